@@ -1,0 +1,359 @@
+//! glray's settings: one table of every setting, and their resolution from
+//! defaults < config file < environment < `glray run` flags, remembering where each value came
+//! from (`glray info` prints it).
+//!
+//! An unknown key or a bad value is an error that names the key, where it was found and the
+//! allowed values. The library turns such an error into a loud message and a pure pass-through
+//! (it never stops the host); the `glray` command refuses to start the program.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// What values a setting accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Bool,
+    /// One of the listed words.
+    Choice(&'static [&'static str]),
+    /// A file system path; empty means "not set".
+    Path,
+}
+
+/// One setting: its key in the TOML file; its environment variable is GLRAY_ + KEY uppercased.
+#[derive(Debug)]
+pub struct Setting {
+    pub key: &'static str,
+    pub kind: Kind,
+    pub default: &'static str,
+    pub doc: &'static str,
+}
+
+pub const LOG_LEVELS: &[&str] = &["off", "error", "warn", "info", "debug"];
+
+/// Every setting glray has. docs/settings.md is checked against this table by a test.
+pub const SETTINGS: &[Setting] = &[
+    Setting {
+        key: "enable",
+        kind: Kind::Bool,
+        default: "true",
+        doc: "false makes glray a pure pass-through: every call goes to the real GL unchanged.",
+    },
+    Setting {
+        key: "log",
+        kind: Kind::Choice(LOG_LEVELS),
+        default: "warn",
+        doc: "How much glray writes to standard error (each line starts with `glray:`).",
+    },
+    Setting {
+        key: "intercept_dlopen",
+        kind: Kind::Bool,
+        default: "true",
+        doc: "Redirect the program's dlopen of libGL, libGLX, libOpenGL, libEGL and libOSMesa \
+              (exact library names only) to glray, so that programs that load GL themselves \
+              still reach it.",
+    },
+    Setting {
+        key: "real_opengl",
+        kind: Kind::Path,
+        default: "",
+        doc: "The real GL library (default: glvnd's libOpenGL.so.0).",
+    },
+    Setting {
+        key: "real_glx",
+        kind: Kind::Path,
+        default: "",
+        doc: "The real GLX library (default: glvnd's libGLX.so.0).",
+    },
+    Setting {
+        key: "real_egl",
+        kind: Kind::Path,
+        default: "",
+        doc: "The real EGL library (default: glvnd's libEGL.so.1).",
+    },
+    Setting {
+        key: "real_osmesa",
+        kind: Kind::Path,
+        default: "",
+        doc: "The real OSMesa library (default: libOSMesa.so.8).",
+    },
+];
+
+/// The environment variable that names the config file; it is not a setting of the file itself.
+pub const CONFIG_ENV: &str = "GLRAY_CONFIG";
+
+pub fn env_name(key: &str) -> String {
+    format!("GLRAY_{}", key.to_ascii_uppercase())
+}
+
+/// Where a value came from, lowest precedence first.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Source {
+    Default,
+    File(PathBuf),
+    Env(String),
+    Flag,
+}
+
+impl fmt::Display for Source {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        match self {
+            Source::Default => write!(f, "default"),
+            Source::File(p) => write!(f, "file {}", p.display()),
+            Source::Env(v) => write!(f, "environment {v}"),
+            Source::Flag => write!(f, "glray run flag"),
+        }
+    }
+}
+
+/// A bad setting, with enough words to fix it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfigError(pub String);
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ConfigError {}
+
+/// The settings in force, each with its source.
+#[derive(Debug, Clone)]
+pub struct Config {
+    values: BTreeMap<&'static str, (String, Source)>,
+    pub file: Option<PathBuf>,
+}
+
+fn setting(key: &str) -> Option<&'static Setting> {
+    SETTINGS.iter().find(|s| s.key == key)
+}
+
+fn allowed(kind: Kind) -> String {
+    match kind {
+        Kind::Bool => "true, false (also 1, 0, yes, no, on, off)".into(),
+        Kind::Choice(words) => words.join(", "),
+        Kind::Path => "a file path".into(),
+    }
+}
+
+fn parse_bool(v: &str) -> Option<bool> {
+    match v.trim().to_ascii_lowercase().as_str() {
+        "1" | "true" | "yes" | "on" => Some(true),
+        "0" | "false" | "no" | "off" => Some(false),
+        _ => None,
+    }
+}
+
+/// Checks `value` for `s` and returns its canonical spelling.
+fn validate(s: &Setting, value: &str, place: &dyn Fn() -> String) -> Result<String, ConfigError> {
+    let ok = match s.kind {
+        Kind::Bool => parse_bool(value).map(|b| b.to_string()),
+        Kind::Choice(words) => {
+            let v = value.trim().to_ascii_lowercase();
+            words.contains(&v.as_str()).then_some(v)
+        }
+        Kind::Path => Some(value.to_string()),
+    };
+    ok.ok_or_else(|| {
+        ConfigError(format!(
+            "bad value {value:?} for setting `{}` ({}); allowed: {}",
+            s.key,
+            place(),
+            allowed(s.kind)
+        ))
+    })
+}
+
+fn unknown_key(key: &str, place: &str) -> ConfigError {
+    let keys: Vec<&str> = SETTINGS.iter().map(|s| s.key).collect();
+    ConfigError(format!("unknown setting `{key}` ({place}); known settings: {}", keys.join(", ")))
+}
+
+/// The config file in effect: $GLRAY_CONFIG if set, else $XDG_CONFIG_HOME/glray/config.toml or
+/// ~/.config/glray/config.toml if it exists.
+pub fn config_file(env: &dyn Fn(&str) -> Option<String>) -> Option<PathBuf> {
+    if let Some(p) = env(CONFIG_ENV).filter(|p| !p.is_empty()) {
+        return Some(PathBuf::from(p));
+    }
+    let dir = env("XDG_CONFIG_HOME")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| env("HOME").map(|h| Path::new(&h).join(".config")))?;
+    let p = dir.join("glray").join("config.toml");
+    p.exists().then_some(p)
+}
+
+impl Config {
+    /// Resolves every setting from the file, the environment (`env_vars`: all variables, of which
+    /// those starting with GLRAY_ are read) and the flags, in that order of precedence.
+    pub fn resolve(env_vars: &[(String, String)], flags: &[(String, String)]) -> Result<Config, ConfigError> {
+        let env = |k: &str| env_vars.iter().rev().find(|(n, _)| n == k).map(|(_, v)| v.clone());
+        let mut values: BTreeMap<&'static str, (String, Source)> =
+            SETTINGS.iter().map(|s| (s.key, (s.default.to_string(), Source::Default))).collect();
+
+        let file = config_file(&env);
+        if let Some(path) = &file {
+            let text = std::fs::read_to_string(path).map_err(|e| {
+                ConfigError(format!("cannot read config file {} ({CONFIG_ENV}): {e}", path.display()))
+            })?;
+            let table: toml::Table = text
+                .parse()
+                .map_err(|e| ConfigError(format!("config file {}: {e}", path.display())))?;
+            for (key, value) in table {
+                let place = format!("in {}", path.display());
+                let s = setting(&key).ok_or_else(|| unknown_key(&key, &place))?;
+                let raw = match (&value, s.kind) {
+                    (toml::Value::Boolean(b), Kind::Bool) => b.to_string(),
+                    (toml::Value::Integer(i), Kind::Bool) => i.to_string(),
+                    (toml::Value::String(v), _) => v.clone(),
+                    (other, _) => other.to_string(),
+                };
+                let v = validate(s, &raw, &|| place.clone())?;
+                values.insert(s.key, (v, Source::File(path.clone())));
+            }
+        }
+
+        for (name, value) in env_vars {
+            let Some(rest) = name.strip_prefix("GLRAY_") else { continue };
+            if name == CONFIG_ENV {
+                continue;
+            }
+            let key = rest.to_ascii_lowercase();
+            let place = format!("environment variable {name}");
+            let s = setting(&key).ok_or_else(|| {
+                let keys: Vec<String> = SETTINGS.iter().map(|s| env_name(s.key)).collect();
+                ConfigError(format!(
+                    "unknown setting {name} ({place}); known: {}, {CONFIG_ENV}",
+                    keys.join(", ")
+                ))
+            })?;
+            let v = validate(s, value, &|| place.clone())?;
+            values.insert(s.key, (v, Source::Env(name.clone())));
+        }
+
+        for (key, value) in flags {
+            let place = "a glray run --set flag".to_string();
+            let s = setting(key).ok_or_else(|| unknown_key(key, &place))?;
+            let v = validate(s, value, &|| place.clone())?;
+            values.insert(s.key, (v, Source::Flag));
+        }
+        Ok(Config { values, file })
+    }
+
+    /// Resolves from this process's environment, with no flags.
+    pub fn from_process_env() -> Result<Config, ConfigError> {
+        let vars: Vec<(String, String)> = std::env::vars_os()
+            .filter_map(|(k, v)| Some((k.into_string().ok()?, v.into_string().ok()?)))
+            .collect();
+        Config::resolve(&vars, &[])
+    }
+
+    /// Every setting with its value and source, in table order.
+    pub fn entries(&self) -> Vec<(&'static Setting, &str, &Source)> {
+        SETTINGS
+            .iter()
+            .map(|s| {
+                let (v, src) = &self.values[s.key];
+                (s, v.as_str(), src)
+            })
+            .collect()
+    }
+
+    fn get(&self, key: &str) -> &str {
+        &self.values[key].0
+    }
+
+    pub fn enable(&self) -> bool {
+        self.get("enable") == "true"
+    }
+
+    pub fn intercept_dlopen(&self) -> bool {
+        self.get("intercept_dlopen") == "true"
+    }
+
+    pub fn log_level(&self) -> crate::log::Level {
+        crate::log::Level::parse(self.get("log")).unwrap_or(crate::log::Level::Warn)
+    }
+
+    /// The user's path for a real library, if set.
+    pub fn real_path(&self, key: &str) -> Option<&str> {
+        Some(self.get(key)).filter(|p| !p.is_empty())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vars(v: &[(&str, &str)]) -> Vec<(String, String)> {
+        v.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect()
+    }
+
+    #[test]
+    fn defaults_apply_without_anything_set() {
+        let c = Config::resolve(&vars(&[("HOME", "/nonexistent")]), &[]).unwrap();
+        assert!(c.enable());
+        assert_eq!(c.log_level(), crate::log::Level::Warn);
+        assert!(c.entries().iter().all(|(_, _, s)| **s == Source::Default));
+    }
+
+    #[test]
+    fn precedence_is_file_then_env_then_flag() {
+        let dir = std::env::temp_dir().join(format!("glray-cfg-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("c.toml");
+        std::fs::write(&file, "enable = false\nlog = \"info\"\nintercept_dlopen = false\n").unwrap();
+        let env = vars(&[("GLRAY_CONFIG", file.to_str().unwrap()), ("GLRAY_LOG", "debug"), ("GLRAY_ENABLE", "1")]);
+        let c = Config::resolve(&env, &[("enable".into(), "off".into())]).unwrap();
+        let by_key = |k: &str| c.entries().into_iter().find(|(s, _, _)| s.key == k).unwrap();
+        assert_eq!(by_key("intercept_dlopen").1, "false");
+        assert_eq!(*by_key("intercept_dlopen").2, Source::File(file.clone()));
+        assert_eq!(by_key("log").1, "debug");
+        assert_eq!(*by_key("log").2, Source::Env("GLRAY_LOG".into()));
+        assert_eq!(by_key("enable").1, "false");
+        assert_eq!(*by_key("enable").2, Source::Flag);
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn bad_value_names_setting_and_allowed_values() {
+        let e = Config::resolve(&vars(&[("GLRAY_LOG", "loud")]), &[]).unwrap_err().0;
+        assert!(e.contains("`log`") && e.contains("GLRAY_LOG") && e.contains("off, error, warn, info, debug"), "{e}");
+        let e = Config::resolve(&vars(&[("GLRAY_ENABLE", "maybe")]), &[]).unwrap_err().0;
+        assert!(e.contains("`enable`") && e.contains("true, false"), "{e}");
+    }
+
+    #[test]
+    fn unknown_keys_are_named_everywhere() {
+        let e = Config::resolve(&vars(&[("GLRAY_ENABEL", "1")]), &[]).unwrap_err().0;
+        assert!(e.contains("GLRAY_ENABEL") && e.contains("GLRAY_ENABLE"), "{e}");
+        let e = Config::resolve(&[], &[("colour".into(), "red".into())]).unwrap_err().0;
+        assert!(e.contains("`colour`") && e.contains("known settings"), "{e}");
+        let dir = std::env::temp_dir().join(format!("glray-cfg2-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("c.toml");
+        std::fs::write(&file, "presett = \"gl\"\n").unwrap();
+        let e = Config::resolve(&vars(&[("GLRAY_CONFIG", file.to_str().unwrap())]), &[]).unwrap_err().0;
+        assert!(e.contains("`presett`") && e.contains(file.to_str().unwrap()), "{e}");
+        std::fs::write(&file, "enable = [1, 2]\n").unwrap();
+        let e = Config::resolve(&vars(&[("GLRAY_CONFIG", file.to_str().unwrap())]), &[]).unwrap_err().0;
+        assert!(e.contains("`enable`"), "{e}");
+        std::fs::write(&file, "enable = \n").unwrap();
+        let e = Config::resolve(&vars(&[("GLRAY_CONFIG", file.to_str().unwrap())]), &[]).unwrap_err().0;
+        assert!(e.contains("config file"), "{e}");
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn missing_config_file_named_by_env_is_an_error() {
+        let e = Config::resolve(&vars(&[("GLRAY_CONFIG", "/nonexistent/glray.toml")]), &[]).unwrap_err().0;
+        assert!(e.contains("/nonexistent/glray.toml") && e.contains("GLRAY_CONFIG"), "{e}");
+    }
+}
+
+impl From<ConfigError> for String {
+    fn from(e: ConfigError) -> String {
+        e.0
+    }
+}

@@ -1,0 +1,8 @@
+//! What libglray.so and the `glray` command share: the settings, logging, and finding the real
+//! GL, GLX, EGL and OSMesa libraries without ever finding glray itself.
+
+pub mod config;
+pub mod log;
+pub mod reallib;
+
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -1,0 +1,85 @@
+//! What the library reads once: its settings, its own file (so that a lookup never takes glray
+//! for the real GL), and the real libraries, each opened on first need.
+
+use std::ffi::{c_void, CString};
+use std::path::Path;
+use std::sync::OnceLock;
+
+use glray_core::config::Config;
+use glray_core::reallib::{self, FileId, RealKind, RealLib};
+
+pub struct Runtime {
+    pub config: Config,
+    /// glray's own file, as the loader found it (the preload path or the drop-in name).
+    pub own_path: Option<CString>,
+    pub own_file: Option<FileId>,
+    /// The address glray's code is loaded at, to recognise its own symbols.
+    pub own_base: *const c_void,
+}
+
+// SAFETY: `own_base` is only compared, never dereferenced.
+unsafe impl Sync for Runtime {}
+unsafe impl Send for Runtime {}
+
+static RUNTIME: OnceLock<Runtime> = OnceLock::new();
+
+pub fn get() -> &'static Runtime {
+    RUNTIME.get_or_init(init)
+}
+
+fn init() -> Runtime {
+    let config = match Config::from_process_env() {
+        Ok(c) => c,
+        Err(e) => {
+            // Never stop the host: say what is wrong, loudly, and change nothing it draws.
+            glray_core::log::set_level(glray_core::log::Level::Error);
+            glray_core::error!("{e}; glray runs as a pure pass-through until this is fixed");
+            Config::resolve(&[], &[("enable".into(), "false".into())]).expect("defaults are valid")
+        }
+    };
+    glray_core::log::set_level(config.log_level());
+
+    let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
+    // SAFETY: dladdr on the address of one of our own functions.
+    let found = unsafe { libc::dladdr(get as *const c_void, &mut info) } != 0;
+    let own_path = (found && !info.dli_fname.is_null())
+        .then(|| unsafe { std::ffi::CStr::from_ptr(info.dli_fname) }.to_owned());
+    let own_file = own_path.as_ref().and_then(|p| FileId::of(Path::new(&*p.to_string_lossy())));
+    glray_core::debug!(
+        "glray {} loaded from {:?}, enable={}",
+        glray_core::VERSION,
+        own_path,
+        config.enable()
+    );
+    Runtime { config, own_path, own_file, own_base: info.dli_fbase }
+}
+
+/// The real library of `kind`, opened on first use; None (logged once) if it cannot be found.
+pub fn real(kind: RealKind) -> Option<&'static RealLib> {
+    static LIBS: [OnceLock<Option<RealLib>>; 4] = [const { OnceLock::new() }; 4];
+    let slot = &LIBS[RealKind::ALL.iter().position(|k| *k == kind).unwrap()];
+    slot.get_or_init(|| {
+        let rt = get();
+        match reallib::open(kind, rt.config.real_path(kind.setting()), rt.own_file) {
+            Ok(lib) => {
+                glray_core::debug!("real {} is {}", kind.soname(), lib.path);
+                Some(lib)
+            }
+            Err(e) => {
+                glray_core::error!("{e}");
+                None
+            }
+        }
+    })
+    .as_ref()
+}
+
+/// Reads the settings as the library loads, so that a bad setting is reported at program start.
+#[used]
+#[link_section = ".init_array"]
+static INIT: extern "C" fn() = {
+    extern "C" fn init_at_load() {
+        let _ = std::panic::catch_unwind(get);
+    }
+    init_at_load
+};
