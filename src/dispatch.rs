@@ -9,7 +9,7 @@
 use std::cell::Cell;
 use std::ffi::{c_void, CStr};
 use std::ptr::null_mut;
-use std::sync::atomic::{AtomicPtr, Ordering};
+use std::sync::atomic::{AtomicPtr, AtomicU8, Ordering};
 
 use glray_core::reallib::RealKind;
 
@@ -34,17 +34,38 @@ thread_local! {
     static BACKEND: Cell<Backend> = const { Cell::new(Backend::Glvnd) };
 }
 
+/// Which kinds of context the process has ever bound: a bit per backend. While only one kind has
+/// been seen (nearly every program), GL calls go to it without reading the thread-local (a
+/// `__tls_get_addr` call in a shared library, about half of glray's cost per call).
+static SEEN: AtomicU8 = AtomicU8::new(0);
+const SEEN_GLVND: u8 = 1;
+const SEEN_OSMESA: u8 = 2;
+
 /// Makes this thread's GL calls go to `backend` (called after a successful MakeCurrent).
 pub fn set_backend(backend: Backend) {
     BACKEND.with(|b| b.set(backend));
+    let bit = match backend {
+        Backend::Glvnd => SEEN_GLVND,
+        Backend::OSMesa => SEEN_OSMESA,
+    };
+    if SEEN.load(Ordering::Relaxed) & bit == 0 {
+        SEEN.fetch_or(bit, Ordering::SeqCst);
+    }
 }
 
 /// The real function of GL command `i` for this thread's current context.
 #[inline(always)]
 pub fn gl(i: usize) -> *mut c_void {
-    match BACKEND.with(|b| b.get()) {
-        Backend::Glvnd => glvnd(i),
-        Backend::OSMesa => osmesa(i),
+    match SEEN.load(Ordering::Relaxed) {
+        SEEN_OSMESA => osmesa(i),
+        // Both kinds bound in this process: follow the thread's own context.
+        s if s == SEEN_GLVND | SEEN_OSMESA => match BACKEND.with(|b| b.get()) {
+            Backend::Glvnd => glvnd(i),
+            Backend::OSMesa => osmesa(i),
+        },
+        // Only glvnd, or no context bound yet (GL calls then reach glvnd's no-op dispatch, as
+        // they would without glray).
+        _ => glvnd(i),
     }
 }
 
@@ -78,14 +99,14 @@ fn resolve(table: &Table, i: usize, backend: Backend) -> *mut c_void {
     let found = std::panic::catch_unwind(|| find(i, backend)).unwrap_or(null_mut());
     let value = if found.is_null() { MISSING } else { found };
     // Several threads may race here; they find the same pointer, and only the first one logs.
-    if table.0[i].compare_exchange(null_mut(), value, Ordering::AcqRel, Ordering::Acquire).is_ok()
-        && found.is_null()
-    {
-        glray_core::warn!(
-            "{} has no real implementation ({:?}); calls to it do nothing",
-            COMMANDS[i].name.to_string_lossy(),
-            backend
-        );
+    if table.0[i].compare_exchange(null_mut(), value, Ordering::AcqRel, Ordering::Acquire).is_ok() {
+        let name = COMMANDS[i].name.to_string_lossy();
+        if found.is_null() {
+            glray_core::warn!("{name} has no real implementation ({backend:?}); calls to it do nothing");
+        } else if glray_core::log::enabled(glray_core::log::Level::Debug) {
+            let file = glray_core::reallib::defining_file(found).unwrap_or_default();
+            glray_core::debug!("{name} -> {backend:?} {file}");
+        }
     }
     found
 }

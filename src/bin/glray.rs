@@ -115,7 +115,9 @@ fn find_library(explicit: Option<PathBuf>) -> Result<PathBuf, String> {
 /// The drop-in directory: libGL.so.1, libEGL.so.1 and libOSMesa.so.8 linked to libglray.so.
 /// Beside the library if writable, else in the user's cache directory.
 fn dropin_dir(lib: &Path) -> Result<PathBuf, String> {
-    const NAMES: [&str; 3] = ["libGL.so.1", "libEGL.so.1", "libOSMesa.so.8"];
+    // libOpenGL.so.0 and libGLX.so.0 are not here: they are glray's own dependencies (the real
+    // ones must load under those names); preloading covers programs that dlopen them.
+    const NAMES: [&str; 6] = ["libGL.so.1", "libGL.so", "libEGL.so.1", "libEGL.so", "libOSMesa.so.8", "libOSMesa.so"];
     let beside = lib.parent().unwrap_or(Path::new(".")).join("glray-dropin");
     let cache = std::env::var_os("XDG_CACHE_HOME")
         .map(PathBuf::from)

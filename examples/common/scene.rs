@@ -1,0 +1,177 @@
+//! One fixed-function scene, drawn the ways old programs draw: immediate mode with normals, a
+//! display list called twice, client vertex arrays, and (where the caller passes them) buffer
+//! objects fetched through GetProcAddress. Deterministic for a given frame number.
+#![allow(dead_code)]
+
+use super::gl::*;
+use std::ffi::c_void;
+
+/// Buffer-object entry points, fetched at run time as GLEW and VTK do.
+pub struct BufferFns {
+    pub gen: unsafe extern "C" fn(i32, *mut u32),
+    pub bind: unsafe extern "C" fn(u32, u32),
+    pub data: unsafe extern "C" fn(u32, isize, *const c_void, u32),
+}
+
+impl BufferFns {
+    /// Looks the three functions up with `get_proc`; None if any is missing.
+    pub unsafe fn load(get_proc: impl Fn(&std::ffi::CStr) -> *const c_void) -> Option<BufferFns> {
+        let g = get_proc(c"glGenBuffers");
+        let b = get_proc(c"glBindBuffer");
+        let d = get_proc(c"glBufferData");
+        if g.is_null() || b.is_null() || d.is_null() {
+            return None;
+        }
+        Some(BufferFns { gen: std::mem::transmute(g), bind: std::mem::transmute(b), data: std::mem::transmute(d) })
+    }
+}
+
+pub struct Scene {
+    cube: u32,
+    vbo: Option<(u32, &'static BufferFns)>,
+}
+
+unsafe fn cube_faces() {
+    const FACES: [([f32; 3], [[f32; 3]; 4]); 6] = [
+        ([0., 0., 1.], [[-1., -1., 1.], [1., -1., 1.], [1., 1., 1.], [-1., 1., 1.]]),
+        ([0., 0., -1.], [[-1., -1., -1.], [-1., 1., -1.], [1., 1., -1.], [1., -1., -1.]]),
+        ([0., 1., 0.], [[-1., 1., -1.], [-1., 1., 1.], [1., 1., 1.], [1., 1., -1.]]),
+        ([0., -1., 0.], [[-1., -1., -1.], [1., -1., -1.], [1., -1., 1.], [-1., -1., 1.]]),
+        ([1., 0., 0.], [[1., -1., -1.], [1., 1., -1.], [1., 1., 1.], [1., -1., 1.]]),
+        ([-1., 0., 0.], [[-1., -1., -1.], [-1., -1., 1.], [-1., 1., 1.], [-1., 1., -1.]]),
+    ];
+    glBegin(GL_QUADS);
+    for (n, vs) in FACES {
+        glNormal3f(n[0], n[1], n[2]);
+        for v in vs {
+            glVertex3f(v[0], v[1], v[2]);
+        }
+    }
+    glEnd();
+}
+
+impl Scene {
+    pub unsafe fn new(buffers: Option<&'static BufferFns>) -> Scene {
+        let cube = glGenLists(1);
+        glNewList(cube, GL_COMPILE);
+        cube_faces();
+        glEndList();
+        let vbo = buffers.map(|b| {
+            let tri: [f32; 9] = [-0.5, -0.4, 0.0, 0.5, -0.4, 0.0, 0.0, 0.5, 0.0];
+            let mut id = 0;
+            (b.gen)(1, &mut id);
+            (b.bind)(GL_ARRAY_BUFFER, id);
+            (b.data)(GL_ARRAY_BUFFER, std::mem::size_of_val(&tri) as isize, tri.as_ptr().cast(), GL_STATIC_DRAW);
+            (b.bind)(GL_ARRAY_BUFFER, 0);
+            (id, b)
+        });
+        Scene { cube, vbo }
+    }
+
+    pub unsafe fn draw(&self, width: i32, height: i32, frame: u32) {
+        glViewport(0, 0, width, height);
+        glClearColor(0.1, 0.15, 0.25, 1.0);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        glEnable(GL_DEPTH_TEST);
+        glMatrixMode(GL_PROJECTION);
+        glLoadIdentity();
+        let aspect = width as f64 / height as f64;
+        glFrustum(-aspect * 0.5, aspect * 0.5, -0.5, 0.5, 1.0, 30.0);
+        glMatrixMode(GL_MODELVIEW);
+        glLoadIdentity();
+        glTranslatef(0.0, 0.0, -8.0);
+
+        let light = [0.4f32, 0.7, 1.0, 0.0];
+        glLightfv(GL_LIGHT0, GL_POSITION, light.as_ptr());
+        glEnable(GL_LIGHTING);
+        glEnable(GL_LIGHT0);
+        glEnable(GL_NORMALIZE);
+        glEnable(GL_COLOR_MATERIAL);
+        glColorMaterial(GL_FRONT_AND_BACK, GL_AMBIENT_AND_DIFFUSE);
+
+        // The display list, twice, at different transforms.
+        for (i, color) in [[0.9f32, 0.3, 0.2], [0.2, 0.8, 0.3]].iter().enumerate() {
+            glPushMatrix();
+            glTranslatef(if i == 0 { -1.6 } else { 1.6 }, 0.6, 0.0);
+            glRotatef(30.0 + 7.0 * frame as f32, 1.0, 1.0, 0.0);
+            glScalef(0.8, 0.8, 0.8);
+            glColor3f(color[0], color[1], color[2]);
+            glCallList(self.cube);
+            glPopMatrix();
+        }
+
+        // Immediate mode: a lit band of quads.
+        glPushMatrix();
+        glTranslatef(0.0, -1.4, 0.0);
+        glRotatef(-60.0, 1.0, 0.0, 0.0);
+        glColor3f(0.9, 0.8, 0.3);
+        glBegin(GL_QUAD_STRIP);
+        for k in 0..=24 {
+            let a = k as f32 / 24.0 * std::f32::consts::TAU;
+            glNormal3f(a.cos(), a.sin(), 0.3);
+            glVertex3f(2.0 * a.cos(), 2.0 * a.sin(), -0.2);
+            glVertex3f(2.2 * a.cos(), 2.2 * a.sin(), 0.2);
+        }
+        glEnd();
+        glPopMatrix();
+
+        // Client arrays, unlit, per-vertex colour.
+        glDisable(GL_LIGHTING);
+        let verts: [f32; 12] = [0.0, 0.0, 0.0, 0.6, 0.0, 0.0, 0.6, 0.6, 0.0, 0.0, 0.6, 0.0];
+        let colors: [f32; 12] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
+        glPushMatrix();
+        glTranslatef(-0.3, 1.6, 0.5);
+        glEnableClientState(GL_VERTEX_ARRAY);
+        glEnableClientState(GL_COLOR_ARRAY);
+        glVertexPointer(3, GL_FLOAT, 0, verts.as_ptr().cast());
+        glColorPointer(3, GL_FLOAT, 0, colors.as_ptr().cast());
+        glDrawArrays(GL_TRIANGLE_FAN, 0, 4);
+        glDisableClientState(GL_COLOR_ARRAY);
+
+        // A buffer object, if the caller fetched the entry points.
+        if let Some((id, b)) = self.vbo {
+            glTranslatef(0.3, -3.4, 0.5);
+            glColor3f(0.7, 0.7, 1.0);
+            (b.bind)(GL_ARRAY_BUFFER, id);
+            glVertexPointer(3, GL_FLOAT, 0, std::ptr::null());
+            glDrawArrays(GL_TRIANGLES, 0, 3);
+            (b.bind)(GL_ARRAY_BUFFER, 0);
+        }
+        glDisableClientState(GL_VERTEX_ARRAY);
+        glPopMatrix();
+    }
+}
+
+/// Reads the current framebuffer (RGB, bottom-up as GL returns it).
+pub unsafe fn read_rgb(width: i32, height: i32) -> Vec<u8> {
+    let mut pixels = vec![0u8; (width * height * 3) as usize];
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, pixels.as_mut_ptr().cast());
+    pixels
+}
+
+/// Writes bottom-up RGB rows as a top-down PNG.
+pub fn write_png(path: &str, width: u32, height: u32, bottom_up_rgb: &[u8]) -> std::io::Result<()> {
+    let row = width as usize * 3;
+    let mut top_down = Vec::with_capacity(bottom_up_rgb.len());
+    for y in (0..height as usize).rev() {
+        top_down.extend_from_slice(&bottom_up_rgb[y * row..(y + 1) * row]);
+    }
+    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let mut enc = png::Encoder::new(file, width, height);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.write_header()?.write_image_data(&top_down)?;
+    Ok(())
+}
+
+/// `PROGRAM OUT.png [FRAMES]` from the command line.
+pub fn args() -> (String, u32) {
+    let mut a = std::env::args().skip(1);
+    let out = a.next().unwrap_or_else(|| {
+        eprintln!("usage: {} OUT.png [FRAMES]", std::env::args().next().unwrap_or_default());
+        std::process::exit(2)
+    });
+    let frames = a.next().map(|f| f.parse().expect("FRAMES is a number")).unwrap_or(3);
+    (out, frames)
+}
