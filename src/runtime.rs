@@ -45,11 +45,11 @@ fn init() -> Runtime {
     let own_path = (found && !info.dli_fname.is_null())
         .then(|| unsafe { std::ffi::CStr::from_ptr(info.dli_fname) }.to_owned());
     let own_file = own_path.as_ref().and_then(|p| FileId::of(Path::new(&*p.to_string_lossy())));
-    glray_core::debug!(
-        "glray {} loaded from {:?}, enable={}",
+    glray_core::info!(
+        "glray {} loaded from {}{}",
         glray_core::VERSION,
-        own_path,
-        config.enable()
+        own_path.as_ref().map_or("?".into(), |p| p.to_string_lossy()),
+        if config.enable() { "" } else { " (pass-through: enable = false)" }
     );
     Runtime { config, own_path, own_file, own_base: info.dli_fbase }
 }

@@ -1,44 +1,58 @@
 //! GetProcAddress: programs fetch most entry points this way (GLEW, VTK, glretrace), so every
-//! name glray exports is answered with glray's own function, and any other name with whatever
-//! the real implementation answers (glvnd hands out dispatch stubs even for names it does not
-//! know, exactly as it would without glray).
+//! name glray exports is answered with glray's own function. A name of the GL, GLX, EGL or OSMesa
+//! APIs that glray does not export (an extension newer than its registry) gets whatever the real
+//! implementation answers, as without glray. Any other name gets NULL: glvnd would hand out a
+//! dispatch stub even for "notAFunction" (the GLX spec allows that), but a NULL tells a program
+//! the truth.
 
 use std::ffi::{c_void, CStr};
 
 use crate::exports::own_function;
 use crate::real;
 
-/// glray's function for `name`, or None if glray does not export it.
-unsafe fn own(name: *const c_void) -> Option<*mut c_void> {
-    // SAFETY: the caller passes a NUL-terminated name (checked for null by the callers).
-    let name = unsafe { CStr::from_ptr(name.cast()) };
-    own_function(name.to_bytes()).map(|p| p as *mut c_void)
+/// How to answer a lookup of `name`.
+enum Answer {
+    Own(*mut c_void),
+    AskReal,
+    Unknown,
+}
+
+unsafe fn answer(name: *const c_void) -> Answer {
+    if name.is_null() {
+        return Answer::Unknown;
+    }
+    // SAFETY: a non-null name is NUL-terminated (the GetProcAddress contract).
+    let name = unsafe { CStr::from_ptr(name.cast()) }.to_bytes();
+    if let Some(p) = own_function(name) {
+        Answer::Own(p as *mut c_void)
+    } else if [&b"gl"[..], b"egl", b"OSMesa"].iter().any(|api| name.starts_with(api)) {
+        Answer::AskReal
+    } else {
+        Answer::Unknown
+    }
+}
+
+/// Answers a lookup: glray's function, the real one, or NULL.
+unsafe fn resolve(name: *mut c_void, real: impl FnOnce(*mut c_void) -> *mut c_void) -> *mut c_void {
+    match answer(name) {
+        Answer::Own(p) => p,
+        Answer::AskReal => real(name),
+        Answer::Unknown => std::ptr::null_mut(),
+    }
 }
 
 pub unsafe fn glXGetProcAddress(procName: *mut c_void) -> *mut c_void {
-    if procName.is_null() {
-        return std::ptr::null_mut();
-    }
-    own(procName).unwrap_or_else(|| real::glXGetProcAddress(procName))
+    resolve(procName, |n| real::glXGetProcAddress(n))
 }
 
 pub unsafe fn glXGetProcAddressARB(procName: *mut c_void) -> *mut c_void {
-    if procName.is_null() {
-        return std::ptr::null_mut();
-    }
-    own(procName).unwrap_or_else(|| real::glXGetProcAddressARB(procName))
+    resolve(procName, |n| real::glXGetProcAddressARB(n))
 }
 
 pub unsafe fn eglGetProcAddress(procname: *mut c_void) -> *mut c_void {
-    if procname.is_null() {
-        return std::ptr::null_mut();
-    }
-    own(procname).unwrap_or_else(|| real::eglGetProcAddress(procname))
+    resolve(procname, |n| real::eglGetProcAddress(n))
 }
 
 pub unsafe fn OSMesaGetProcAddress(funcName: *mut c_void) -> *mut c_void {
-    if funcName.is_null() {
-        return std::ptr::null_mut();
-    }
-    own(funcName).unwrap_or_else(|| real::OSMesaGetProcAddress(funcName))
+    resolve(funcName, |n| real::OSMesaGetProcAddress(n))
 }

@@ -1,0 +1,161 @@
+//! What the integration tests share: where the built library, command and examples are; running a
+//! program plainly, preloaded or dropped in; an Xvfb of the test's own; the frameshot helper.
+#![allow(dead_code)]
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::OnceLock;
+
+/// The directory of the build under test (target/release for `cargo test --release`).
+pub fn build_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_glray")).parent().unwrap().to_path_buf()
+}
+
+pub fn glray_bin() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_glray"))
+}
+
+pub fn libglray() -> PathBuf {
+    let p = build_dir().join("libglray.so");
+    assert!(p.exists(), "{} is missing: build with `cargo build --release --all-targets` (scripts/test does)", p.display());
+    p
+}
+
+pub fn example(name: &str) -> PathBuf {
+    let p = build_dir().join("examples").join(name);
+    assert!(p.exists(), "{} is missing: build with `cargo build --release --all-targets`", p.display());
+    p
+}
+
+/// A fresh scratch directory for one test.
+pub fn scratch(test: &str) -> PathBuf {
+    let dir = build_dir().join("test-scratch").join(test);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The drop-in directory, made by `glray dropin-dir`.
+pub fn dropin_dir() -> PathBuf {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let out = Command::new(glray_bin()).arg("dropin-dir").output().unwrap();
+        assert!(out.status.success(), "glray dropin-dir: {}", String::from_utf8_lossy(&out.stderr));
+        PathBuf::from(String::from_utf8(out.stdout).unwrap().trim())
+    })
+    .clone()
+}
+
+/// How a program is run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Way {
+    /// Without glray: the reference.
+    Plain,
+    /// LD_PRELOAD=libglray.so (after any helper preloads).
+    Preload,
+    /// The drop-in directory first on LD_LIBRARY_PATH.
+    Dropin,
+}
+
+pub const GLRAY_WAYS: [Way; 2] = [Way::Preload, Way::Dropin];
+
+/// A command for `program` run `way`, with `preload` helpers (e.g. frameshot) before glray, and a
+/// time limit (coreutils `timeout`, which kills it if it hangs).
+pub fn command(way: Way, preload: &[&Path], program: &Path, seconds: u32) -> Command {
+    let mut cmd = Command::new("timeout");
+    cmd.arg("-k").arg("5").arg(seconds.to_string()).arg(program);
+    let mut preloads: Vec<String> = preload.iter().map(|p| p.display().to_string()).collect();
+    for (k, _) in std::env::vars() {
+        if k.starts_with("GLRAY_") {
+            cmd.env_remove(k);
+        }
+    }
+    cmd.env_remove("LD_PRELOAD").env_remove("LD_LIBRARY_PATH");
+    match way {
+        Way::Plain => {}
+        Way::Preload => preloads.push(libglray().display().to_string()),
+        Way::Dropin => {
+            cmd.env("LD_LIBRARY_PATH", dropin_dir());
+        }
+    }
+    if !preloads.is_empty() {
+        cmd.env("LD_PRELOAD", preloads.join(":"));
+    }
+    cmd
+}
+
+/// Runs and returns the output; panics with stderr if it did not exit 0.
+pub fn run_ok(cmd: &mut Command, what: &str) -> Output {
+    let out = cmd.output().unwrap_or_else(|e| panic!("{what}: cannot start: {e}"));
+    assert!(
+        out.status.success(),
+        "{what}: {:?}\nstdout: {}\nstderr: {}",
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Asserts two files are byte-identical.
+pub fn assert_same_file(a: &Path, b: &Path, what: &str) {
+    let x = std::fs::read(a).unwrap_or_else(|e| panic!("{what}: {}: {e}", a.display()));
+    let y = std::fs::read(b).unwrap_or_else(|e| panic!("{what}: {}: {e}", b.display()));
+    assert!(x.len() > 100, "{what}: {} is too small to be an image", a.display());
+    assert!(x == y, "{what}: {} and {} differ", a.display(), b.display());
+}
+
+/// An X server of the test's own (Xvfb -noreset), stopped by PID when dropped.
+pub struct Xvfb {
+    child: Child,
+    pub display: String,
+}
+
+impl Xvfb {
+    pub fn start() -> Xvfb {
+        // -displayfd 1: Xvfb picks a free display number and writes it to its stdout.
+        let mut child = Command::new("Xvfb")
+            .args(["-displayfd", "1", "-noreset", "-nolisten", "tcp", "-screen", "0", "1280x1024x24"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("Xvfb is not installed: run scripts/test, which installs it");
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+        let n: u32 = line.trim().parse().unwrap_or_else(|_| panic!("Xvfb did not report a display: {line:?}"));
+        Xvfb { child, display: format!(":{n}") }
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The frameshot helper (tests/helpers/frameshot.c), compiled once per test run.
+pub fn frameshot() -> PathBuf {
+    static LIB: OnceLock<PathBuf> = OnceLock::new();
+    LIB.get_or_init(|| {
+        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/helpers/frameshot.c");
+        let dir = build_dir().join("test-helpers");
+        std::fs::create_dir_all(&dir).unwrap();
+        let out = dir.join(format!("frameshot-{}.so", std::process::id()));
+        run_ok(
+            Command::new("cc").args(["-O2", "-shared", "-fPIC", "-o"]).arg(&out).arg(&src).arg("-ldl"),
+            "compiling frameshot.c",
+        );
+        out
+    })
+    .clone()
+}
+
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+pub fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
