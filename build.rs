@@ -132,12 +132,8 @@ fn write(path: &Path, text: &str) {
 
 /// Lines of a gl-spec file without comments and blanks.
 fn data_lines(path: &Path) -> Vec<String> {
-    let text = std::fs::read_to_string(path)
-        .unwrap_or_else(|e| fail(&format!("reading {}: {e}", path.display())));
-    text.lines()
-        .map(|l| l.split('#').next().unwrap().trim().to_string())
-        .filter(|l| !l.is_empty())
-        .collect()
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| fail(&format!("reading {}: {e}", path.display())));
+    text.lines().map(|l| l.split('#').next().unwrap().trim().to_string()).filter(|l| !l.is_empty()).collect()
 }
 
 fn read_types(path: &Path) -> HashMap<String, String> {
@@ -161,10 +157,7 @@ fn rust_type(c_decl: &str, types: &HashMap<String, String>, context: &str) -> St
         // Every pointer is passed as a raw pointer: const-ness and pointee do not change the ABI.
         return "*mut c_void".into();
     }
-    let base: Vec<&str> = c_decl
-        .split_whitespace()
-        .filter(|w| *w != "const" && *w != "struct")
-        .collect();
+    let base: Vec<&str> = c_decl.split_whitespace().filter(|w| *w != "const" && *w != "struct").collect();
     let base = base.join(" ");
     types
         .get(&base)
@@ -263,9 +256,8 @@ fn registry_commands(
 
     let mut out = BTreeMap::new();
     for name in wanted {
-        let node = protos
-            .get(name.as_str())
-            .unwrap_or_else(|| fail(&format!("{api}.xml requires unknown command {name}")));
+        let node =
+            protos.get(name.as_str()).unwrap_or_else(|| fail(&format!("{api}.xml requires unknown command {name}")));
         let proto = node.children().find(|n| n.has_tag_name("proto")).unwrap();
         let (ret_c, _) = decl_text(proto);
         let ret = rust_type(&ret_c, types, &name);
@@ -284,7 +276,11 @@ fn prototype_file(path: &Path, types: &HashMap<String, String>) -> BTreeMap<Stri
     let mut out = BTreeMap::new();
     for line in data_lines(path) {
         let bad_line = |line: &str| -> String { format!("{}: not a prototype: {line}", path.display()) };
-        macro_rules! bad { () => { || fail(&bad_line(&line)) } }
+        macro_rules! bad {
+            () => {
+                || fail(&bad_line(&line))
+            };
+        }
         let (head, rest) = line.split_once('(').unwrap_or_else(bad!());
         let args = rest.trim_end_matches(';').trim_end().strip_suffix(')').unwrap_or_else(bad!());
         let head = head.trim();
@@ -309,9 +305,7 @@ fn expand(pattern: &str) -> Vec<String> {
     let Some(open) = pattern.find('{') else { return vec![pattern.to_string()] };
     let close = open + pattern[open..].find('}').unwrap_or_else(|| fail(&format!("unclosed {{ in {pattern}")));
     let (pre, alts, post) = (&pattern[..open], &pattern[open + 1..close], &pattern[close + 1..]);
-    alts.split(',')
-        .flat_map(|alt| expand(&format!("{pre}{alt}{post}")))
-        .collect()
+    alts.split(',').flat_map(|alt| expand(&format!("{pre}{alt}{post}"))).collect()
 }
 
 fn glob(pattern: &[u8], name: &[u8]) -> bool {
@@ -367,10 +361,9 @@ fn classify(path: &Path, commands: &mut BTreeMap<String, Command>) {
 /// Parameter names that are Rust keywords get a trailing underscore.
 fn ident(name: &str) -> String {
     const KEYWORDS: &[&str] = &[
-        "type", "ref", "in", "fn", "match", "mod", "move", "impl", "loop", "box", "self", "use",
-        "where", "struct", "enum", "trait", "let", "mut", "const", "static", "priv", "final",
-        "override", "async", "await", "dyn", "abstract", "become", "do", "macro", "typeof",
-        "unsized", "virtual", "yield", "try",
+        "type", "ref", "in", "fn", "match", "mod", "move", "impl", "loop", "box", "self", "use", "where", "struct",
+        "enum", "trait", "let", "mut", "const", "static", "priv", "final", "override", "async", "await", "dyn",
+        "abstract", "become", "do", "macro", "typeof", "unsized", "virtual", "yield", "try",
     ];
     if KEYWORDS.contains(&name) {
         format!("{name}_")
@@ -407,7 +400,8 @@ fn gen_commands(cmds: &[&Command]) -> String {
         )
         .unwrap();
     }
-    writeln!(s, "];\n\n/// Index of each command in COMMANDS.\n#[allow(non_upper_case_globals)]\npub mod cmd {{").unwrap();
+    writeln!(s, "];\n\n/// Index of each command in COMMANDS.\n#[allow(non_upper_case_globals)]\npub mod cmd {{")
+        .unwrap();
     for (i, c) in cmds.iter().enumerate() {
         writeln!(s, "    pub const {}: usize = {i};", c.name).unwrap();
     }

@@ -23,7 +23,8 @@ fn main() {
             eprintln!("egl_scene: {e}");
             std::process::exit(1)
         });
-        let buffers = scene::BufferFns::load(|n| egl::eglGetProcAddress(n.as_ptr().cast())).map(|b| &*Box::leak(Box::new(b)));
+        let buffers =
+            scene::BufferFns::load(|n| egl::eglGetProcAddress(n.as_ptr().cast())).map(|b| &*Box::leak(Box::new(b)));
         let s = scene::Scene::new(buffers);
         let mut last = Vec::new();
         for frame in 0..frames {

@@ -27,19 +27,37 @@ fn main() {
         let mut vp = [-7i32; 4];
         glGetIntegerv(GL_VIEWPORT, vp.as_mut_ptr());
         println!("no context: glGetIntegerv(GL_VIEWPORT) = {vp:?}");
-        println!("eglMakeCurrent(EGL_NO_DISPLAY, ...) = {}", eglMakeCurrent(std::ptr::null_mut(), std::ptr::null_mut(), std::ptr::null_mut(), std::ptr::null_mut()));
+        println!(
+            "eglMakeCurrent(EGL_NO_DISPLAY, ...) = {}",
+            eglMakeCurrent(std::ptr::null_mut(), std::ptr::null_mut(), std::ptr::null_mut(), std::ptr::null_mut())
+        );
         println!("eglGetError = {:#x}", eglGetError());
-        println!("eglGetProcAddress(\"notAFunction\") is null = {}", eglGetProcAddress(c"notAFunction".as_ptr().cast()).is_null());
-        println!("eglGetProcAddress(\"glBegin\") is null = {}", eglGetProcAddress(c"glBegin".as_ptr().cast()).is_null());
+        println!(
+            "eglGetProcAddress(\"notAFunction\") is null = {}",
+            eglGetProcAddress(c"notAFunction".as_ptr().cast()).is_null()
+        );
+        println!(
+            "eglGetProcAddress(\"glBegin\") is null = {}",
+            eglGetProcAddress(c"glBegin".as_ptr().cast()).is_null()
+        );
 
         // A failed MakeCurrent (zero size) leaves no context current.
         let mut ctx = osmesa::OSMesa::new(64, 64).expect("OSMesa context");
         OSMesaMakeCurrent(std::ptr::null_mut(), std::ptr::null_mut(), 0, 0, 0);
         let (ctx, buffer) = (ctx.ctx, &mut ctx.buffer);
-        println!("OSMesaMakeCurrent(0x0) = {}", OSMesaMakeCurrent(ctx, buffer.as_mut_ptr().cast(), GL_UNSIGNED_BYTE, 0, 0));
-        println!("OSMesaMakeCurrent(bad type) = {}", OSMesaMakeCurrent(ctx, buffer.as_mut_ptr().cast(), 0x1234, 64, 64));
+        println!(
+            "OSMesaMakeCurrent(0x0) = {}",
+            OSMesaMakeCurrent(ctx, buffer.as_mut_ptr().cast(), GL_UNSIGNED_BYTE, 0, 0)
+        );
+        println!(
+            "OSMesaMakeCurrent(bad type) = {}",
+            OSMesaMakeCurrent(ctx, buffer.as_mut_ptr().cast(), 0x1234, 64, 64)
+        );
         println!("current context is null = {}", OSMesaGetCurrentContext().is_null());
-        println!("OSMesaMakeCurrent(64x64) = {}", OSMesaMakeCurrent(ctx, buffer.as_mut_ptr().cast(), GL_UNSIGNED_BYTE, 64, 64));
+        println!(
+            "OSMesaMakeCurrent(64x64) = {}",
+            OSMesaMakeCurrent(ctx, buffer.as_mut_ptr().cast(), GL_UNSIGNED_BYTE, 64, 64)
+        );
         let version = CStr::from_ptr(glGetString(GL_VERSION).cast()).to_string_lossy().into_owned();
         println!("GL_VERSION = {version}");
 
@@ -74,8 +92,14 @@ fn main() {
         check("glDeleteLists(1, -1)");
         glReadPixels(0, 0, 1, 1, 0xDEAD, GL_UNSIGNED_BYTE, buffer.as_mut_ptr().cast());
         check("glReadPixels(bad format)");
-        println!("OSMesaGetProcAddress(\"glNotAFunction\") is null = {}", OSMesaGetProcAddress(c"glNotAFunction".as_ptr().cast()).is_null());
-        println!("OSMesaGetProcAddress(\"glBindBuffer\") is null = {}", OSMesaGetProcAddress(c"glBindBuffer".as_ptr().cast()).is_null());
+        println!(
+            "OSMesaGetProcAddress(\"glNotAFunction\") is null = {}",
+            OSMesaGetProcAddress(c"glNotAFunction".as_ptr().cast()).is_null()
+        );
+        println!(
+            "OSMesaGetProcAddress(\"glBindBuffer\") is null = {}",
+            OSMesaGetProcAddress(c"glBindBuffer".as_ptr().cast()).is_null()
+        );
         println!("done");
     }
 }

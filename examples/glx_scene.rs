@@ -35,8 +35,18 @@ fn main() {
         swa.colormap = xlib::XCreateColormap(dpy, root, (*vi).visual, xlib::AllocNone);
         swa.event_mask = xlib::ExposureMask;
         let win = xlib::XCreateWindow(
-            dpy, root, 0, 0, W as u32, H as u32, 0, (*vi).depth, xlib::InputOutput as u32, (*vi).visual,
-            xlib::CWColormap | xlib::CWEventMask, &mut swa,
+            dpy,
+            root,
+            0,
+            0,
+            W as u32,
+            H as u32,
+            0,
+            (*vi).depth,
+            xlib::InputOutput as u32,
+            (*vi).visual,
+            xlib::CWColormap | xlib::CWEventMask,
+            &mut swa,
         );
         xlib::XMapWindow(dpy, win);
         let ctx = glx::glXCreateContext(dpy, vi, std::ptr::null_mut(), xlib::True);

@@ -21,7 +21,8 @@ fn main() {
             eprintln!("osmesa_scene: {e}");
             std::process::exit(1)
         });
-        let buffers = scene::BufferFns::load(|n| osmesa::OSMesaGetProcAddress(n.as_ptr().cast())).map(|b| &*Box::leak(Box::new(b)));
+        let buffers = scene::BufferFns::load(|n| osmesa::OSMesaGetProcAddress(n.as_ptr().cast()))
+            .map(|b| &*Box::leak(Box::new(b)));
         let s = scene::Scene::new(buffers);
         for frame in 0..frames {
             s.draw(W, H, frame);

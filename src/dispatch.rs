@@ -160,5 +160,5 @@ fn is_own(p: *mut c_void) -> bool {
     let own = runtime::get().own_base;
     let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
     // SAFETY: dladdr only reads the loader's tables.
-    unsafe { libc::dladdr(p, &mut info) != 0 && info.dli_fbase as *const c_void == own }
+    unsafe { libc::dladdr(p, &mut info) != 0 && std::ptr::eq(info.dli_fbase, own) }
 }

@@ -20,14 +20,12 @@ type DlopenFn = unsafe extern "C" fn(*const c_char, c_int) -> *mut c_void;
 pub fn is_gl_library(path: &[u8]) -> bool {
     let base = path.rsplit(|&c| c == b'/').next().unwrap_or(path);
     ["libGL", "libGLX", "libOpenGL", "libEGL", "libOSMesa"].iter().any(|stem| {
-        base.strip_prefix(stem.as_bytes())
-            .and_then(|rest| rest.strip_prefix(b".so"))
-            .is_some_and(|version| {
-                // Nothing, or ".N", ".N.M", ...
-                version.is_empty()
-                    || (version[0] == b'.'
-                        && version[1..].split(|&c| c == b'.').all(|n| !n.is_empty() && n.iter().all(u8::is_ascii_digit)))
-            })
+        base.strip_prefix(stem.as_bytes()).and_then(|rest| rest.strip_prefix(b".so")).is_some_and(|version| {
+            // Nothing, or ".N", ".N.M", ...
+            version.is_empty()
+                || (version[0] == b'.'
+                    && version[1..].split(|&c| c == b'.').all(|n| !n.is_empty() && n.iter().all(u8::is_ascii_digit)))
+        })
     })
 }
 
@@ -68,12 +66,32 @@ mod tests {
 
     #[test]
     fn matches_only_gl_library_names() {
-        for yes in ["libGL.so.1", "/usr/lib/x86_64-linux-gnu/libGL.so.1", "libGL.so", "libGL.so.1.7.0",
-                    "libGLX.so.0", "libOpenGL.so.0", "libEGL.so.1", "libOSMesa.so.8", "libOSMesa.so.8.0.0"] {
+        for yes in [
+            "libGL.so.1",
+            "/usr/lib/x86_64-linux-gnu/libGL.so.1",
+            "libGL.so",
+            "libGL.so.1.7.0",
+            "libGLX.so.0",
+            "libOpenGL.so.0",
+            "libEGL.so.1",
+            "libOSMesa.so.8",
+            "libOSMesa.so.8.0.0",
+        ] {
             assert!(is_gl_library(yes.as_bytes()), "{yes}");
         }
-        for no in ["libGLX_mesa.so.0", "libGLdispatch.so.0", "libGLU.so.1", "libGLabelPlot.so", "libGLEW.so.2.2",
-                   "libEGL_mesa.so.0", "libGL.so.1x", "libGL.so.", "libgl.so.1", "mylibGL.so.1", ""] {
+        for no in [
+            "libGLX_mesa.so.0",
+            "libGLdispatch.so.0",
+            "libGLU.so.1",
+            "libGLabelPlot.so",
+            "libGLEW.so.2.2",
+            "libEGL_mesa.so.0",
+            "libGL.so.1x",
+            "libGL.so.",
+            "libgl.so.1",
+            "mylibGL.so.1",
+            "",
+        ] {
             assert!(!is_gl_library(no.as_bytes()), "{no}");
         }
     }

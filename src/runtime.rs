@@ -42,8 +42,8 @@ fn init() -> Runtime {
     let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
     // SAFETY: dladdr on the address of one of our own functions.
     let found = unsafe { libc::dladdr(get as *const c_void, &mut info) } != 0;
-    let own_path = (found && !info.dli_fname.is_null())
-        .then(|| unsafe { std::ffi::CStr::from_ptr(info.dli_fname) }.to_owned());
+    let own_path =
+        (found && !info.dli_fname.is_null()).then(|| unsafe { std::ffi::CStr::from_ptr(info.dli_fname) }.to_owned());
     let own_file = own_path.as_ref().and_then(|p| FileId::of(Path::new(&*p.to_string_lossy())));
     glray_core::info!(
         "glray {} loaded from {}{}",

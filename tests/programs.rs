@@ -97,7 +97,12 @@ fn openscad_png_is_unchanged() {
         };
         cmd.arg("-o").arg(&png).arg(&model).env("DISPLAY", &x.display);
         let out = run_ok(&mut cmd, &format!("openscad {way:?}"));
-        assert_eq!(stderr(&out).contains("glray: debug: glXMakeContextCurrent -> "), way != Way::Plain, "{way:?}: {}", stderr(&out));
+        assert_eq!(
+            stderr(&out).contains("glray: debug: glXMakeContextCurrent -> "),
+            way != Way::Plain,
+            "{way:?}: {}",
+            stderr(&out)
+        );
         pngs.push((way, png));
     }
     for (way, png) in &pngs[1..] {
@@ -139,10 +144,18 @@ fn glretrace_replays_identically_through_glray() {
                 .env("GLRAY_LOG", "debug"),
             &format!("glretrace {name}"),
         );
-        assert_eq!(stderr(&out).contains("glray: debug: glXSwapBuffers -> "), way != Way::Plain, "{name}: {}", stderr(&out));
+        assert_eq!(
+            stderr(&out).contains("glray: debug: glXSwapBuffers -> "),
+            way != Way::Plain,
+            "{name}: {}",
+            stderr(&out)
+        );
         let mut files: Vec<_> = std::fs::read_dir(dir.join(name)).unwrap().map(|e| e.unwrap().path()).collect();
         files.sort();
-        files.iter().map(|f| (f.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read(f).unwrap())).collect()
+        files
+            .iter()
+            .map(|f| (f.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read(f).unwrap()))
+            .collect()
     };
     let a = replay("plain-a", Way::Plain);
     let b = replay("plain-b", Way::Plain);

@@ -51,8 +51,17 @@ impl Egl {
             return Err(fail("eglInitialize"));
         }
         eglBindAPI(EGL_OPENGL_API);
-        let attribs = [EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_RED_SIZE, 8,
-                       EGL_DEPTH_SIZE, 16, EGL_NONE];
+        let attribs = [
+            EGL_SURFACE_TYPE,
+            EGL_PBUFFER_BIT,
+            EGL_RENDERABLE_TYPE,
+            EGL_OPENGL_BIT,
+            EGL_RED_SIZE,
+            8,
+            EGL_DEPTH_SIZE,
+            16,
+            EGL_NONE,
+        ];
         let mut cfg = std::ptr::null_mut();
         let mut n = 0;
         if eglChooseConfig(dpy, attribs.as_ptr(), &mut cfg, 1, &mut n) == 0 || n < 1 {

@@ -22,7 +22,11 @@ impl BufferFns {
         if g.is_null() || b.is_null() || d.is_null() {
             return None;
         }
-        Some(BufferFns { gen: std::mem::transmute(g), bind: std::mem::transmute(b), data: std::mem::transmute(d) })
+        Some(BufferFns {
+            gen: std::mem::transmute::<*const c_void, unsafe extern "C" fn(i32, *mut u32)>(g),
+            bind: std::mem::transmute::<*const c_void, unsafe extern "C" fn(u32, u32)>(b),
+            data: std::mem::transmute::<*const c_void, unsafe extern "C" fn(u32, isize, *const c_void, u32)>(d),
+        })
     }
 }
 

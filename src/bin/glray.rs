@@ -22,9 +22,8 @@ struct Cli {
 enum Command {
     /// Run PROGRAM under glray (LD_PRELOAD by default, like vglrun).
     Run {
-        /// Drop-in instead of preload: put a directory whose libGL.so.1, libEGL.so.1 and
-        /// libOSMesa.so.8 are glray first on LD_LIBRARY_PATH. Needed for programs that dlopen
-        /// libGL.so.1 without linking it (apitrace's glretrace) when preloading is not wanted.
+        /// Drop-in instead of preload: put a directory whose libGL.so.1, libOpenGL.so.0,
+        /// libGLX.so.0, libEGL.so.1 and libOSMesa.so.8 are glray first on LD_LIBRARY_PATH.
         #[arg(long)]
         dropin: bool,
         /// A setting for this run, KEY=VALUE (see `glray info`); may be repeated.
@@ -57,9 +56,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run { dropin, set, library, program } => run(dropin, &set, library, &program),
         Command::Info { set, library } => info(&set, library),
-        Command::DropinDir { library } => find_library(library)
-            .and_then(|lib| dropin_dir(&lib))
-            .map(|d| println!("{}", d.display())),
+        Command::DropinDir { library } => {
+            find_library(library).and_then(|lib| dropin_dir(&lib)).map(|d| println!("{}", d.display()))
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -81,9 +80,7 @@ fn parse_flags(set: &[String]) -> Result<Vec<(String, String)>, String> {
 }
 
 fn process_env() -> Vec<(String, String)> {
-    std::env::vars_os()
-        .filter_map(|(k, v)| Some((k.into_string().ok()?, v.into_string().ok()?)))
-        .collect()
+    std::env::vars_os().filter_map(|(k, v)| Some((k.into_string().ok()?, v.into_string().ok()?))).collect()
 }
 
 /// libglray.so: --library, else beside this executable, else in ../lib/glray or ../lib.
@@ -93,31 +90,34 @@ fn find_library(explicit: Option<PathBuf>) -> Result<PathBuf, String> {
     }
     let exe = std::env::current_exe().map_err(|e| format!("cannot locate the glray command: {e}"))?;
     let dir = exe.parent().unwrap_or(Path::new("/"));
-    let candidates = [
-        dir.join("libglray.so"),
-        dir.join("../lib/glray/libglray.so"),
-        dir.join("../lib/libglray.so"),
-    ];
-    candidates
-        .iter()
-        .find(|p| p.exists())
-        .and_then(|p| p.canonicalize().ok())
-        .ok_or_else(|| {
-            format!(
-                "cannot find libglray.so beside {} (looked in {}); build it with `cargo build --release` \
+    let candidates = [dir.join("libglray.so"), dir.join("../lib/glray/libglray.so"), dir.join("../lib/libglray.so")];
+    candidates.iter().find(|p| p.exists()).and_then(|p| p.canonicalize().ok()).ok_or_else(|| {
+        format!(
+            "cannot find libglray.so beside {} (looked in {}); build it with `cargo build --release` \
                  or pass --library PATH",
-                exe.display(),
-                candidates.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
-            )
-        })
+            exe.display(),
+            candidates.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+        )
+    })
 }
 
-/// The drop-in directory: libGL.so.1, libEGL.so.1 and libOSMesa.so.8 linked to libglray.so.
-/// Beside the library if writable, else in the user's cache directory.
+/// The drop-in directory: every GL library name (libGL, libOpenGL, libGLX, libEGL, libOSMesa,
+/// versioned and not) linked to libglray.so. The loader sees one file under all these names and
+/// loads it once; glray then opens the real libraries by path (docs/design.md). Beside the
+/// library if writable, else in the user's cache directory.
 fn dropin_dir(lib: &Path) -> Result<PathBuf, String> {
-    // libOpenGL.so.0 and libGLX.so.0 are not here: they are glray's own dependencies (the real
-    // ones must load under those names); preloading covers programs that dlopen them.
-    const NAMES: [&str; 6] = ["libGL.so.1", "libGL.so", "libEGL.so.1", "libEGL.so", "libOSMesa.so.8", "libOSMesa.so"];
+    const NAMES: [&str; 10] = [
+        "libGL.so.1",
+        "libGL.so",
+        "libOpenGL.so.0",
+        "libOpenGL.so",
+        "libGLX.so.0",
+        "libGLX.so",
+        "libEGL.so.1",
+        "libEGL.so",
+        "libOSMesa.so.8",
+        "libOSMesa.so",
+    ];
     let beside = lib.parent().unwrap_or(Path::new(".")).join("glray-dropin");
     let cache = std::env::var_os("XDG_CACHE_HOME")
         .map(PathBuf::from)
@@ -188,6 +188,51 @@ fn run(dropin: bool, set: &[String], library: Option<PathBuf>, program: &[OsStri
     Err(format!("cannot run {}: {err}", Path::new(&program[0]).display()))
 }
 
+/// "RENDERER, GL VERSION" of Mesa, from a 1x1 OSMesa context (no display needed).
+fn osmesa_renderer(lib: &reallib::RealLib) -> Option<String> {
+    use std::ffi::{c_void, CStr};
+    type Create = unsafe extern "C" fn(u32, i32, i32, i32, *mut c_void) -> *mut c_void;
+    type MakeCurrent = unsafe extern "C" fn(*mut c_void, *mut c_void, u32, i32, i32) -> u8;
+    type Destroy = unsafe extern "C" fn(*mut c_void);
+    type GetString = unsafe extern "C" fn(u32) -> *const std::ffi::c_char;
+    let (create, make_current, destroy, get_string) = (
+        lib.sym(c"OSMesaCreateContextExt"),
+        lib.sym(c"OSMesaMakeCurrent"),
+        lib.sym(c"OSMesaDestroyContext"),
+        lib.sym(c"glGetString"),
+    );
+    if [create, make_current, destroy, get_string].iter().any(|p| p.is_null()) {
+        return None;
+    }
+    // SAFETY: the symbols come from libOSMesa and have osmesa.h's signatures; the buffer outlives
+    // the context, which is destroyed before returning.
+    unsafe {
+        let create: Create = std::mem::transmute(create);
+        let make_current: MakeCurrent = std::mem::transmute(make_current);
+        let destroy: Destroy = std::mem::transmute(destroy);
+        let get_string: GetString = std::mem::transmute(get_string);
+        let ctx = create(0x1908 /* OSMESA_RGBA */, 0, 0, 0, std::ptr::null_mut());
+        if ctx.is_null() {
+            return None;
+        }
+        let mut pixel = [0u8; 4];
+        let mut text = None;
+        if make_current(ctx, pixel.as_mut_ptr().cast(), 0x1401 /* GL_UNSIGNED_BYTE */, 1, 1) != 0 {
+            let s = |name: u32| {
+                let p = get_string(name);
+                (!p.is_null()).then(|| CStr::from_ptr(p).to_string_lossy().into_owned())
+            };
+            text = Some(format!(
+                "{}, OpenGL {}",
+                s(0x1F01 /* GL_RENDERER */).unwrap_or_default(),
+                s(0x1F02 /* GL_VERSION */).unwrap_or_default()
+            ));
+        }
+        destroy(ctx);
+        text
+    }
+}
+
 fn info(set: &[String], library: Option<PathBuf>) -> Result<(), String> {
     let flags = parse_flags(set)?;
     let config = Config::resolve(&process_env(), &flags)?;
@@ -201,7 +246,15 @@ fn info(set: &[String], library: Option<PathBuf>) -> Result<(), String> {
     println!("real libraries:");
     for kind in RealKind::ALL {
         match reallib::open(kind, config.real_path(kind.setting()), own) {
-            Ok(l) => println!("  {:<15} {}", kind.soname(), l.path),
+            Ok(l) => {
+                println!("  {:<15} {}", kind.soname(), l.path);
+                if kind == RealKind::OSMesa {
+                    match osmesa_renderer(&l) {
+                        Some(r) => println!("  {:<15} {r}", "renderer"),
+                        None => println!("  {:<15} unknown (no OSMesa context could be made)", "renderer"),
+                    }
+                }
+            }
             Err(e) => println!("  {:<15} not found: {e}", kind.soname()),
         }
     }

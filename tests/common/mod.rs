@@ -18,7 +18,11 @@ pub fn glray_bin() -> PathBuf {
 
 pub fn libglray() -> PathBuf {
     let p = build_dir().join("libglray.so");
-    assert!(p.exists(), "{} is missing: build with `cargo build --release --all-targets` (scripts/test does)", p.display());
+    assert!(
+        p.exists(),
+        "{} is missing: build with `cargo build --release --all-targets` (scripts/test does)",
+        p.display()
+    );
     p
 }
 

@@ -118,6 +118,12 @@ impl fmt::Display for ConfigError {
 
 impl std::error::Error for ConfigError {}
 
+impl From<ConfigError> for String {
+    fn from(e: ConfigError) -> String {
+        e.0
+    }
+}
+
 /// The settings in force, each with its source.
 #[derive(Debug, Clone)]
 pub struct Config {
@@ -156,12 +162,7 @@ fn validate(s: &Setting, value: &str, place: &dyn Fn() -> String) -> Result<Stri
         Kind::Path => Some(value.to_string()),
     };
     ok.ok_or_else(|| {
-        ConfigError(format!(
-            "bad value {value:?} for setting `{}` ({}); allowed: {}",
-            s.key,
-            place(),
-            allowed(s.kind)
-        ))
+        ConfigError(format!("bad value {value:?} for setting `{}` ({}); allowed: {}", s.key, place(), allowed(s.kind)))
     })
 }
 
@@ -194,12 +195,10 @@ impl Config {
 
         let file = config_file(&env);
         if let Some(path) = &file {
-            let text = std::fs::read_to_string(path).map_err(|e| {
-                ConfigError(format!("cannot read config file {} ({CONFIG_ENV}): {e}", path.display()))
-            })?;
-            let table: toml::Table = text
-                .parse()
-                .map_err(|e| ConfigError(format!("config file {}: {e}", path.display())))?;
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| ConfigError(format!("cannot read config file {} ({CONFIG_ENV}): {e}", path.display())))?;
+            let table: toml::Table =
+                text.parse().map_err(|e| ConfigError(format!("config file {}: {e}", path.display())))?;
             for (key, value) in table {
                 let place = format!("in {}", path.display());
                 let s = setting(&key).ok_or_else(|| unknown_key(&key, &place))?;
@@ -223,10 +222,7 @@ impl Config {
             let place = format!("environment variable {name}");
             let s = setting(&key).ok_or_else(|| {
                 let keys: Vec<String> = SETTINGS.iter().map(|s| env_name(s.key)).collect();
-                ConfigError(format!(
-                    "unknown setting {name} ({place}); known: {}, {CONFIG_ENV}",
-                    keys.join(", ")
-                ))
+                ConfigError(format!("unknown setting {name} ({place}); known: {}, {CONFIG_ENV}", keys.join(", ")))
             })?;
             let v = validate(s, value, &|| place.clone())?;
             values.insert(s.key, (v, Source::Env(name.clone())));
@@ -243,9 +239,8 @@ impl Config {
 
     /// Resolves from this process's environment, with no flags.
     pub fn from_process_env() -> Result<Config, ConfigError> {
-        let vars: Vec<(String, String)> = std::env::vars_os()
-            .filter_map(|(k, v)| Some((k.into_string().ok()?, v.into_string().ok()?)))
-            .collect();
+        let vars: Vec<(String, String)> =
+            std::env::vars_os().filter_map(|(k, v)| Some((k.into_string().ok()?, v.into_string().ok()?))).collect();
         Config::resolve(&vars, &[])
     }
 
@@ -349,11 +344,5 @@ mod tests {
     fn missing_config_file_named_by_env_is_an_error() {
         let e = Config::resolve(&vars(&[("GLRAY_CONFIG", "/nonexistent/glray.toml")]), &[]).unwrap_err().0;
         assert!(e.contains("/nonexistent/glray.toml") && e.contains("GLRAY_CONFIG"), "{e}");
-    }
-}
-
-impl From<ConfigError> for String {
-    fn from(e: ConfigError) -> String {
-        e.0
     }
 }

@@ -71,6 +71,8 @@ impl FileId {
 }
 
 /// The file that defines the code or data at `addr`, from the dynamic loader.
+// dladdr only compares `addr` with the loader's tables; it never reads through it.
+#[allow(clippy::not_unsafe_ptr_arg_deref)]
 pub fn defining_file(addr: *const c_void) -> Option<String> {
     // SAFETY: dladdr only reads the loader's tables; a zeroed Dl_info is a valid out-parameter.
     unsafe {
@@ -118,9 +120,7 @@ impl RealLib {
     /// The address of `name` in this library (or its dependencies), or null.
     pub fn sym(&self, name: &CStr) -> *mut c_void {
         // SAFETY: we only read the symbol's address; nothing is called here.
-        unsafe { self.lib.get::<*mut c_void>(name.to_bytes_with_nul()) }
-            .map(|s| *s)
-            .unwrap_or(std::ptr::null_mut())
+        unsafe { self.lib.get::<*mut c_void>(name.to_bytes_with_nul()) }.map(|s| *s).unwrap_or(std::ptr::null_mut())
     }
 }
 
