@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 
 fn main() {
     let spec = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap()).join("gl-spec");
-    for f in ["types.txt", "exports.txt", "classes.txt", "osmesa.txt", "glx-extras.txt"] {
+    for f in ["types.txt", "exports.txt", "classes.txt", "osmesa.txt", "glx-extras.txt", "sizes.txt"] {
         println!("cargo:rerun-if-changed={}", spec.join(f).display());
     }
     println!("cargo:rerun-if-changed=build.rs");
@@ -56,11 +56,15 @@ fn main() {
     }
     classify(&spec.join("classes.txt"), &mut commands);
 
+    let sizes = read_sizes(&spec.join("sizes.txt"));
+
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     let cmds: Vec<&Command> = commands.values().collect();
     write(&out.join("commands.rs"), &gen_commands(&cmds));
     write(&out.join("real.rs"), &gen_real(&cmds));
     write(&out.join("exports.rs"), &gen_exports(&cmds));
+    write(&out.join("record.rs"), &gen_record(&cmds, &types, &sizes));
+    write(&out.join("replay.rs"), &gen_replay(&cmds));
 
     // The glvnd layout that every loader accepts (see docs/design.md): SONAME libGL.so.1, and
     // glvnd's libGLX and libOpenGL as dependencies so that dlsym(handle, name) on our handle
@@ -116,10 +120,20 @@ struct Command {
     name: String,
     lib: Lib,
     ret: String,
-    params: Vec<(String, String)>,
+    params: Vec<Param>,
     class: String,
     list: String,
     handler: bool,
+}
+
+/// One parameter: its name, Rust FFI type, C declaration (without the name) and the registry's
+/// `len` (how many elements a pointer parameter points to), if any.
+#[derive(Clone)]
+struct Param {
+    name: String,
+    rust: String,
+    c: String,
+    len: Option<String>,
 }
 
 fn fail(msg: &str) -> ! {
@@ -192,7 +206,7 @@ fn version_in(range: &str, number: &str) -> bool {
     parse(lo) <= v && v <= parse(hi)
 }
 
-type Proto = (String, Vec<(String, String)>);
+type Proto = (String, Vec<Param>);
 
 fn registry_commands(
     xml: &[u8],
@@ -264,7 +278,8 @@ fn registry_commands(
         let mut params = Vec::new();
         for p in node.children().filter(|n| n.has_tag_name("param")) {
             let (ty_c, pname) = decl_text(p);
-            params.push((pname, rust_type(&ty_c, types, &name)));
+            let rust = rust_type(&ty_c, types, &name);
+            params.push(Param { name: pname, rust, c: ty_c, len: p.attribute("len").map(str::to_string) });
         }
         out.insert(name, (ret, params));
     }
@@ -292,7 +307,8 @@ fn prototype_file(path: &Path, types: &HashMap<String, String>) -> BTreeMap<Stri
             for a in args.split(',') {
                 let a = a.trim();
                 let split = a.rfind(|c: char| c.is_whitespace() || c == '*').unwrap_or_else(bad!());
-                params.push((a[split + 1..].to_string(), rust_type(&a[..=split], types, name)));
+                let c = a[..=split].trim().to_string();
+                params.push(Param { name: a[split + 1..].to_string(), rust: rust_type(&c, types, name), c, len: None });
             }
         }
         out.insert(name.to_string(), (ret, params));
@@ -373,8 +389,8 @@ fn ident(name: &str) -> String {
 }
 
 fn signature(c: &Command) -> (String, String, String) {
-    let params: Vec<String> = c.params.iter().map(|(n, t)| format!("{}: {t}", ident(n))).collect();
-    let args: Vec<String> = c.params.iter().map(|(n, _)| ident(n)).collect();
+    let params: Vec<String> = c.params.iter().map(|p| format!("{}: {}", ident(&p.name), p.rust)).collect();
+    let args: Vec<String> = c.params.iter().map(|p| ident(&p.name)).collect();
     let ret = if c.ret == "()" { String::new() } else { format!(" -> {}", c.ret) };
     (params.join(", "), args.join(", "), ret)
 }
@@ -418,7 +434,7 @@ fn gen_real(cmds: &[&Command]) -> String {
     let mut s = String::new();
     for c in cmds {
         let (params, args, ret) = signature(c);
-        let types: Vec<&str> = c.params.iter().map(|(_, t)| t.as_str()).collect();
+        let types: Vec<&str> = c.params.iter().map(|p| p.rust.as_str()).collect();
         writeln!(
             s,
             "#[inline(always)]\npub unsafe fn {name}({params}){ret} {{\n    \
@@ -439,17 +455,245 @@ fn gen_exports(cmds: &[&Command]) -> String {
     let mut s = String::new();
     for c in cmds {
         let (params, args, ret) = signature(c);
-        let body = if c.handler {
+        let call = if c.handler {
             format!("crate::ffi_guard::guard(c\"{0}\", || crate::handlers::{0}({args}))", c.name)
         } else {
             format!("crate::real::{}({args})", c.name)
         };
-        writeln!(s, "#[no_mangle]\npub unsafe extern \"C\" fn {}({params}){ret} {{\n    {body}\n}}", c.name).unwrap();
+        let sep = if args.is_empty() { "" } else { ", " };
+        // Recording: only the outermost call of a thread is recorded (a real implementation
+        // calling its own exported functions reaches glray's exports again).
+        writeln!(
+            s,
+            "#[no_mangle]\npub unsafe extern \"C\" fn {name}({params}){ret} {{\n    \
+             if !crate::record::active() {{\n        return {call};\n    }}\n    \
+             let outer__ = crate::record::enter();\n    \
+             let ret__ = {call};\n    \
+             if outer__ {{\n        \
+             crate::record::with(|rec__| crate::record::generated::{name}(rec__, {args}{sep}ret__));\n        \
+             crate::record::leave();\n    \
+             }}\n    \
+             ret__\n}}",
+            name = c.name,
+        )
+        .unwrap();
     }
     writeln!(s, "/// The address of each export, in COMMANDS order: what GetProcAddress hands out.").unwrap();
     writeln!(s, "pub static EXPORTS: [FnAddr; COUNT] = [").unwrap();
     for c in cmds {
         writeln!(s, "    FnAddr({} as *const c_void),", c.name).unwrap();
+    }
+    writeln!(s, "];").unwrap();
+    s
+}
+
+/// gl-spec/sizes.txt: COMPSIZE argument list -> rule name.
+fn read_sizes(path: &Path) -> HashMap<String, String> {
+    let mut map = HashMap::new();
+    for line in data_lines(path) {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.len() != 2 {
+            fail(&format!("gl-spec/sizes.txt: expected `ARGS RULE`: {line}"));
+        }
+        let args = if words[0] == "-" { String::new() } else { words[0].to_string() };
+        map.insert(args, words[1].to_string());
+    }
+    map
+}
+
+/// The C base type a pointer parameter points to ("const GLfloat *" -> "GLfloat").
+fn pointee(c_decl: &str) -> String {
+    c_decl
+        .replace('*', " ")
+        .split_whitespace()
+        .filter(|w| *w != "const" && *w != "struct")
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Size in bytes of one element of a Rust FFI type.
+fn rust_size(rust: &str) -> usize {
+    match rust {
+        "()" | "u8" | "i8" => 1,
+        "u16" | "i16" => 2,
+        "u32" | "i32" | "f32" => 4,
+        _ => 8,
+    }
+}
+
+fn is_char(base: &str) -> bool {
+    matches!(base, "GLchar" | "GLcharARB" | "char")
+}
+
+/// `x as i64` for an integer parameter, or None if `name` is not an integer parameter of `c`.
+fn int_param(c: &Command, name: &str) -> Option<String> {
+    c.params
+        .iter()
+        .find(|p| p.name == name && !p.rust.contains('*') && !p.rust.starts_with('f'))
+        .map(|p| format!("({} as i64)", ident(&p.name)))
+}
+
+/// Code that records pointer parameter `p` of command `c`.
+fn record_pointer(c: &Command, p: &Param, types: &HashMap<String, String>, sizes: &HashMap<String, String>) -> String {
+    let v = ident(&p.name);
+    let base = pointee(&p.c);
+    let elem = if base == "void" { 1 } else { types.get(&base).map_or(1, |r| rust_size(r)) };
+    let stars = p.c.matches('*').count();
+    let unknown = format!("rec.unknown_pointer(crate::commands::cmd::{}, {v});", c.name);
+    if !p.c.contains("const") {
+        return format!("rec.output_pointer({v});");
+    }
+    if stars >= 2 {
+        // Arrays of strings (glShaderSource): `len` is the count, `length` the optional lengths.
+        if is_char(&base) {
+            if let Some(count) = p.len.as_deref().and_then(|l| int_param(c, l)) {
+                let lengths = c.params.iter().find(|q| q.name == "length" && q.rust.contains('*'));
+                let lengths = lengths.map_or("core::ptr::null_mut()".to_string(), |q| ident(&q.name));
+                return format!("rec.strings({v}, {count}, {lengths});");
+            }
+        }
+        return unknown;
+    }
+    let Some(len) = p.len.as_deref() else {
+        return if is_char(&base) { format!("rec.c_string({v});") } else { unknown };
+    };
+    if let Some(inner) = len.strip_prefix("COMPSIZE(").and_then(|l| l.strip_suffix(')')) {
+        let Some(rule) = sizes.get(inner) else { return unknown };
+        let names: Vec<&str> = if inner.is_empty() { vec![] } else { inner.split(',').collect() };
+        return match rule.as_str() {
+            "c_string" => format!("rec.c_string({v});"),
+            _ if inner.is_empty() && is_char(&base) => format!("rec.c_string({v});"),
+            "string_with_length" => match int_param(c, names[1]) {
+                Some(n) => format!("rec.string_with_length({v}, {n});"),
+                None => unknown,
+            },
+            r if r.starts_with("array_pointer") => format!("rec.array_pointer({v});"),
+            r => {
+                let args: Option<Vec<String>> = names.iter().map(|n| int_param(c, n)).collect();
+                match args {
+                    Some(args) => {
+                        format!("{{ let m = sizes::{r}(rec, &[{}]); rec.memory({v}, m, {elem}); }}", args.join(", "))
+                    }
+                    None => unknown,
+                }
+            }
+        };
+    }
+    // A number, a parameter, or a product of them.
+    let terms: Option<Vec<String>> = len
+        .split('*')
+        .map(|t| {
+            let t = t.trim();
+            if t.chars().all(|ch| ch.is_ascii_digit()) && !t.is_empty() {
+                Some(format!("({t} as i64)"))
+            } else {
+                int_param(c, t)
+            }
+        })
+        .collect();
+    match terms {
+        Some(t) => format!("rec.memory({v}, sizes::product(&[{}]), {elem});", t.join(", ")),
+        None => unknown,
+    }
+}
+
+fn record_scalar(rust: &str, v: &str) -> String {
+    match rust {
+        "f32" => format!("rec.e.f32({v});"),
+        "f64" => format!("rec.e.f64({v});"),
+        "i8" | "i16" | "i32" | "i64" | "isize" => format!("rec.e.int({v} as i64);"),
+        _ => format!("rec.e.uint({v} as u64);"),
+    }
+}
+
+fn bits(rust: &str, v: &str) -> String {
+    match rust {
+        "f32" | "f64" => format!("{v}.to_bits() as u64"),
+        "()" => "0u64".into(),
+        r if r.contains('*') => format!("{v} as usize as u64"),
+        "i8" | "i16" | "i32" | "i64" | "isize" => format!("{v} as i64 as u64"),
+        _ => format!("{v} as u64"),
+    }
+}
+
+/// record.rs: `generated::NAME(rec, args..., ret)` writes one call to the trace. Commands whose
+/// class touches client arrays, contexts or frames also call the recorder's hooks before and
+/// after, with their arguments as bits.
+fn gen_record(cmds: &[&Command], types: &HashMap<String, String>, sizes: &HashMap<String, String>) -> String {
+    let mut s = String::new();
+    for c in cmds {
+        let mut params: Vec<String> = c.params.iter().map(|p| format!("{}: {}", ident(&p.name), p.rust)).collect();
+        params.push(format!("ret__: {}", c.ret));
+        let hooked = ["geometry", "client", "context", "frame"].contains(&c.class.as_str());
+        writeln!(s, "#[allow(unused_variables, unused_parens, clippy::unnecessary_cast)]").unwrap();
+        writeln!(s, "pub unsafe fn {}(rec: &mut Recorder, {}) {{", c.name, params.join(", ")).unwrap();
+        if hooked {
+            let b: Vec<String> = c.params.iter().map(|p| bits(&p.rust, &ident(&p.name))).collect();
+            writeln!(s, "    let bits__: [u64; {}] = [{}];", b.len(), b.join(", ")).unwrap();
+            writeln!(s, "    rec.before(crate::commands::cmd::{}, &bits__);", c.name).unwrap();
+        }
+        writeln!(s, "    rec.begin(crate::commands::cmd::{}, {});", c.name, c.params.len()).unwrap();
+        for p in &c.params {
+            let code = if p.rust.contains('*') {
+                record_pointer(c, p, types, sizes)
+            } else {
+                record_scalar(&p.rust, &ident(&p.name))
+            };
+            writeln!(s, "    {code}").unwrap();
+        }
+        match c.ret.as_str() {
+            "()" => writeln!(s, "    rec.e.no_return();").unwrap(),
+            r if r.contains('*') => writeln!(s, "    rec.e.opaque(ret__ as usize as u64);").unwrap(),
+            r => writeln!(s, "    {}", record_scalar(r, "ret__")).unwrap(),
+        }
+        if hooked {
+            writeln!(s, "    rec.after(crate::commands::cmd::{}, &bits__, {});", c.name, bits(&c.ret, "ret__"))
+                .unwrap();
+        }
+        writeln!(s, "}}").unwrap();
+    }
+    s
+}
+
+/// replay.rs: for every GL command, a function that turns recorded values into arguments and
+/// calls the replay target's function; `REPLAY[cmd]` finds it.
+fn gen_replay(cmds: &[&Command]) -> String {
+    let mut s = String::new();
+    writeln!(s, "pub type ReplayFn = unsafe fn(&mut Replayer, &[Value]) -> Result<(), String>;").unwrap();
+    for c in cmds.iter().filter(|c| c.lib == Lib::Gl) {
+        writeln!(s, "#[allow(unused_variables, clippy::useless_transmute)]").unwrap();
+        writeln!(s, "unsafe fn {}(r: &mut Replayer, a: &[Value]) -> Result<(), String> {{", c.name).unwrap();
+        writeln!(s, "    if a.len() != {} {{ return Err(arity({}, a.len())); }}", c.params.len(), c.params.len())
+            .unwrap();
+        writeln!(s, "    let f__ = r.gl(cmd::{})?;", c.name).unwrap();
+        let mut names = Vec::new();
+        for (i, p) in c.params.iter().enumerate() {
+            let v = format!("a{i}");
+            let conv = if p.rust.contains('*') {
+                if p.c.contains("const") {
+                    format!("r.input_pointer(&a[{i}])?")
+                } else {
+                    format!("r.output_pointer(cmd::{}, {i}, &a[{i}])?", c.name)
+                }
+            } else {
+                format!("<{} as FromValue>::from_value(&a[{i}], {i})?", p.rust)
+            };
+            writeln!(s, "    let {v}: {} = {conv};", p.rust).unwrap();
+            names.push(v);
+        }
+        let types: Vec<&str> = c.params.iter().map(|p| p.rust.as_str()).collect();
+        let ret = if c.ret == "()" { String::new() } else { format!(" -> {}", c.ret) };
+        writeln!(s, "    let real__: unsafe extern \"C\" fn({}){ret} = core::mem::transmute(f__);", types.join(", "))
+            .unwrap();
+        writeln!(s, "    real__({});\n    Ok(())\n}}", names.join(", ")).unwrap();
+    }
+    writeln!(s, "pub static REPLAY: [Option<ReplayFn>; COUNT] = [").unwrap();
+    for c in cmds {
+        if c.lib == Lib::Gl {
+            writeln!(s, "    Some({} as ReplayFn),", c.name).unwrap();
+        } else {
+            writeln!(s, "    None,").unwrap();
+        }
     }
     writeln!(s, "];").unwrap();
     s

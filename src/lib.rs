@@ -20,4 +20,5 @@ pub mod exports;
 mod ffi_guard;
 mod handlers;
 mod real;
+mod record;
 mod runtime;

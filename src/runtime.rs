@@ -51,6 +51,9 @@ fn init() -> Runtime {
         own_path.as_ref().map_or("?".into(), |p| p.to_string_lossy()),
         if config.enable() { "" } else { " (pass-through: enable = false)" }
     );
+    if let Some(path) = config.record() {
+        crate::record::start(path);
+    }
     Runtime { config, own_path, own_file, own_base: info.dli_fbase }
 }
 

@@ -54,6 +54,13 @@ pub const SETTINGS: &[Setting] = &[
               still reach it.",
     },
     Setting {
+        key: "record",
+        kind: Kind::Path,
+        default: "",
+        doc: "Record every GL/GLX/EGL/OSMesa call of the program into this trace file (docs/trace-format.md); \
+              `%p` becomes the process id. Empty: no recording.",
+    },
+    Setting {
         key: "real_opengl",
         kind: Kind::Path,
         default: "",
@@ -269,6 +276,11 @@ impl Config {
 
     pub fn log_level(&self) -> crate::log::Level {
         crate::log::Level::parse(self.get("log")).unwrap_or(crate::log::Level::Warn)
+    }
+
+    /// The trace file to record into, if any.
+    pub fn record(&self) -> Option<&str> {
+        Some(self.get("record")).filter(|p| !p.is_empty())
     }
 
     /// The user's path for a real library, if set.

@@ -2,7 +2,9 @@
 //! GL, GLX, EGL and OSMesa libraries without ever finding glray itself.
 
 pub mod config;
+pub mod image;
 pub mod log;
 pub mod reallib;
+pub mod trace;
 
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

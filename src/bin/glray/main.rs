@@ -7,9 +7,25 @@ use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
 use glray_core::config::{env_name, Config, Kind, SETTINGS};
 use glray_core::reallib::{self, FileId, RealKind};
+
+#[allow(dead_code)]
+#[path = "../../commands.rs"]
+mod commands;
+mod replay;
+
+/// Where `glray replay` sends the calls.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Renderer {
+    /// Mesa's OSMesa: the reference rasterizer.
+    Osmesa,
+    /// glray's capture and ray tracer (not built yet).
+    Glray,
+    /// Both, with difference images and a report (not built yet).
+    Both,
+}
 
 #[derive(Parser)]
 #[command(name = "glray", version, about = "Ray-traced frames for unmodified OpenGL programs")]
@@ -29,6 +45,9 @@ enum Command {
         /// A setting for this run, KEY=VALUE (see `glray info`); may be repeated.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Record the program's GL calls into this trace (the same as --set record=PATH).
+        #[arg(long, value_name = "TRACE")]
+        record: Option<PathBuf>,
         /// libglray.so to use (default: the one installed beside this command).
         #[arg(long, value_name = "PATH")]
         library: Option<PathBuf>,
@@ -44,6 +63,51 @@ enum Command {
         #[arg(long, value_name = "PATH")]
         library: Option<PathBuf>,
     },
+    /// Compare two images (PNG or PPM): the share of pixels with a channel off by more than the
+    /// fuzz, PSNR, and a red difference image. Exit status 0 when the thresholds hold, 1 when
+    /// not, 2 on an error (unreadable file, sizes differ).
+    Compare {
+        a: PathBuf,
+        b: PathBuf,
+        /// A channel may be off by this share of 255 before its pixel counts as differing.
+        #[arg(long, default_value_t = 0.05)]
+        fuzz: f64,
+        /// The largest share of differing pixels that passes (0.02 = 2%).
+        #[arg(long, default_value_t = 0.0)]
+        max_differing: f64,
+        /// The lowest PSNR in dB that passes (default: no PSNR threshold).
+        #[arg(long)]
+        min_psnr: Option<f64>,
+        /// Write the difference image here (red = differing pixel).
+        #[arg(long, value_name = "PNG")]
+        diff: Option<PathBuf>,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Replay a recorded trace (glray run --record) and write each frame as OUT/frame-NNNN.png.
+    Replay {
+        trace: PathBuf,
+        #[arg(long, value_enum, default_value = "osmesa")]
+        renderer: Renderer,
+        /// Directory for the images (created if missing).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Only these frames, e.g. 0,3,5-7 (default: all).
+        #[arg(long, value_name = "LIST")]
+        frames: Option<String>,
+        /// Also write what each glReadPixels of RGB/RGBA bytes returned (readpixels-NNNN.png):
+        /// the picture of programs that draw offscreen and read it back, like OpenSCAD.
+        #[arg(long)]
+        readpixels: bool,
+    },
+    /// Print a trace's events, one per line.
+    Dump {
+        trace: PathBuf,
+        /// Stop after this many calls.
+        #[arg(long)]
+        calls: Option<u64>,
+    },
     /// Print (creating it if needed) the drop-in directory: LD_LIBRARY_PATH=$(glray dropin-dir) app
     DropinDir {
         #[arg(long, value_name = "PATH")]
@@ -54,14 +118,179 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { dropin, set, library, program } => run(dropin, &set, library, &program),
+        Command::Compare { a, b, fuzz, max_differing, min_psnr, diff, json } => {
+            return compare(&a, &b, fuzz, max_differing, min_psnr, diff.as_deref(), json);
+        }
+        Command::Run { dropin, mut set, record, library, program } => {
+            if let Some(r) = record {
+                // Absolute, so that a program that changes directory records where it was asked.
+                let r = std::path::absolute(&r).unwrap_or(r);
+                set.push(format!("record={}", r.display()));
+            }
+            run(dropin, &set, library, &program)
+        }
         Command::Info { set, library } => info(&set, library),
+        Command::Replay { trace, renderer, out, frames, readpixels } => {
+            replay(&trace, renderer, &out, frames, readpixels)
+        }
+        Command::Dump { trace, calls } => dump(&trace, calls),
         Command::DropinDir { library } => {
             find_library(library).and_then(|lib| dropin_dir(&lib)).map(|d| println!("{}", d.display()))
         }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("glray: error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn read_trace(path: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn replay(
+    trace: &Path,
+    renderer: Renderer,
+    out: &Path,
+    frames: Option<String>,
+    readpixels: bool,
+) -> Result<(), String> {
+    if renderer != Renderer::Osmesa {
+        return Err(format!(
+            "--renderer {renderer:?} is not available yet: glray's capture and ray tracer come next; use --renderer osmesa"
+        )
+        .to_lowercase());
+    }
+    let frames = frames.as_deref().map(replay::FrameSet::parse).transpose()?.unwrap_or_default();
+    let data = read_trace(trace)?;
+    let config = Config::resolve(&process_env(), &[])?;
+    let mut r = replay::Replayer::new(out, frames, readpixels, config.real_path("real_osmesa"))?;
+    let summary = r.run(&data).map_err(|e| format!("{}: {e}", trace.display()))?;
+    println!(
+        "replayed {} calls: {} frames written to {}{}",
+        summary.calls,
+        summary.frames_written,
+        out.display(),
+        if readpixels { format!(", {} glReadPixels images", summary.readpixels_written) } else { String::new() }
+    );
+    if !summary.missing.is_empty() {
+        eprintln!("glray: warning: OSMesa lacks {} (those calls were skipped)", summary.missing.join(", "));
+    }
+    Ok(())
+}
+
+fn dump(trace: &Path, max_calls: Option<u64>) -> Result<(), String> {
+    use glray_core::trace::{Event, Reader};
+    use std::io::Write;
+    let data = read_trace(trace)?;
+    let fail = |e: glray_core::trace::TraceError| format!("{}: {e}", trace.display());
+    let mut r = Reader::new(&data).map_err(fail)?;
+    let names: Vec<String> = r.names.iter().map(|n| String::from_utf8_lossy(n).into_owned()).collect();
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    let mut write = |line: String| writeln!(out, "{line}").map_err(|e| e.to_string());
+    write(format!("glray trace version {}, {} command names", r.version, names.len()))?;
+    while let Some(event) = r.next_event().map_err(fail)? {
+        match event {
+            Event::Call { cmd, thread, args, ret } => {
+                let args: Vec<String> = args.iter().map(show_value).collect();
+                let ret = ret.map(|v| format!(" = {}", show_value(&v))).unwrap_or_default();
+                write(format!("{} [{thread}] {}({}){ret}", r.calls() - 1, names[cmd], args.join(", ")))?;
+                if max_calls.is_some_and(|m| r.calls() >= m) {
+                    break;
+                }
+            }
+            Event::Frame { number } => write(format!("-- frame {number} --"))?,
+            Event::Drawable { thread, id, width, height } => {
+                write(format!("   [{thread}] drawable {id:#x}: {width}x{height}"))?
+            }
+            Event::Arrays { thread, arrays } => {
+                for a in arrays {
+                    write(format!(
+                        "   [{thread}] array kind {} #{}: size {} type {:#x} stride {} from element {}, {} bytes",
+                        a.kind,
+                        a.index,
+                        a.size,
+                        a.gl_type,
+                        a.stride,
+                        a.first,
+                        a.bytes.len()
+                    ))?;
+                }
+            }
+            Event::End => write("-- end --".into())?,
+        }
+    }
+    Ok(())
+}
+
+fn show_value(v: &glray_core::trace::Value) -> String {
+    use glray_core::trace::Value;
+    match v {
+        Value::Int(x) => x.to_string(),
+        Value::UInt(x) if *x > 0xFFFF => format!("{x:#x}"),
+        Value::UInt(x) => x.to_string(),
+        Value::F32(x) => format!("{x}"),
+        Value::F64(x) => format!("{x}"),
+        Value::Null => "NULL".into(),
+        Value::Opaque(x) => format!("<{x:#x}>"),
+        Value::Offset(x) => format!("offset {x}"),
+        Value::Blob(b) => format!("<{} bytes>", b.len()),
+        Value::Str(s) => format!("{:?}", String::from_utf8_lossy(s)),
+        Value::Strings(l) => format!("[{} strings]", l.len()),
+    }
+}
+
+fn compare(
+    a: &Path,
+    b: &Path,
+    fuzz: f64,
+    max_differing: f64,
+    min_psnr: Option<f64>,
+    diff: Option<&Path>,
+    json: bool,
+) -> ExitCode {
+    use glray_core::image::{compare, Image};
+    let result = (|| -> Result<bool, String> {
+        if !(0.0..=1.0).contains(&fuzz) || !(0.0..=1.0).contains(&max_differing) {
+            return Err(format!("--fuzz ({fuzz}) and --max-differing ({max_differing}) are shares between 0 and 1"));
+        }
+        let c = compare(&Image::read(a)?, &Image::read(b)?, fuzz)?;
+        if let Some(d) = diff {
+            c.diff.write_png(d)?;
+        }
+        let pass = c.differing_share() <= max_differing && min_psnr.is_none_or(|m| c.psnr >= m);
+        let psnr = if c.psnr.is_finite() { format!("{:.2}", c.psnr) } else { "inf".into() };
+        if json {
+            println!(
+                "{{\"pixels\":{},\"differing\":{},\"differing_share\":{},\"psnr\":{},\"max_channel_error\":{},\"fuzz\":{},\"pass\":{}}}",
+                c.pixels,
+                c.differing,
+                c.differing_share(),
+                if c.psnr.is_finite() { psnr.clone() } else { "null".into() },
+                c.max_channel_error,
+                fuzz,
+                pass
+            );
+        } else {
+            println!(
+                "{} of {} pixels differ by more than {:.1}% ({:.3}%); PSNR {psnr} dB; largest channel error {}; {}",
+                c.differing,
+                c.pixels,
+                fuzz * 100.0,
+                c.differing_share() * 100.0,
+                c.max_channel_error,
+                if pass { "pass" } else { "FAIL" }
+            );
+        }
+        Ok(pass)
+    })();
+    match result {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
         Err(e) => {
             eprintln!("glray: error: {e}");
             ExitCode::from(2)

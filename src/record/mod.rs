@@ -1,0 +1,410 @@
+//! Recording traces (`GLRAY_RECORD=path`, `glray run --record path`): every GL, GLX, EGL and
+//! OSMesa call, after the real call returns, with the client memory it read; the memory of client
+//! vertex arrays at each draw that reads them; drawable sizes at MakeCurrent; frame ends at
+//! swaps (and, for OSMesa contexts, which have no swap, at glFinish). docs/trace-format.md
+//! describes the file.
+//!
+//! The file is opened at the first recorded call, so processes that load glray but never call
+//! GL (a shell under `glray run`) leave it alone; `%p` in the path becomes the process id.
+//! Writes are serialised by one lock and buffered; the buffer goes to the file at each frame end,
+//! every few MiB, and at exit.
+
+mod arrays;
+pub mod sizes;
+
+use std::collections::{HashMap, HashSet};
+use std::ffi::{c_void, CStr};
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+
+use glray_core::trace::Encoder;
+
+use crate::commands::{cmd, COMMANDS};
+use crate::real;
+
+pub use arrays::ClientArrays;
+
+/// The generated `generated::NAME(rec, args..., ret)` of every command.
+pub mod generated {
+    #![allow(non_snake_case, clippy::all)]
+    use super::{sizes, Recorder};
+    use std::ffi::{c_ulong, c_void};
+    include!(concat!(env!("OUT_DIR"), "/record.rs"));
+}
+
+static ACTIVE: AtomicBool = AtomicBool::new(false);
+static RECORDER: Mutex<Option<Recorder>> = Mutex::new(None);
+
+/// Whether calls are being recorded: one relaxed load on every call.
+#[inline(always)]
+pub fn active() -> bool {
+    ACTIVE.load(Ordering::Relaxed)
+}
+
+/// Starts recording into `path` (opened at the first call).
+pub fn start(path: &str) {
+    let path = path.replace("%p", &std::process::id().to_string());
+    *RECORDER.lock().unwrap_or_else(|e| e.into_inner()) = Some(Recorder::new(PathBuf::from(path)));
+    ACTIVE.store(true, Ordering::Relaxed);
+    // SAFETY: registering a plain extern "C" function with atexit.
+    unsafe { libc::atexit(finish_at_exit) };
+}
+
+extern "C" fn finish_at_exit() {
+    let _ = std::panic::catch_unwind(finish);
+}
+
+/// Writes the end marker and flushes; recording stops.
+pub fn finish() {
+    ACTIVE.store(false, Ordering::Relaxed);
+    if let Some(rec) = RECORDER.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
+        if rec.file.is_some() {
+            rec.e.end();
+            rec.flush();
+        }
+    }
+}
+
+thread_local! {
+    static THREAD: std::cell::Cell<u32> = const { std::cell::Cell::new(u32::MAX) };
+    static INSIDE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Marks this thread as inside a recorded call; false if it already was (the call is nested:
+/// a real implementation calling an exported function, and is not recorded).
+pub fn enter() -> bool {
+    INSIDE.with(|i| !i.replace(true))
+}
+
+/// Ends the outermost recorded call of this thread.
+pub fn leave() {
+    INSIDE.with(|i| i.set(false));
+}
+
+/// Runs `f` with the recorder, under the lock and a panic guard: an I/O error or a panic stops
+/// recording (with a message) but never the program.
+pub fn with(f: impl FnOnce(&mut Recorder)) {
+    let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(rec) = guard.as_mut() else { return };
+    let thread = THREAD.with(|t| {
+        if t.get() == u32::MAX {
+            t.set(rec.next_thread);
+            rec.next_thread += 1;
+        }
+        t.get()
+    });
+    rec.thread = thread;
+    let ok = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        if rec.file.is_none() {
+            rec.open()?;
+        }
+        f(rec);
+        if rec.e.len() > (8 << 20) {
+            rec.flush();
+        }
+        rec.error.take().map_or(Ok(()), Err)
+    }));
+    let err = match ok {
+        Ok(Ok(())) => return,
+        Ok(Err(e)) => e,
+        Err(_) => "internal error while recording".to_string(),
+    };
+    glray_core::error!("recording stopped: {err}");
+    ACTIVE.store(false, Ordering::Relaxed);
+    *guard = None;
+}
+
+/// What the recorder knows per recorded thread.
+#[derive(Default)]
+struct ThreadState {
+    arrays: ClientArrays,
+    /// The drawable bound by the last MakeCurrent, and its size.
+    drawable: (u64, u32, u32),
+    /// Whether the current context is an OSMesa one (its frames end at glFinish).
+    osmesa: bool,
+    /// Arguments of the last GLX/EGL MakeCurrent, to re-query the size at swaps.
+    surface: Option<(Kind, u64, u64)>,
+}
+
+#[derive(Clone, Copy)]
+enum Kind {
+    Glx,
+    Egl,
+}
+
+pub struct Recorder {
+    pub e: Encoder,
+    path: PathBuf,
+    file: Option<std::fs::File>,
+    thread: u32,
+    next_thread: u32,
+    threads: HashMap<u32, ThreadState>,
+    warned: HashSet<usize>,
+    frame: u64,
+    error: Option<String>,
+}
+
+impl Recorder {
+    fn new(path: PathBuf) -> Recorder {
+        Recorder {
+            e: Encoder::new(),
+            path,
+            file: None,
+            thread: 0,
+            next_thread: 0,
+            threads: HashMap::new(),
+            warned: HashSet::new(),
+            frame: 0,
+            error: None,
+        }
+    }
+
+    fn open(&mut self) -> Result<(), String> {
+        let file = std::fs::File::create(&self.path)
+            .map_err(|e| format!("cannot create the trace {}: {e}", self.path.display()))?;
+        let names: Vec<&[u8]> = COMMANDS.iter().map(|c| c.name.to_bytes()).collect();
+        let mut header = Encoder::new();
+        header.header(&names);
+        let file = self.file.insert(file);
+        header.flush_to(file).map_err(|e| format!("writing {}: {e}", self.path.display()))?;
+        glray_core::info!("recording to {}", self.path.display());
+        Ok(())
+    }
+
+    fn flush(&mut self) {
+        if let Some(f) = self.file.as_mut() {
+            if let Err(e) = self.e.flush_to(f).and_then(|_| f.flush()) {
+                self.error = Some(format!("writing {}: {e}", self.path.display()));
+            }
+        }
+    }
+
+    fn state(&mut self) -> &mut ThreadState {
+        self.threads.entry(self.thread).or_default()
+    }
+
+    /// Starts the record of a call.
+    pub fn begin(&mut self, cmd: usize, nargs: usize) {
+        self.e.begin_call(cmd, self.thread, nargs as u8);
+    }
+
+    /// A pointer the call writes through, or one whose memory is not recorded: its value.
+    pub fn output_pointer(&mut self, p: *mut c_void) {
+        if p.is_null() {
+            self.e.null()
+        } else {
+            self.e.opaque(p as usize as u64)
+        }
+    }
+
+    /// A pointer whose size glray cannot tell (reported once per command).
+    pub fn unknown_pointer(&mut self, cmd: usize, p: *mut c_void) {
+        // GLX, EGL and OSMesa arguments are not replayed (contexts and surfaces are remade), so
+        // only GL commands are worth a warning.
+        if !p.is_null() && COMMANDS[cmd].lib == crate::commands::Lib::Gl && self.warned.insert(cmd) {
+            glray_core::warn!(
+                "recording {}: the size of a pointer argument is unknown; its memory is not recorded",
+                COMMANDS[cmd].name.to_string_lossy()
+            );
+        }
+        self.output_pointer(p)
+    }
+
+    /// The memory a pointer argument reads, sized by a rule.
+    pub fn memory(&mut self, p: *mut c_void, mem: sizes::Mem, elem: usize) {
+        const LIMIT: usize = 1 << 30;
+        if p.is_null() {
+            return self.e.null();
+        }
+        let bytes = match mem {
+            sizes::Mem::Offset => return self.e.offset(p as usize as u64),
+            sizes::Mem::Elements(n) => n.saturating_mul(elem),
+            sizes::Mem::Bytes(n) => n,
+        };
+        if bytes > LIMIT {
+            glray_core::warn!("recording: a {bytes}-byte argument is over the 1 GiB limit; only its address is kept");
+            return self.e.opaque(p as usize as u64);
+        }
+        // SAFETY: the program passed `p` to GL for GL to read `bytes` bytes (the registry's rule).
+        let data = unsafe { std::slice::from_raw_parts(p as *const u8, bytes) };
+        self.e.blob(data);
+    }
+
+    pub fn c_string(&mut self, p: *mut c_void) {
+        if p.is_null() {
+            return self.e.null();
+        }
+        // SAFETY: GL takes this argument as a NUL-terminated string.
+        let s = unsafe { CStr::from_ptr(p as *const libc::c_char) };
+        self.e.string(s.to_bytes());
+    }
+
+    pub fn string_with_length(&mut self, p: *mut c_void, len: i64) {
+        if p.is_null() || len < 0 {
+            return self.c_string(p);
+        }
+        // SAFETY: GL reads `len` bytes of this string.
+        let s = unsafe { std::slice::from_raw_parts(p as *const u8, len as usize) };
+        self.e.string(s);
+    }
+
+    /// An array of `count` strings, each NUL-terminated or of the length in `lengths`.
+    pub fn strings(&mut self, p: *mut c_void, count: i64, lengths: *mut c_void) {
+        if p.is_null() || count < 0 {
+            return self.e.null();
+        }
+        let ptrs = p as *const *const libc::c_char;
+        let lens = lengths as *const i32;
+        let mut list = Vec::with_capacity(count as usize);
+        for i in 0..count as usize {
+            // SAFETY: GL reads `count` string pointers and, if given, `count` lengths.
+            unsafe {
+                let s = *ptrs.add(i);
+                let len = if lens.is_null() { -1 } else { *lens.add(i) };
+                list.push(if s.is_null() {
+                    &[][..]
+                } else if len < 0 {
+                    CStr::from_ptr(s).to_bytes()
+                } else {
+                    std::slice::from_raw_parts(s as *const u8, len as usize)
+                });
+            }
+        }
+        self.e.strings(&list);
+    }
+
+    /// A vertex array pointer: an offset when a buffer object is bound, else the address (the
+    /// memory is captured when a draw reads it).
+    pub fn array_pointer(&mut self, p: *mut c_void) {
+        if bound_buffer(GL_ARRAY_BUFFER_BINDING) != 0 {
+            self.e.offset(p as usize as u64)
+        } else {
+            self.output_pointer(p)
+        }
+    }
+
+    /// Called before a hooked command is recorded (draws: capture client arrays first).
+    pub fn before(&mut self, cmd: usize, args: &[u64]) {
+        if !self.state().arrays.any_client() {
+            return;
+        }
+        if let Some(range) = arrays::draw_range(cmd, args) {
+            let thread = self.thread;
+            let captured = self.state().arrays.capture(range);
+            if !captured.is_empty() {
+                let list: Vec<_> = captured.iter().map(|c| c.as_data()).collect();
+                self.e.arrays(thread, &list);
+            }
+        }
+    }
+
+    /// Called after a hooked command is recorded.
+    pub fn after(&mut self, cmd: usize, args: &[u64], ret: u64) {
+        self.state().arrays.track(cmd, args);
+        match cmd {
+            cmd::glXMakeCurrent if ret != 0 => self.bound(Kind::Glx, args[0], args[1], args[2]),
+            cmd::glXMakeContextCurrent | cmd::glXMakeCurrentReadSGI if ret != 0 => {
+                self.bound(Kind::Glx, args[0], args[1], args[3])
+            }
+            cmd::eglMakeCurrent if ret != 0 => self.bound(Kind::Egl, args[0], args[1], args[3]),
+            cmd::OSMesaMakeCurrent if ret != 0 => {
+                let thread = self.thread;
+                let st = self.state();
+                st.osmesa = args[0] != 0;
+                st.surface = None;
+                st.drawable = (args[1], args[3] as u32, args[4] as u32);
+                self.e.drawable(thread, args[1], args[3] as u32, args[4] as u32);
+            }
+            cmd::glXSwapBuffers
+            | cmd::eglSwapBuffers
+            | cmd::eglSwapBuffersWithDamageKHR
+            | cmd::eglSwapBuffersWithDamageEXT => self.frame_end(true),
+            cmd::glFinish if self.state().osmesa => self.frame_end(false),
+            _ => {}
+        }
+    }
+
+    fn bound(&mut self, kind: Kind, dpy: u64, drawable: u64, ctx: u64) {
+        let thread = self.thread;
+        let st = self.state();
+        st.osmesa = false;
+        if ctx == 0 {
+            st.surface = None;
+            st.drawable = (0, 0, 0);
+            self.e.drawable(thread, 0, 0, 0);
+            return;
+        }
+        st.surface = Some((kind, dpy, drawable));
+        let (w, h) = surface_size(kind, dpy, drawable);
+        self.state().drawable = (drawable, w, h);
+        self.e.drawable(thread, drawable, w, h);
+    }
+
+    fn frame_end(&mut self, swapped: bool) {
+        self.e.frame(self.frame);
+        self.frame += 1;
+        if swapped {
+            // A window may have been resized: the next frame is drawn at the new size.
+            let thread = self.thread;
+            let st = self.state();
+            if let Some((kind, dpy, drawable)) = st.surface {
+                let (w, h) = surface_size(kind, dpy, drawable);
+                if (drawable, w, h) != st.drawable {
+                    st.drawable = (drawable, w, h);
+                    self.e.drawable(thread, drawable, w, h);
+                }
+            }
+        }
+        self.flush();
+    }
+}
+
+const GL_ARRAY_BUFFER_BINDING: u32 = 0x8894;
+pub(crate) const GL_ELEMENT_ARRAY_BUFFER_BINDING: u32 = 0x8895;
+pub(crate) const GL_PIXEL_UNPACK_BUFFER_BINDING: u32 = 0x88EF;
+
+/// The buffer object bound to a binding point, from the real GL.
+pub(crate) fn bound_buffer(binding: u32) -> i32 {
+    let mut v = 0i32;
+    // SAFETY: glGetIntegerv of a binding writes one integer.
+    unsafe { real::glGetIntegerv(binding, (&mut v as *mut i32).cast()) };
+    v
+}
+
+fn surface_size(kind: Kind, dpy: u64, drawable: u64) -> (u32, u32) {
+    let (mut w, mut h) = (0u32, 0u32);
+    // SAFETY: size queries of the drawable just made current, with out-parameters of the
+    // right type (unsigned int for GLX, EGLint for EGL).
+    unsafe {
+        match kind {
+            Kind::Glx => {
+                const GLX_WIDTH: i32 = 0x801D;
+                const GLX_HEIGHT: i32 = 0x801E;
+                real::glXQueryDrawable(
+                    dpy as usize as *mut c_void,
+                    drawable as _,
+                    GLX_WIDTH,
+                    (&mut w as *mut u32).cast(),
+                );
+                real::glXQueryDrawable(
+                    dpy as usize as *mut c_void,
+                    drawable as _,
+                    GLX_HEIGHT,
+                    (&mut h as *mut u32).cast(),
+                );
+            }
+            Kind::Egl => {
+                const EGL_WIDTH: i32 = 0x3057;
+                const EGL_HEIGHT: i32 = 0x3056;
+                let (mut ew, mut eh) = (0i32, 0i32);
+                let surface = drawable as usize as *mut c_void;
+                real::eglQuerySurface(dpy as usize as *mut c_void, surface, EGL_WIDTH, (&mut ew as *mut i32).cast());
+                real::eglQuerySurface(dpy as usize as *mut c_void, surface, EGL_HEIGHT, (&mut eh as *mut i32).cast());
+                (w, h) = (ew.max(0) as u32, eh.max(0) as u32);
+            }
+        }
+    }
+    (w, h)
+}
