@@ -2,7 +2,7 @@
 //! (no libGL), the image lands in the program's own buffer. Buffer objects come from
 //! OSMesaGetProcAddress.
 //!
-//!     osmesa_scene OUT.png [FRAMES]
+//!     osmesa_scene OUT.png [FRAMES [PARTS]]     PARTS: lists,immediate,arrays,buffers,textures or all
 
 #[path = "common/gl.rs"]
 mod gl;
@@ -15,7 +15,7 @@ const W: i32 = 320;
 const H: i32 = 240;
 
 fn main() {
-    let (out, frames) = scene::args();
+    let (out, frames, parts) = scene::args_with_parts();
     unsafe {
         let ctx = osmesa::OSMesa::new(W, H).unwrap_or_else(|e| {
             eprintln!("osmesa_scene: {e}");
@@ -23,7 +23,7 @@ fn main() {
         });
         let buffers = scene::BufferFns::load(|n| osmesa::OSMesaGetProcAddress(n.as_ptr().cast()))
             .map(|b| &*Box::leak(Box::new(b)));
-        let s = scene::Scene::new(buffers);
+        let s = scene::Scene::with_parts(buffers, parts);
         for frame in 0..frames {
             s.draw(W, H, frame);
             gl::glFinish();

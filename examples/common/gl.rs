@@ -38,6 +38,17 @@ pub const GL_PACK_ALIGNMENT: u32 = 0x0D05;
 pub const GL_ARRAY_BUFFER: u32 = 0x8892;
 pub const GL_STATIC_DRAW: u32 = 0x88E4;
 pub const GL_NO_ERROR: u32 = 0;
+pub const GL_SPECULAR: u32 = 0x1202;
+pub const GL_SHININESS: u32 = 0x1601;
+pub const GL_TEXTURE_2D: u32 = 0x0DE1;
+pub const GL_TEXTURE_MIN_FILTER: u32 = 0x2801;
+pub const GL_TEXTURE_MAG_FILTER: u32 = 0x2800;
+pub const GL_NEAREST: i32 = 0x2600;
+pub const GL_LINEAR: i32 = 0x2601;
+pub const GL_TEXTURE_ENV: u32 = 0x2300;
+pub const GL_TEXTURE_ENV_MODE: u32 = 0x2200;
+pub const GL_MODULATE: i32 = 0x2100;
+pub const GL_UNPACK_ALIGNMENT: u32 = 0x0CF5;
 
 extern "C" {
     pub fn glClearColor(r: f32, g: f32, b: f32, a: f32);
@@ -79,4 +90,21 @@ extern "C" {
     pub fn glGetString(name: u32) -> *const u8;
     pub fn glPushAttrib(mask: u32);
     pub fn glPopAttrib();
+    pub fn glGenTextures(n: i32, textures: *mut u32);
+    pub fn glBindTexture(target: u32, texture: u32);
+    pub fn glTexImage2D(
+        target: u32,
+        level: i32,
+        internal: i32,
+        w: i32,
+        h: i32,
+        border: i32,
+        format: u32,
+        ty: u32,
+        data: *const c_void,
+    );
+    pub fn glTexParameteri(target: u32, pname: u32, param: i32);
+    pub fn glTexEnvi(target: u32, pname: u32, param: i32);
+    pub fn glTexCoord2f(s: f32, t: f32);
+    pub fn glMaterialf(face: u32, pname: u32, param: f32);
 }

@@ -1,6 +1,8 @@
 //! One fixed-function scene, drawn the ways old programs draw: immediate mode with normals, a
-//! display list called twice, client vertex arrays, and (where the caller passes them) buffer
-//! objects fetched through GetProcAddress. Deterministic for a given frame number.
+//! display list called twice, client vertex arrays, a textured quad, and (where the caller
+//! passes them) buffer objects fetched through GetProcAddress; one light, specular material.
+//! Deterministic for a given frame number. `Parts` picks which of them are drawn (the trace
+//! suite records each part alone).
 #![allow(dead_code)]
 
 use super::gl::*;
@@ -30,9 +32,46 @@ impl BufferFns {
     }
 }
 
+/// Which parts of the scene are drawn.
+#[derive(Clone, Copy)]
+pub struct Parts {
+    pub lists: bool,
+    pub immediate: bool,
+    pub arrays: bool,
+    pub buffers: bool,
+    pub textures: bool,
+}
+
+impl Parts {
+    pub const ALL: Parts = Parts { lists: true, immediate: true, arrays: true, buffers: true, textures: true };
+
+    /// From a comma-separated list of part names, or "all".
+    pub fn parse(list: &str) -> Result<Parts, String> {
+        if list == "all" {
+            return Ok(Parts::ALL);
+        }
+        let mut p = Parts { lists: false, immediate: false, arrays: false, buffers: false, textures: false };
+        for name in list.split(',') {
+            match name {
+                "lists" => p.lists = true,
+                "immediate" => p.immediate = true,
+                "arrays" => p.arrays = true,
+                "buffers" => p.buffers = true,
+                "textures" => p.textures = true,
+                other => {
+                    return Err(format!("unknown part {other:?} (lists, immediate, arrays, buffers, textures, all)"))
+                }
+            }
+        }
+        Ok(p)
+    }
+}
+
 pub struct Scene {
     cube: u32,
     vbo: Option<(u32, &'static BufferFns)>,
+    texture: u32,
+    parts: Parts,
 }
 
 unsafe fn cube_faces() {
@@ -56,6 +95,10 @@ unsafe fn cube_faces() {
 
 impl Scene {
     pub unsafe fn new(buffers: Option<&'static BufferFns>) -> Scene {
+        Scene::with_parts(buffers, Parts::ALL)
+    }
+
+    pub unsafe fn with_parts(buffers: Option<&'static BufferFns>, parts: Parts) -> Scene {
         let cube = glGenLists(1);
         glNewList(cube, GL_COMPILE);
         cube_faces();
@@ -69,7 +112,22 @@ impl Scene {
             (b.bind)(GL_ARRAY_BUFFER, 0);
             (id, b)
         });
-        Scene { cube, vbo }
+        // An 8x8 RGB checkerboard, rows packed (alignment 1).
+        let mut texels = Vec::with_capacity(8 * 8 * 3);
+        for y in 0..8 {
+            for x in 0..8 {
+                texels.extend_from_slice(if (x + y) % 2 == 0 { &[240u8, 240, 240] } else { &[40u8, 90, 200] });
+            }
+        }
+        let mut texture = 0;
+        glGenTextures(1, &mut texture);
+        glBindTexture(GL_TEXTURE_2D, texture);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB as i32, 8, 8, 0, GL_RGB, GL_UNSIGNED_BYTE, texels.as_ptr().cast());
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glBindTexture(GL_TEXTURE_2D, 0);
+        Scene { cube, vbo, texture, parts }
     }
 
     pub unsafe fn draw(&self, width: i32, height: i32, frame: u32) {
@@ -92,9 +150,13 @@ impl Scene {
         glEnable(GL_NORMALIZE);
         glEnable(GL_COLOR_MATERIAL);
         glColorMaterial(GL_FRONT_AND_BACK, GL_AMBIENT_AND_DIFFUSE);
+        let white = [0.8f32, 0.8, 0.8, 1.0];
+        glMaterialfv(GL_FRONT_AND_BACK, GL_SPECULAR, white.as_ptr());
+        glMaterialf(GL_FRONT_AND_BACK, GL_SHININESS, 24.0);
+        let p = self.parts;
 
         // The display list, twice, at different transforms.
-        for (i, color) in [[0.9f32, 0.3, 0.2], [0.2, 0.8, 0.3]].iter().enumerate() {
+        for (i, color) in [[0.9f32, 0.3, 0.2], [0.2, 0.8, 0.3]].iter().enumerate().filter(|_| p.lists) {
             glPushMatrix();
             glTranslatef(if i == 0 { -1.6 } else { 1.6 }, 0.6, 0.0);
             glRotatef(30.0 + 7.0 * frame as f32, 1.0, 1.0, 0.0);
@@ -105,19 +167,42 @@ impl Scene {
         }
 
         // Immediate mode: a lit band of quads.
-        glPushMatrix();
-        glTranslatef(0.0, -1.4, 0.0);
-        glRotatef(-60.0, 1.0, 0.0, 0.0);
-        glColor3f(0.9, 0.8, 0.3);
-        glBegin(GL_QUAD_STRIP);
-        for k in 0..=24 {
-            let a = k as f32 / 24.0 * std::f32::consts::TAU;
-            glNormal3f(a.cos(), a.sin(), 0.3);
-            glVertex3f(2.0 * a.cos(), 2.0 * a.sin(), -0.2);
-            glVertex3f(2.2 * a.cos(), 2.2 * a.sin(), 0.2);
+        if p.immediate {
+            glPushMatrix();
+            glTranslatef(0.0, -1.4, 0.0);
+            glRotatef(-60.0, 1.0, 0.0, 0.0);
+            glColor3f(0.9, 0.8, 0.3);
+            glBegin(GL_QUAD_STRIP);
+            for k in 0..=24 {
+                let a = k as f32 / 24.0 * std::f32::consts::TAU;
+                glNormal3f(a.cos(), a.sin(), 0.3);
+                glVertex3f(2.0 * a.cos(), 2.0 * a.sin(), -0.2);
+                glVertex3f(2.2 * a.cos(), 2.2 * a.sin(), 0.2);
+            }
+            glEnd();
+            glPopMatrix();
         }
-        glEnd();
-        glPopMatrix();
+
+        // A textured quad, lit, modulated by the material colour.
+        if p.textures {
+            glPushMatrix();
+            glTranslatef(1.9, -1.6, 1.0);
+            glRotatef(-25.0, 0.0, 1.0, 0.0);
+            glEnable(GL_TEXTURE_2D);
+            glBindTexture(GL_TEXTURE_2D, self.texture);
+            glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE);
+            glColor3f(1.0, 1.0, 1.0);
+            glBegin(GL_QUADS);
+            glNormal3f(0.0, 0.0, 1.0);
+            for (s, t) in [(0.0f32, 0.0f32), (2.0, 0.0), (2.0, 2.0), (0.0, 2.0)] {
+                glTexCoord2f(s, t);
+                glVertex3f(s * 0.5 - 0.5, t * 0.5 - 0.5, 0.0);
+            }
+            glEnd();
+            glBindTexture(GL_TEXTURE_2D, 0);
+            glDisable(GL_TEXTURE_2D);
+            glPopMatrix();
+        }
 
         // Client arrays, unlit, per-vertex colour.
         glDisable(GL_LIGHTING);
@@ -126,14 +211,16 @@ impl Scene {
         glPushMatrix();
         glTranslatef(-0.3, 1.6, 0.5);
         glEnableClientState(GL_VERTEX_ARRAY);
-        glEnableClientState(GL_COLOR_ARRAY);
-        glVertexPointer(3, GL_FLOAT, 0, verts.as_ptr().cast());
-        glColorPointer(3, GL_FLOAT, 0, colors.as_ptr().cast());
-        glDrawArrays(GL_TRIANGLE_FAN, 0, 4);
-        glDisableClientState(GL_COLOR_ARRAY);
+        if p.arrays {
+            glEnableClientState(GL_COLOR_ARRAY);
+            glVertexPointer(3, GL_FLOAT, 0, verts.as_ptr().cast());
+            glColorPointer(3, GL_FLOAT, 0, colors.as_ptr().cast());
+            glDrawArrays(GL_TRIANGLE_FAN, 0, 4);
+            glDisableClientState(GL_COLOR_ARRAY);
+        }
 
         // A buffer object, if the caller fetched the entry points.
-        if let Some((id, b)) = self.vbo {
+        if let Some((id, b)) = self.vbo.filter(|_| p.buffers) {
             glTranslatef(0.3, -3.4, 0.5);
             glColor3f(0.7, 0.7, 1.0);
             (b.bind)(GL_ARRAY_BUFFER, id);
@@ -169,13 +256,26 @@ pub fn write_png(path: &str, width: u32, height: u32, bottom_up_rgb: &[u8]) -> s
     Ok(())
 }
 
-/// `PROGRAM OUT.png [FRAMES]` from the command line.
+/// `PROGRAM OUT.png [FRAMES [PARTS]]` from the command line.
 pub fn args() -> (String, u32) {
-    let mut a = std::env::args().skip(1);
-    let out = a.next().unwrap_or_else(|| {
-        eprintln!("usage: {} OUT.png [FRAMES]", std::env::args().next().unwrap_or_default());
-        std::process::exit(2)
-    });
-    let frames = a.next().map(|f| f.parse().expect("FRAMES is a number")).unwrap_or(3);
+    let (out, frames, _) = args_with_parts();
     (out, frames)
+}
+
+/// `PROGRAM OUT.png [FRAMES [PARTS]]`, PARTS a comma-separated list (see `Parts`).
+pub fn args_with_parts() -> (String, u32, Parts) {
+    let mut a = std::env::args().skip(1);
+    let usage = || -> ! {
+        eprintln!("usage: {} OUT.png [FRAMES [PARTS]]", std::env::args().next().unwrap_or_default());
+        std::process::exit(2)
+    };
+    let out = a.next().unwrap_or_else(|| usage());
+    let frames = a.next().map(|f| f.parse().unwrap_or_else(|_| usage())).unwrap_or(3);
+    let parts = a.next().map(|p| {
+        Parts::parse(&p).unwrap_or_else(|e| {
+            eprintln!("{e}");
+            usage()
+        })
+    });
+    (out, frames, parts.unwrap_or(Parts::ALL))
 }

@@ -144,6 +144,9 @@ pub struct Recorder {
     warned: HashSet<usize>,
     frame: u64,
     error: Option<String>,
+    /// Each command's number in this trace (u32::MAX: not named yet), and how many are named.
+    numbers: Vec<u32>,
+    named: u32,
 }
 
 impl Recorder {
@@ -158,15 +161,16 @@ impl Recorder {
             warned: HashSet::new(),
             frame: 0,
             error: None,
+            numbers: vec![u32::MAX; crate::commands::COUNT],
+            named: 0,
         }
     }
 
     fn open(&mut self) -> Result<(), String> {
         let file = std::fs::File::create(&self.path)
             .map_err(|e| format!("cannot create the trace {}: {e}", self.path.display()))?;
-        let names: Vec<&[u8]> = COMMANDS.iter().map(|c| c.name.to_bytes()).collect();
         let mut header = Encoder::new();
-        header.header(&names);
+        header.header();
         let file = self.file.insert(file);
         header.flush_to(file).map_err(|e| format!("writing {}: {e}", self.path.display()))?;
         glray_core::info!("recording to {}", self.path.display());
@@ -185,9 +189,16 @@ impl Recorder {
         self.threads.entry(self.thread).or_default()
     }
 
-    /// Starts the record of a call.
+    /// Starts the record of a call; a command's first call also names it in the trace.
     pub fn begin(&mut self, cmd: usize, nargs: usize) {
-        self.e.begin_call(cmd, self.thread, nargs as u8);
+        let mut number = self.numbers[cmd];
+        if number == u32::MAX {
+            number = self.named;
+            self.named += 1;
+            self.numbers[cmd] = number;
+            self.e.name(COMMANDS[cmd].name.to_bytes());
+        }
+        self.e.begin_call(number as usize, self.thread, nargs as u8);
     }
 
     /// A pointer the call writes through, or one whose memory is not recorded: its value.

@@ -7,8 +7,9 @@
  *   on the frame number only. getpid returns a constant, so that seeds built from time and pid
  *   (xscreensaver's ya_rand_init) are the same in every run.
  * - Picture: at swap number FRAMESHOT_FRAME (default 3) of glXSwapBuffers or eglSwapBuffers, the
- *   back buffer of the current viewport is read with glReadPixels, written as a binary PPM to
- *   FRAMESHOT_OUT, and the program exits with status 0.
+ *   back buffer of the current viewport is read with glReadPixels and written as a binary PPM to
+ *   FRAMESHOT_OUT; that swap goes ahead (so a recorded trace ends that frame too), and the
+ *   program exits with status 0 at the next swap.
  *
  * Everything reaches the next library in symbol order (glray when it is loaded, else libGL), so
  * the picture is what the program would have shown, with or without glray.
@@ -69,7 +70,10 @@ static void *next(const char *name) {
     return p;
 }
 
+static int exit_at_next_swap;
+
 static void shoot_if_due(void) {
+    if (exit_at_next_swap) exit(0);
     frame_no++;
     const char *want = getenv("FRAMESHOT_FRAME");
     long due = want ? atol(want) : 3;
@@ -100,7 +104,7 @@ static void shoot_if_due(void) {
     for (int y = h - 1; y >= 0; y--) fwrite(px + (size_t)y * w * 3, 1, (size_t)w * 3, f);
     fclose(f);
     fprintf(stderr, "frameshot: frame %ld (%dx%d) written\n", frame_no, w, h);
-    exit(0);
+    exit_at_next_swap = 1;
 }
 
 void glXSwapBuffers(void *dpy, unsigned long drawable) {

@@ -1,7 +1,7 @@
 //! glray's trace format (docs/trace-format.md): what the recorder writes and the replayer reads.
 //!
-//! A header (magic, version, the table of command names the trace uses), then events: calls with
-//! self-describing arguments (each value carries a type byte, so a trace can be read, dumped and
+//! A header (magic, version, flags), then events: command names defined at their first use,
+//! calls with self-describing arguments (each value carries a type byte, so a trace can be read, dumped and
 //! fuzzed without knowing any signature), frame ends, client-array memory captured at draw time,
 //! and drawable sizes. The reader never trusts a length: every count and blob is checked against
 //! the bytes left, and every error names its byte offset and call number.
@@ -19,6 +19,7 @@ pub mod tag {
     pub const ARRAYS: u8 = 0x03;
     pub const DRAWABLE: u8 = 0x04;
     pub const END: u8 = 0x05;
+    pub const NAME: u8 = 0x06;
 }
 
 /// Argument type bytes.
@@ -89,10 +90,29 @@ pub mod array_kind {
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum Event<'a> {
-    Call { cmd: usize, thread: u32, args: Vec<Value<'a>>, ret: Option<Value<'a>> },
-    Frame { number: u64 },
-    Arrays { thread: u32, arrays: Vec<ArrayData<'a>> },
-    Drawable { thread: u32, id: u64, width: u32, height: u32 },
+    Call {
+        cmd: usize,
+        thread: u32,
+        args: Vec<Value<'a>>,
+        ret: Option<Value<'a>>,
+    },
+    Frame {
+        number: u64,
+    },
+    Arrays {
+        thread: u32,
+        arrays: Vec<ArrayData<'a>>,
+    },
+    Drawable {
+        thread: u32,
+        id: u64,
+        width: u32,
+        height: u32,
+    },
+    /// Command number `number` is named `Reader::names[number]` from here on.
+    Name {
+        number: usize,
+    },
     End,
 }
 
@@ -133,14 +153,16 @@ impl Encoder {
         Ok(())
     }
 
-    pub fn header(&mut self, names: &[&[u8]]) {
+    pub fn header(&mut self) {
         self.buf.extend_from_slice(MAGIC);
         self.buf.extend_from_slice(&VERSION.to_le_bytes());
         self.buf.extend_from_slice(&0u32.to_le_bytes());
-        self.varint(names.len() as u64);
-        for n in names {
-            self.bytes_with_len(n);
-        }
+    }
+
+    /// Defines the next command number (0, 1, 2, ... in order) as `name`.
+    pub fn name(&mut self, name: &[u8]) {
+        self.buf.push(tag::NAME);
+        self.bytes_with_len(name);
     }
 
     fn varint(&mut self, mut v: u64) {
@@ -160,7 +182,8 @@ impl Encoder {
         self.buf.extend_from_slice(b);
     }
 
-    /// Starts a call of command `cmd` (an index into the header's table) with `nargs` arguments.
+    /// Starts a call of command `cmd` (a number defined by an earlier `name`) with `nargs`
+    /// arguments.
     pub fn begin_call(&mut self, cmd: usize, thread: u32, nargs: u8) {
         self.buf.push(tag::CALL);
         self.varint(cmd as u64);
@@ -296,7 +319,7 @@ pub struct Reader<'a> {
 }
 
 impl<'a> Reader<'a> {
-    /// Checks the header and reads the command table.
+    /// Checks the header.
     pub fn new(data: &'a [u8]) -> Result<Reader<'a>, TraceError> {
         let mut r = Reader {
             data,
@@ -321,14 +344,6 @@ impl<'a> Reader<'a> {
             ));
         }
         let _flags = r.take(4, "the flags")?;
-        let n = r.count(1, "command names")?;
-        for _ in 0..n {
-            let name = r.sized("a command name")?;
-            if name.is_empty() || !name.iter().all(|c| c.is_ascii_alphanumeric() || *c == b'_') {
-                return Err(r.error(format!("bad command name {:?}", String::from_utf8_lossy(name))));
-            }
-            r.names.push(name);
-        }
         Ok(r)
     }
 
@@ -453,10 +468,13 @@ impl<'a> Reader<'a> {
                 self.calls += 1;
                 self.in_call = true;
                 let at = self.pos;
-                let cmd = self.varint("the command number")? as usize;
-                if cmd >= self.names.len() {
-                    return Err(self.error_at(at, format!("command number {cmd}, the table has {}", self.names.len())));
+                let cmd = self.varint("the command number")?;
+                if cmd >= self.names.len() as u64 {
+                    return Err(
+                        self.error_at(at, format!("command number {cmd} was never named ({} are)", self.names.len()))
+                    );
                 }
+                let cmd = cmd as usize;
                 let thread = self.u32_of("the thread number")?;
                 let nargs = self.byte("the argument count")?;
                 let mut args = Vec::with_capacity(nargs as usize);
@@ -501,6 +519,14 @@ impl<'a> Reader<'a> {
                 }
                 Event::Arrays { thread, arrays }
             }
+            tag::NAME => {
+                let name = self.sized("a command name")?;
+                if name.is_empty() || !name.iter().all(|c| c.is_ascii_alphanumeric() || *c == b'_') {
+                    return Err(self.error(format!("bad command name {:?}", String::from_utf8_lossy(name))));
+                }
+                self.names.push(name);
+                Event::Name { number: self.names.len() - 1 }
+            }
             tag::END => {
                 self.ended = true;
                 Event::End
@@ -517,7 +543,10 @@ mod tests {
 
     fn sample() -> Vec<u8> {
         let mut e = Encoder::new();
-        e.header(&[b"glBegin", b"glVertex3fv", b"glXSwapBuffers"]);
+        e.header();
+        for n in [&b"glBegin"[..], b"glVertex3fv", b"glXSwapBuffers"] {
+            e.name(n);
+        }
         e.begin_call(0, 0, 1);
         e.uint(4);
         e.no_return();
@@ -551,10 +580,11 @@ mod tests {
     fn round_trip() {
         let data = sample();
         let mut r = Reader::new(&data).unwrap();
-        assert_eq!(r.names, vec![&b"glBegin"[..], b"glVertex3fv", b"glXSwapBuffers"]);
         let mut events = Vec::new();
         while let Some(e) = r.next_event().unwrap() {
-            events.push(e);
+            if !matches!(e, Event::Name { .. }) {
+                events.push(e);
+            }
         }
         assert_eq!(events.len(), 7);
         assert_eq!(events[0], Event::Call { cmd: 0, thread: 0, args: vec![Value::UInt(4)], ret: None });
@@ -585,6 +615,7 @@ mod tests {
         );
         assert_eq!(events[6], Event::End);
         assert_eq!(r.calls(), 3);
+        assert_eq!(r.names, vec![&b"glBegin"[..], b"glVertex3fv", b"glXSwapBuffers"]);
     }
 
     #[test]
@@ -621,18 +652,22 @@ mod tests {
     #[test]
     fn impossible_sizes_do_not_allocate() {
         let mut e = Encoder::new();
-        e.header(&[b"glTexImage2D"]);
+        e.header();
+        e.name(b"glTexImage2D");
         let mut data = e.bytes().to_vec();
         // A call whose blob claims 2^60 bytes.
         data.extend_from_slice(&[tag::CALL, 0, 0, 1, ty::BLOB]);
         data.extend_from_slice(&[0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x10]);
         let mut r = Reader::new(&data).unwrap();
+        assert!(matches!(r.next_event().unwrap(), Some(Event::Name { number: 0 })));
         let err = r.next_event().unwrap_err();
         assert!(err.message.contains("impossible count") && err.call == Some(0), "{err}");
         // A command number beyond the table.
         let mut data = e.bytes().to_vec();
         data.extend_from_slice(&[tag::CALL, 5, 0, 0, ty::NONE]);
-        let err = Reader::new(&data).unwrap().next_event().unwrap_err();
-        assert!(err.message.contains("command number 5"), "{err}");
+        let mut r = Reader::new(&data).unwrap();
+        r.next_event().unwrap();
+        let err = r.next_event().unwrap_err();
+        assert!(err.message.contains("command number 5 was never named"), "{err}");
     }
 }

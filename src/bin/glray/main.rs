@@ -183,22 +183,47 @@ fn replay(
 }
 
 fn dump(trace: &Path, max_calls: Option<u64>) -> Result<(), String> {
-    use glray_core::trace::{Event, Reader};
+    use glray_core::trace::Reader;
     use std::io::Write;
     let data = read_trace(trace)?;
     let fail = |e: glray_core::trace::TraceError| format!("{}: {e}", trace.display());
     let mut r = Reader::new(&data).map_err(fail)?;
-    let names: Vec<String> = r.names.iter().map(|n| String::from_utf8_lossy(n).into_owned()).collect();
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
-    let mut write = |line: String| writeln!(out, "{line}").map_err(|e| e.to_string());
-    write(format!("glray trace version {}, {} command names", r.version, names.len()))?;
+    // A closed pipe (`glray dump t.trace | head`) ends the dump quietly.
+    let mut closed = false;
+    let mut write = |line: String| -> Result<(), String> {
+        match writeln!(out, "{line}") {
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                closed = true;
+                Err(String::new())
+            }
+            other => other.map_err(|e| e.to_string()),
+        }
+    };
+    let result = dump_events(&mut r, &mut write, max_calls, &fail);
+    match result {
+        Err(e) if e.is_empty() && closed => Ok(()),
+        other => other,
+    }
+}
+
+fn dump_events(
+    r: &mut glray_core::trace::Reader,
+    write: &mut dyn FnMut(String) -> Result<(), String>,
+    max_calls: Option<u64>,
+    fail: &dyn Fn(glray_core::trace::TraceError) -> String,
+) -> Result<(), String> {
+    use glray_core::trace::Event;
+    write(format!("glray trace version {}", r.version))?;
     while let Some(event) = r.next_event().map_err(fail)? {
         match event {
+            Event::Name { .. } => {}
             Event::Call { cmd, thread, args, ret } => {
                 let args: Vec<String> = args.iter().map(show_value).collect();
                 let ret = ret.map(|v| format!(" = {}", show_value(&v))).unwrap_or_default();
-                write(format!("{} [{thread}] {}({}){ret}", r.calls() - 1, names[cmd], args.join(", ")))?;
+                let name = String::from_utf8_lossy(r.names[cmd]);
+                write(format!("{} [{thread}] {name}({}){ret}", r.calls() - 1, args.join(", ")))?;
                 if max_calls.is_some_and(|m| r.calls() >= m) {
                     break;
                 }

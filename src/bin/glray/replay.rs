@@ -308,8 +308,8 @@ impl Replayer {
     /// Replays the whole trace; an error names the byte offset and call number.
     pub fn run(&mut self, data: &[u8]) -> Result<&Summary, String> {
         let mut reader = Reader::new(data).map_err(|e| e.to_string())?;
-        // The trace's command numbers, as this glray's.
-        let map: Vec<Option<usize>> = reader.names.iter().map(|n| lookup(n)).collect();
+        // The trace's command numbers, as this glray's (filled as the trace names them).
+        let mut map: Vec<Option<usize>> = Vec::new();
         let mut last_offset;
         loop {
             last_offset = reader.offset();
@@ -337,6 +337,10 @@ impl Replayer {
                     self.set_arrays(&arrays).map_err(at)?;
                 }
                 Event::Frame { number } => self.frame(number).map_err(at)?,
+                Event::Name { number } => {
+                    debug_assert_eq!(number, map.len());
+                    map.push(lookup(reader.names[number]));
+                }
                 Event::End => break,
             }
         }

@@ -1,0 +1,273 @@
+//! Recording and replay: the checked-in trace suite replays to its reference images; programs
+//! recorded under glray and replayed into OSMesa give their own pictures back; bad traces stop
+//! with a message naming the byte offset; `glray compare` and `glray dump` do what they say.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn glray(args: &[&str]) -> Command {
+    let mut c = Command::new(glray_bin());
+    c.args(args);
+    c
+}
+
+fn replay(trace: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut c = Command::new(glray_bin());
+    c.arg("replay").arg(trace).arg("--out").arg(out).args(extra);
+    run_ok(&mut c, &format!("glray replay {}", trace.display()))
+}
+
+/// `glray compare A B` with the default thresholds (no pixel off by more than 5%).
+fn compare_ok(a: &Path, b: &Path, extra: &[&str]) {
+    let out = run_ok(Command::new(glray_bin()).arg("compare").arg(a).arg(b).args(extra), "glray compare");
+    assert!(stdout(&out).contains("pass"), "{}", stdout(&out));
+}
+
+fn suite() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/traces")
+}
+
+#[test]
+fn the_trace_suite_replays_to_its_reference_images() {
+    let dir = scratch("suite");
+    let mut traces: Vec<PathBuf> = std::fs::read_dir(suite())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "trace"))
+        .collect();
+    traces.sort();
+    let names: Vec<String> = traces.iter().map(|t| t.file_stem().unwrap().to_string_lossy().into_owned()).collect();
+    for part in ["lists", "immediate", "arrays", "buffers", "textures", "all"] {
+        assert!(names.contains(&format!("osmesa-{part}")), "tests/traces lacks osmesa-{part}");
+    }
+    assert!(names.contains(&"glx-all".to_string()) && names.contains(&"egl-all".to_string()));
+    for (trace, name) in traces.iter().zip(&names) {
+        let out = dir.join(name);
+        let o = replay(trace, &out, &[]);
+        assert!(stdout(&o).contains("3 frames written"), "{name}: {}", stdout(&o));
+        assert_same_file(&trace.with_extension("png"), &out.join("frame-0002.png"), name);
+    }
+}
+
+#[test]
+fn frames_can_be_chosen() {
+    let dir = scratch("frames");
+    replay(&suite().join("osmesa-lists.trace"), &dir, &["--frames", "0,2"]);
+    let mut files: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    files.sort();
+    assert_eq!(files, ["frame-0000.png", "frame-0002.png"]);
+    let bad = glray(&["replay", "x.trace", "--out", "/tmp/x", "--frames", "3-1"]).output().unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(stderr(&bad).contains("--frames"), "{}", stderr(&bad));
+}
+
+/// Records `program args` under glray (with `way`'s preloads), replays into OSMesa, and returns
+/// the replay's directory.
+fn record_and_replay(name: &str, cmd: &mut Command, dir: &Path, replay_args: &[&str]) -> PathBuf {
+    let trace = dir.join(format!("{name}.trace"));
+    cmd.env("GLRAY_RECORD", &trace);
+    run_ok(cmd, &format!("{name} recording"));
+    let out = dir.join(format!("{name}-replay"));
+    replay(&trace, &out, replay_args);
+    out
+}
+
+#[test]
+fn our_programs_replay_to_their_own_pictures() {
+    let x = Xvfb::start();
+    let dir = scratch("examples-replay");
+    for name in ["osmesa_scene", "glx_scene", "egl_scene"] {
+        let png = dir.join(format!("{name}.png"));
+        let mut cmd = command(Way::Preload, &[], &example(name), 60);
+        cmd.arg(&png).arg("3").env("DISPLAY", &x.display);
+        let out = record_and_replay(name, &mut cmd, &dir, &[]);
+        if name == "egl_scene" {
+            // EGL's llvmpipe and OSMesa round a few edge pixels differently (a channel off by a
+            // few levels): the same happens drawing natively with each, without any trace.
+            compare_ok(&png, &out.join("frame-0002.png"), &["--min-psnr", "40"]);
+        } else {
+            assert_same_file(&png, &out.join("frame-0002.png"), name);
+        }
+    }
+}
+
+/// A real program's frame N (grabbed by frameshot) against frame N-1 (0-based) of its replay.
+fn real_program_replays(name: &str, program: &Path, args: &[&str], frame: u32) {
+    let x = Xvfb::start();
+    let dir = scratch(&format!("replay-{name}"));
+    let ppm = dir.join("live.ppm");
+    let mut cmd = command(Way::Preload, &[&frameshot()], program, 120);
+    cmd.args(args).env("DISPLAY", &x.display).env("FRAMESHOT_OUT", &ppm).env("FRAMESHOT_FRAME", frame.to_string());
+    let want = format!("{}", frame - 1);
+    let out = record_and_replay(name, &mut cmd, &dir, &["--frames", &want]);
+    let replayed = out.join(format!("frame-{:04}.png", frame - 1));
+    // Byte-identical pixels: compare decodes PPM and PNG alike.
+    let c = run_ok(
+        Command::new(glray_bin()).arg("compare").arg(&ppm).arg(&replayed).args(["--fuzz", "0"]),
+        &format!("{name} compare"),
+    );
+    assert!(stdout(&c).starts_with("0 of "), "{name}: {}", stdout(&c));
+}
+
+#[test]
+fn glxgears_replays_to_its_own_frame() {
+    real_program_replays("glxgears", &which("glxgears"), &[], 3);
+}
+
+#[test]
+fn xscreensaver_lament_replays_to_its_own_frame() {
+    // Textures bound inside display lists, EGL.
+    real_program_replays("lament", Path::new("/usr/libexec/xscreensaver/lament"), &["-window"], 4);
+}
+
+#[test]
+fn xscreensaver_sproingies_replays_to_its_own_frame() {
+    // GL_POLYGON with glVertex3i, client arrays, a clip plane.
+    real_program_replays("sproingies", Path::new("/usr/libexec/xscreensaver/sproingies"), &["-window"], 4);
+}
+
+#[test]
+fn openscad_replays_to_its_own_png() {
+    let x = Xvfb::start();
+    let dir = scratch("replay-openscad");
+    let model = dir.join("model.scad");
+    std::fs::write(&model, "difference() { cube(10, center=true); sphere(6.5, $fn=48); }\n").unwrap();
+    let png = dir.join("openscad.png");
+    let mut cmd = command(Way::Preload, &[], &which("openscad"), 120);
+    cmd.arg("-o").arg(&png).arg(&model).env("DISPLAY", &x.display);
+    // OpenSCAD draws into a framebuffer object and reads it back: its picture is what that
+    // glReadPixels returned.
+    let out = record_and_replay("openscad", &mut cmd, &dir, &["--readpixels"]);
+    let c = run_ok(
+        Command::new(glray_bin()).arg("compare").arg(&png).arg(out.join("readpixels-0000.png")).args(["--fuzz", "0"]),
+        "openscad compare",
+    );
+    assert!(stdout(&c).starts_with("0 of "), "{}", stdout(&c));
+}
+
+fn which(program: &str) -> PathBuf {
+    let out = Command::new("sh").arg("-c").arg(format!("command -v {program}")).output().unwrap();
+    assert!(out.status.success(), "{program} is not installed: scripts/test installs it");
+    PathBuf::from(String::from_utf8(out.stdout).unwrap().trim())
+}
+
+/// `glray replay` on a damaged trace: exit status 2, a message with the byte offset, no panic.
+fn replay_fails(data: &[u8], name: &str, expect: &[&str]) {
+    let dir = scratch(&format!("bad-{name}"));
+    let trace = dir.join("bad.trace");
+    std::fs::write(&trace, data).unwrap();
+    let out = glray(&["replay"]).arg(&trace).arg("--out").arg(dir.join("out")).output().unwrap();
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{name}: {:?} {err}", out.status);
+    assert!(!err.contains("panicked"), "{name}: {err}");
+    for e in expect {
+        assert!(err.contains(e), "{name}: message lacks {e:?}: {err}");
+    }
+}
+
+#[test]
+fn damaged_traces_are_refused_with_the_offset() {
+    let good = std::fs::read(suite().join("osmesa-lists.trace")).unwrap();
+    replay_fails(&good[..good.len() / 2], "truncated", &["byte ", "(call ", "truncated"]);
+    replay_fails(b"NOTATRACE", "magic", &["not a glray trace"]);
+    let mut version = good.clone();
+    version[8] = 7;
+    replay_fails(&version, "version", &["byte 8", "version 7"]);
+    // A blob claiming 2^60 bytes after the header: refused before any allocation.
+    let mut huge = good[..16].to_vec();
+    huge.extend_from_slice(&[0x06, 12]);
+    huge.extend_from_slice(b"glTexImage2D");
+    huge.extend_from_slice(&[0x01, 0, 0, 1, 0x12, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x10]);
+    replay_fails(&huge, "huge", &["byte ", "(call 0)", "impossible count"]);
+    // A command this glray does not know.
+    let mut unknown = good[..16].to_vec();
+    unknown.extend_from_slice(&[0x06, 11]);
+    unknown.extend_from_slice(b"glNotAThing");
+    unknown.extend_from_slice(&[0x01, 0, 0, 0, 0]);
+    replay_fails(&unknown, "unknown", &["glNotAThing", "does not know"]);
+    // Calls that do not fit their command, made in a context (calls without one are skipped).
+    replay_fails(&in_a_context(|e| e.no_return()), "arity", &["glBegin", "0 arguments recorded, the command takes 1"]);
+    replay_fails(
+        &in_a_context(|e| {
+            e.f32(4.0);
+            e.no_return()
+        }),
+        "type",
+        &["glBegin", "argument 0: expected an integer"],
+    );
+}
+
+/// A trace that makes an OSMesa context current on a 4x4 drawable, then calls glBegin with the
+/// arguments `args` writes (a correct call would be one integer).
+fn in_a_context(args: impl Fn(&mut glray_core::trace::Encoder)) -> Vec<u8> {
+    let mut e = glray_core::trace::Encoder::new();
+    e.header();
+    e.name(b"OSMesaCreateContextExt");
+    e.begin_call(0, 0, 5);
+    e.uint(0x1908);
+    e.int(16);
+    e.int(0);
+    e.int(0);
+    e.null();
+    e.opaque(0x1000);
+    e.name(b"OSMesaMakeCurrent");
+    e.begin_call(1, 0, 5);
+    e.opaque(0x1000);
+    e.opaque(0x2000);
+    e.uint(0x1401);
+    e.int(4);
+    e.int(4);
+    e.uint(1);
+    e.drawable(0, 0x2000, 4, 4);
+    e.name(b"glBegin");
+    let before = e.len();
+    e.begin_call(2, 0, 0);
+    let mut tail = glray_core::trace::Encoder::new();
+    args(&mut tail);
+    let mut data = e.bytes().to_vec();
+    // The argument count byte must match what `args` wrote: one value, or none.
+    if !tail.is_empty() && tail.bytes() != [0] {
+        data[before + 3] = 1;
+    }
+    data.extend_from_slice(tail.bytes());
+    data
+}
+
+#[test]
+fn compare_reports_and_its_exit_status_follows_the_thresholds() {
+    let dir = scratch("compare");
+    let a = suite().join("osmesa-all.png");
+    let b = suite().join("osmesa-lists.png");
+    let same = glray(&["compare"]).arg(&a).arg(&a).output().unwrap();
+    assert_eq!(same.status.code(), Some(0));
+    assert!(stdout(&same).contains("PSNR inf"), "{}", stdout(&same));
+    let diff = dir.join("diff.png");
+    let different = glray(&["compare", "--json"]).arg(&a).arg(&b).arg("--diff").arg(&diff).output().unwrap();
+    assert_eq!(different.status.code(), Some(1), "{}", stdout(&different));
+    let json = stdout(&different);
+    assert!(json.contains("\"pass\":false") && json.contains("\"differing\":"), "{json}");
+    assert!(std::fs::metadata(&diff).unwrap().len() > 100);
+    let lenient = glray(&["compare", "--max-differing", "1"]).arg(&a).arg(&b).output().unwrap();
+    assert_eq!(lenient.status.code(), Some(0));
+    let missing = glray(&["compare"]).arg(&a).arg(dir.join("missing.png")).output().unwrap();
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(stderr(&missing).contains("missing.png"));
+}
+
+#[test]
+fn dump_lists_the_calls() {
+    let out = run_ok(glray(&["dump"]).arg(suite().join("osmesa-textures.trace")), "glray dump");
+    let text = stdout(&out);
+    for want in [
+        "OSMesaCreateContextExt(",
+        "glTexImage2D(3553, 0, 6407, 8, 8, 0, 6407, 5121, <192 bytes>)",
+        "-- frame 2 --",
+        "-- end --",
+    ] {
+        assert!(text.contains(want), "dump lacks {want:?}");
+    }
+}
