@@ -231,7 +231,7 @@ fn registry_commands(
     }
 
     let mut wanted: Vec<String> = Vec::new();
-    let block_applies = |req: roxmltree::Node| req.attribute("api").map_or(true, |a| a == api);
+    let block_applies = |req: roxmltree::Node| req.attribute("api").is_none_or(|a| a == api);
     for f in root.children().filter(|n| n.has_tag_name("feature")) {
         if f.attribute("api") != Some(api) || !version_in(range, f.attribute("number").unwrap_or("")) {
             continue;

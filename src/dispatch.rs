@@ -17,7 +17,7 @@ use crate::commands::{Lib, COMMANDS, COUNT};
 use crate::runtime;
 
 /// A slot value meaning "looked up, and there is no real function".
-const MISSING: *mut c_void = 1 as *mut c_void;
+const MISSING: *mut c_void = std::ptr::dangling_mut::<c_void>();
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Backend {

@@ -2,6 +2,8 @@
 //! build.rs. Each calls `real::NAME` or, where gl-spec/classes.txt says `handler`, the handler
 //! of the same name under a panic guard.
 
+#![allow(clippy::let_unit_value, clippy::unit_arg)]
+
 use crate::commands::COUNT;
 use std::ffi::{c_ulong, c_void};
 

@@ -210,9 +210,9 @@ impl Replayer {
                 // SAFETY: a NUL-terminated name.
                 p = unsafe { (self.get_proc)(name.as_ptr()) };
             }
-            self.funcs[c] = if p.is_null() { 1 as *mut c_void } else { p };
+            self.funcs[c] = if p.is_null() { std::ptr::dangling_mut::<c_void>() } else { p };
         }
-        if self.funcs[c] as usize == 1 {
+        if self.funcs[c] == std::ptr::dangling_mut::<c_void>() {
             return Err("not implemented by OSMesa".into());
         }
         Ok(self.funcs[c])
@@ -511,44 +511,43 @@ impl Replayer {
                     bytes.as_ptr().wrapping_sub((a.first.wrapping_mul(stride_for_offset)) as usize) as *const c_void;
                 let key = (a.kind, a.index);
                 match a.kind {
-                    array_kind::VERTEX => {
-                        std::mem::transmute::<_, Ptr>(self.gl(cmd::glVertexPointer)?)(a.size, a.gl_type, a.stride, ptr)
-                    }
-                    array_kind::NORMAL => {
-                        std::mem::transmute::<_, Ptr3>(self.gl(cmd::glNormalPointer)?)(a.gl_type, a.stride, ptr)
-                    }
-                    array_kind::COLOR => {
-                        std::mem::transmute::<_, Ptr>(self.gl(cmd::glColorPointer)?)(a.size, a.gl_type, a.stride, ptr)
-                    }
-                    array_kind::SECONDARY_COLOR => std::mem::transmute::<_, Ptr>(
+                    array_kind::VERTEX => std::mem::transmute::<*mut c_void, Ptr>(self.gl(cmd::glVertexPointer)?)(
+                        a.size, a.gl_type, a.stride, ptr,
+                    ),
+                    array_kind::NORMAL => std::mem::transmute::<*mut c_void, Ptr3>(self.gl(cmd::glNormalPointer)?)(
+                        a.gl_type, a.stride, ptr,
+                    ),
+                    array_kind::COLOR => std::mem::transmute::<*mut c_void, Ptr>(self.gl(cmd::glColorPointer)?)(
+                        a.size, a.gl_type, a.stride, ptr,
+                    ),
+                    array_kind::SECONDARY_COLOR => std::mem::transmute::<*mut c_void, Ptr>(
                         self.gl(cmd::glSecondaryColorPointer)?,
                     )(a.size, a.gl_type, a.stride, ptr),
                     array_kind::FOG_COORD => {
-                        std::mem::transmute::<_, Ptr3>(self.gl(cmd::glFogCoordPointer)?)(a.gl_type, a.stride, ptr)
+                        std::mem::transmute::<*mut c_void, Ptr3>(self.gl(cmd::glFogCoordPointer)?)(
+                            a.gl_type, a.stride, ptr,
+                        )
                     }
                     array_kind::EDGE_FLAG => {
-                        std::mem::transmute::<_, Ptr2>(self.gl(cmd::glEdgeFlagPointer)?)(a.stride, ptr)
+                        std::mem::transmute::<*mut c_void, Ptr2>(self.gl(cmd::glEdgeFlagPointer)?)(a.stride, ptr)
                     }
-                    array_kind::INDEX => {
-                        std::mem::transmute::<_, Ptr3>(self.gl(cmd::glIndexPointer)?)(a.gl_type, a.stride, ptr)
-                    }
+                    array_kind::INDEX => std::mem::transmute::<*mut c_void, Ptr3>(self.gl(cmd::glIndexPointer)?)(
+                        a.gl_type, a.stride, ptr,
+                    ),
                     array_kind::TEXCOORD => {
                         let active: Active = std::mem::transmute(self.gl(cmd::glClientActiveTexture)?);
                         let mut previous = 0i32;
                         get_i(0x84E1, &mut previous); // GL_CLIENT_ACTIVE_TEXTURE
                         active(GL_TEXTURE0 + a.index);
-                        std::mem::transmute::<_, Ptr>(self.gl(cmd::glTexCoordPointer)?)(
+                        std::mem::transmute::<*mut c_void, Ptr>(self.gl(cmd::glTexCoordPointer)?)(
                             a.size, a.gl_type, a.stride, ptr,
                         );
                         active(previous as u32);
                     }
-                    array_kind::ATTRIB => std::mem::transmute::<_, Attrib>(self.gl(cmd::glVertexAttribPointer)?)(
-                        a.index,
-                        a.size,
-                        a.gl_type,
-                        a.normalized as u8,
-                        a.stride,
-                        ptr,
+                    array_kind::ATTRIB => std::mem::transmute::<*mut c_void, Attrib>(
+                        self.gl(cmd::glVertexAttribPointer)?,
+                    )(
+                        a.index, a.size, a.gl_type, a.normalized as u8, a.stride, ptr
                     ),
                     _ => {}
                 }
@@ -592,7 +591,7 @@ impl Replayer {
         let mut align = 4i32;
         // SAFETY: glGetIntegerv(GL_PACK_ALIGNMENT) writes one integer.
         unsafe {
-            std::mem::transmute::<_, unsafe extern "C" fn(u32, *mut i32)>(self.gl(cmd::glGetIntegerv)?)(
+            std::mem::transmute::<*mut c_void, unsafe extern "C" fn(u32, *mut i32)>(self.gl(cmd::glGetIntegerv)?)(
                 0x0D05, &mut align,
             )
         };
