@@ -431,28 +431,46 @@ fn capitalize(s: &str) -> String {
 }
 
 fn gen_real(cmds: &[&Command]) -> String {
+    // Two functions per command: the inlined fast path, which only calls when the function
+    // pointer is already known (so the compiler can make it a tail call with no frame), and a
+    // cold one that resolves it (and reads the thread's context kind when a process mixes them).
     let mut s = String::new();
+    let mut slow = String::new();
     for c in cmds {
         let (params, args, ret) = signature(c);
         let types: Vec<&str> = c.params.iter().map(|p| p.rust.as_str()).collect();
+        let fn_type = format!("unsafe extern \"C\" fn({}){ret}", types.join(", "));
         writeln!(
             s,
             "#[inline(always)]\npub unsafe fn {name}({params}){ret} {{\n    \
+             let addr__ = dispatch::{disp}_cached(cmd::{name});\n    \
+             if !addr__.is_null() {{\n        \
+             let real__: {fn_type} = core::mem::transmute(addr__);\n        \
+             return real__({args});\n    }}\n    \
+             slow::{name}({args})\n}}",
+            name = c.name,
+            disp = c.lib.dispatch(),
+        )
+        .unwrap();
+        writeln!(
+            slow,
+            "#[cold]\n#[inline(never)]\npub unsafe fn {name}({params}){ret} {{\n    \
              let addr__ = dispatch::{disp}(cmd::{name});\n    \
              if addr__.is_null() {{ return core::mem::zeroed(); }}\n    \
-             let real__: unsafe extern \"C\" fn({types}){ret} = core::mem::transmute(addr__);\n    \
+             let real__: {fn_type} = core::mem::transmute(addr__);\n    \
              real__({args})\n}}",
             name = c.name,
             disp = c.lib.dispatch(),
-            types = types.join(", "),
         )
         .unwrap();
     }
+    writeln!(s, "mod slow {{\n    use super::*;\n{slow}}}").unwrap();
     s
 }
 
 fn gen_exports(cmds: &[&Command]) -> String {
     let mut s = String::new();
+    let mut recorded = String::new();
     for c in cmds {
         let (params, args, ret) = signature(c);
         let call = if c.handler {
@@ -461,12 +479,21 @@ fn gen_exports(cmds: &[&Command]) -> String {
             format!("crate::real::{}({args})", c.name)
         };
         let sep = if args.is_empty() { "" } else { ", " };
-        // Recording: only the outermost call of a thread is recorded (a real implementation
-        // calling its own exported functions reaches glray's exports again).
+        // The export is the hot path: a flag test, then the real call (a tail call). Recording
+        // lives in a cold function of its own, so that its frame and spills stay out of it.
         writeln!(
             s,
             "#[no_mangle]\npub unsafe extern \"C\" fn {name}({params}){ret} {{\n    \
-             if !crate::record::active() {{\n        return {call};\n    }}\n    \
+             if crate::record::active() {{\n        return recorded::{name}({args});\n    }}\n    \
+             {call}\n}}",
+            name = c.name,
+        )
+        .unwrap();
+        // Only the outermost call of a thread is recorded (a real implementation calling its
+        // own exported functions reaches glray's exports again).
+        writeln!(
+            recorded,
+            "#[cold]\n#[inline(never)]\npub unsafe fn {name}({params}){ret} {{\n    \
              let outer__ = crate::record::enter();\n    \
              let ret__ = {call};\n    \
              if outer__ {{\n        \
@@ -478,6 +505,7 @@ fn gen_exports(cmds: &[&Command]) -> String {
         )
         .unwrap();
     }
+    writeln!(s, "/// The exports' slow path, taken while recording.\nmod recorded {{\n    use std::ffi::{{c_ulong, c_void}};\n{recorded}}}").unwrap();
     writeln!(s, "/// The address of each export, in COMMANDS order: what GetProcAddress hands out.").unwrap();
     writeln!(s, "pub static EXPORTS: [FnAddr; COUNT] = [").unwrap();
     for c in cmds {

@@ -69,6 +69,40 @@ pub fn gl(i: usize) -> *mut c_void {
     }
 }
 
+/// The real function of GL command `i` if it is already known and the process has bound only
+/// one kind of context; null otherwise (then `gl` finds it). No call, no thread-local: this is
+/// what every export's fast path inlines.
+#[inline(always)]
+pub fn gl_cached(i: usize) -> *mut c_void {
+    match SEEN.load(Ordering::Relaxed) {
+        SEEN_OSMESA => cached(&OSMESA, i),
+        s if s == SEEN_GLVND | SEEN_OSMESA => null_mut(),
+        _ => cached(&GLVND, i),
+    }
+}
+
+/// The real function of command `i` in glvnd if already known, else null.
+#[inline(always)]
+pub fn glvnd_cached(i: usize) -> *mut c_void {
+    cached(&GLVND, i)
+}
+
+/// The real function of command `i` in OSMesa if already known, else null.
+#[inline(always)]
+pub fn osmesa_cached(i: usize) -> *mut c_void {
+    cached(&OSMESA, i)
+}
+
+#[inline(always)]
+fn cached(table: &Table, i: usize) -> *mut c_void {
+    let p = table.0[i].load(Ordering::Acquire);
+    if p as usize > MISSING as usize {
+        p
+    } else {
+        null_mut()
+    }
+}
+
 /// The real function of command `i` in glvnd (GL, GLX, EGL).
 #[inline(always)]
 pub fn glvnd(i: usize) -> *mut c_void {
