@@ -271,3 +271,57 @@ fn dump_lists_the_calls() {
         assert!(text.contains(want), "dump lacks {want:?}");
     }
 }
+
+/// apitrace's own traces (Snappy files) replay through glray like its own.
+#[test]
+fn apitrace_traces_replay_to_the_programs_pictures() {
+    let x = Xvfb::start();
+    let dir = scratch("apitrace-replay");
+    let apitrace = which("apitrace");
+    // Our GLX program, traced by apitrace: its own PNG is the reference.
+    let png = dir.join("glx_scene.png");
+    let trace = dir.join("glx_scene.trace");
+    run_ok(
+        command(Way::Plain, &[], &apitrace, 120)
+            .arg("trace")
+            .arg("-o")
+            .arg(&trace)
+            .arg(example("glx_scene"))
+            .arg(&png)
+            .arg("3")
+            .env("DISPLAY", &x.display),
+        "apitrace trace glx_scene",
+    );
+    let out = dir.join("glx_scene-replay");
+    let o = replay(&trace, &out, &[]);
+    assert!(stderr(&o).contains("is an apitrace trace"), "{}", stderr(&o));
+    assert_same_file(&png, &out.join("frame-0002.png"), "apitrace glx_scene");
+
+    // An EGL hack with client arrays (apitrace records them as blobs in fake pointer calls),
+    // stopped by frameshot, preloaded before apitrace's wrapper inside the traced shell.
+    let ppm = dir.join("sproingies.ppm");
+    let trace = dir.join("sproingies.trace");
+    let script =
+        format!("LD_PRELOAD={}:$LD_PRELOAD exec /usr/libexec/xscreensaver/sproingies -window", frameshot().display());
+    let _ = command(Way::Plain, &[], &apitrace, 120)
+        .args(["trace", "--api", "egl", "-o"])
+        .arg(&trace)
+        .args(["sh", "-c", &script])
+        .env("DISPLAY", &x.display)
+        .env("FRAMESHOT_OUT", &ppm)
+        .env("FRAMESHOT_FRAME", "4")
+        .output()
+        .unwrap();
+    assert!(ppm.exists(), "sproingies did not reach frame 4 under apitrace");
+    let out = dir.join("sproingies-replay");
+    replay(&trace, &out, &["--frames", "3"]);
+    let c = run_ok(
+        Command::new(glray_bin()).arg("compare").arg(&ppm).arg(out.join("frame-0003.png")).args(["--fuzz", "0"]),
+        "compare sproingies",
+    );
+    assert!(stdout(&c).starts_with("0 of "), "{}", stdout(&c));
+
+    // A damaged apitrace file is refused with its offset.
+    let bytes = std::fs::read(&trace).unwrap();
+    replay_fails(&bytes[..bytes.len() - 7], "apitrace-truncated", &["byte "]);
+}

@@ -11,6 +11,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use glray_core::config::{env_name, Config, Kind, SETTINGS};
 use glray_core::reallib::{self, FileId, RealKind};
 
+mod apitrace;
 #[allow(dead_code)]
 #[path = "../../commands.rs"]
 mod commands;
@@ -151,6 +152,21 @@ fn read_trace(path: &Path) -> Result<Vec<u8>, String> {
     std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// A trace in glray's format: read as is, or converted from an apitrace file.
+fn load_trace(trace: &Path) -> Result<Vec<u8>, String> {
+    let data = read_trace(trace)?;
+    if !apitrace::is_apitrace(&data) {
+        return Ok(data);
+    }
+    let (converted, c) = apitrace::convert(&data).map_err(|e| format!("{}: {e}", trace.display()))?;
+    eprintln!("glray: {} is an apitrace trace: {} calls read", trace.display(), c.calls);
+    if !c.unknown.is_empty() {
+        let names: Vec<String> = c.unknown.iter().map(|(n, k)| format!("{n} ({k})")).collect();
+        eprintln!("glray: warning: skipped calls glray does not know: {}", names.join(", "));
+    }
+    Ok(converted)
+}
+
 fn replay(
     trace: &Path,
     renderer: Renderer,
@@ -165,7 +181,7 @@ fn replay(
         .to_lowercase());
     }
     let frames = frames.as_deref().map(replay::FrameSet::parse).transpose()?.unwrap_or_default();
-    let data = read_trace(trace)?;
+    let data = load_trace(trace)?;
     let config = Config::resolve(&process_env(), &[])?;
     let mut r = replay::Replayer::new(out, frames, readpixels, config.real_path("real_osmesa"))?;
     let summary = r.run(&data).map_err(|e| format!("{}: {e}", trace.display()))?;
@@ -185,7 +201,7 @@ fn replay(
 fn dump(trace: &Path, max_calls: Option<u64>) -> Result<(), String> {
     use glray_core::trace::Reader;
     use std::io::Write;
-    let data = read_trace(trace)?;
+    let data = load_trace(trace)?;
     let fail = |e: glray_core::trace::TraceError| format!("{}: {e}", trace.display());
     let mut r = Reader::new(&data).map_err(fail)?;
     let stdout = std::io::stdout();
