@@ -26,14 +26,7 @@ fn main() {
         let buffers =
             scene::BufferFns::load(|n| egl::eglGetProcAddress(n.as_ptr().cast())).map(|b| &*Box::leak(Box::new(b)));
         let s = scene::Scene::new(buffers);
-        let mut last = Vec::new();
-        for frame in 0..frames {
-            s.draw(W, H, frame);
-            if frame + 1 == frames {
-                last = scene::read_rgb(W, H);
-            }
-            ctx.swap();
-        }
+        let last = scene::draw_frames(&s, W, H, frames, || ctx.swap());
         let err = gl::glGetError();
         let (major, minor) = ctx.version;
         drop(ctx);

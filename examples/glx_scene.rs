@@ -62,14 +62,7 @@ fn main() {
         };
         let buffers = scene::BufferFns::load(get).map(|b| &*Box::leak(Box::new(b)));
         let s = scene::Scene::new(buffers);
-        let mut last = Vec::new();
-        for frame in 0..frames {
-            s.draw(W, H, frame);
-            if frame + 1 == frames {
-                last = scene::read_rgb(W, H);
-            }
-            glx::glXSwapBuffers(dpy, win);
-        }
+        let last = scene::draw_frames(&s, W, H, frames, || glx::glXSwapBuffers(dpy, win));
         let err = gl::glGetError();
         glx::glXMakeCurrent(dpy, 0, std::ptr::null_mut());
         glx::glXDestroyContext(dpy, ctx);

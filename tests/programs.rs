@@ -7,7 +7,6 @@ mod common;
 
 use common::*;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// Runs `program args` under frameshot in all three ways and compares frame `frame`.
 fn frames_identical(name: &str, program: &Path, args: &[&str], frame: u32) {
@@ -41,12 +40,6 @@ fn hack(name: &str) -> PathBuf {
     let p = Path::new("/usr/libexec/xscreensaver").join(name);
     assert!(p.exists(), "{} is missing: scripts/test installs xscreensaver-gl-extra", p.display());
     p
-}
-
-fn which(program: &str) -> PathBuf {
-    let out = Command::new("sh").arg("-c").arg(format!("command -v {program}")).output().unwrap();
-    assert!(out.status.success(), "{program} is not installed: scripts/test installs it");
-    PathBuf::from(String::from_utf8(out.stdout).unwrap().trim())
 }
 
 #[test]

@@ -149,12 +149,6 @@ fn openscad_replays_to_its_own_png() {
     assert!(stdout(&c).starts_with("0 of "), "{}", stdout(&c));
 }
 
-fn which(program: &str) -> PathBuf {
-    let out = Command::new("sh").arg("-c").arg(format!("command -v {program}")).output().unwrap();
-    assert!(out.status.success(), "{program} is not installed: scripts/test installs it");
-    PathBuf::from(String::from_utf8(out.stdout).unwrap().trim())
-}
-
 /// `glray replay` on a damaged trace: exit status 2, a message with the byte offset, no panic.
 fn replay_fails(data: &[u8], name: &str, expect: &[&str]) {
     let dir = scratch(&format!("bad-{name}"));

@@ -233,6 +233,20 @@ impl Scene {
     }
 }
 
+/// Draws `frames` frames, calling `end_frame` after each (a swap); returns the last frame's
+/// pixels, read back before its swap (what the program shows).
+pub unsafe fn draw_frames(s: &Scene, width: i32, height: i32, frames: u32, end_frame: impl Fn()) -> Vec<u8> {
+    let mut last = Vec::new();
+    for frame in 0..frames {
+        s.draw(width, height, frame);
+        if frame + 1 == frames {
+            last = read_rgb(width, height);
+        }
+        end_frame();
+    }
+    last
+}
+
 /// Reads the current framebuffer (RGB, bottom-up as GL returns it).
 pub unsafe fn read_rgb(width: i32, height: i32) -> Vec<u8> {
     let mut pixels = vec![0u8; (width * height * 3) as usize];

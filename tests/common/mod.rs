@@ -163,3 +163,10 @@ pub fn stderr(out: &Output) -> String {
 pub fn stdout(out: &Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
+
+/// The path of an installed program, or a failure saying scripts/test installs it.
+pub fn which(program: &str) -> PathBuf {
+    let out = Command::new("sh").arg("-c").arg(format!("command -v {program}")).output().unwrap();
+    assert!(out.status.success(), "{program} is not installed: scripts/test installs it");
+    PathBuf::from(String::from_utf8(out.stdout).unwrap().trim())
+}

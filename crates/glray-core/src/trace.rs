@@ -58,6 +58,17 @@ pub enum Value<'a> {
     Strings(Vec<&'a [u8]>),
 }
 
+impl Value<'_> {
+    /// An integer value (or a handle, recorded as an opaque pointer) as i64; 0 for others.
+    pub fn as_int(&self) -> i64 {
+        match self {
+            Value::Int(x) => *x,
+            Value::UInt(x) | Value::Opaque(x) | Value::Offset(x) => *x as i64,
+            _ => 0,
+        }
+    }
+}
+
 /// One client vertex array's memory, captured when a draw read it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ArrayData<'a> {

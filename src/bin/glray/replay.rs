@@ -297,11 +297,7 @@ fn context_argument(c: usize) -> Option<usize> {
 }
 
 fn handle(v: Option<&Value>) -> u64 {
-    match v {
-        Some(Value::Opaque(x)) | Some(Value::UInt(x)) => *x,
-        Some(Value::Int(x)) => *x as u64,
-        _ => 0,
-    }
+    v.map_or(0, |v| v.as_int() as u64)
 }
 
 impl Replayer {
@@ -361,12 +357,7 @@ impl Replayer {
             return Ok(());
         }
         if matches!(c, cmd::glReadPixels | cmd::glReadnPixels | cmd::glReadnPixelsARB) && args.len() >= 4 {
-            let dim = |v: &Value| match v {
-                Value::Int(x) => *x,
-                Value::UInt(x) => *x as i64,
-                _ => 0,
-            };
-            self.pending_read = Some((dim(&args[2]), dim(&args[3])));
+            self.pending_read = Some((args[2].as_int(), args[3].as_int()));
         }
         let Some(f) = generated::REPLAY[c] else { return Ok(()) };
         // SAFETY: the generated function converts each recorded value to the command's
@@ -577,12 +568,7 @@ impl Replayer {
 
     /// With --readpixels: what a glReadPixels of RGB/RGBA bytes returned, as a PNG.
     fn write_read_pixels(&mut self, args: &[Value]) -> Result<(), String> {
-        let int = |v: &Value| match v {
-            Value::Int(x) => *x,
-            Value::UInt(x) => *x as i64,
-            _ => 0,
-        };
-        let (w, h, format, ty) = (int(&args[2]), int(&args[3]), int(&args[4]) as u32, int(&args[5]) as u32);
+        let (w, h, format, ty) = (args[2].as_int(), args[3].as_int(), args[4].as_int() as u32, args[5].as_int() as u32);
         let bpp = match (format, ty) {
             (GL_RGB, GL_UNSIGNED_BYTE) => 3,
             (GL_RGBA, GL_UNSIGNED_BYTE) => 4,
