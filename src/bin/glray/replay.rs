@@ -138,6 +138,8 @@ pub struct Replayer {
     strings: Vec<CString>,
     pointer_lists: Vec<Vec<*const c_char>>,
     outputs: Vec<Vec<u8>>,
+    /// Where the outputs of queries go (glGet*): nothing reads them, so all calls share it.
+    scratch: Vec<u8>,
     /// Client arrays set from ARRAYS events, kept alive until replaced.
     arrays: HashMap<(u8, u32), Vec<u8>>,
     out: PathBuf,
@@ -192,6 +194,7 @@ impl Replayer {
             strings: Vec::new(),
             pointer_lists: Vec::new(),
             outputs: Vec::new(),
+            scratch: vec![0; 1 << 20],
             arrays: HashMap::new(),
             out: out.to_path_buf(),
             frames,
@@ -254,12 +257,12 @@ impl Replayer {
             return Ok(*o as usize as *mut c_void);
         }
         let _ = index;
-        let size = match c {
-            // Pixels read back: at most 16 bytes a pixel (RGBA float), plus row padding.
-            cmd::glReadPixels | cmd::glReadnPixels | cmd::glReadnPixelsARB => self.read_pixels_size()?,
-            _ => 1 << 20,
-        };
-        let mut buf = vec![0u8; size];
+        if !matches!(c, cmd::glReadPixels | cmd::glReadnPixels | cmd::glReadnPixelsARB) {
+            return Ok(self.scratch.as_mut_ptr().cast());
+        }
+        // Pixels read back (kept for --readpixels): at most 16 bytes a pixel (RGBA float), plus
+        // row padding.
+        let mut buf = vec![0u8; self.read_pixels_size()?];
         let p = buf.as_mut_ptr() as *mut c_void;
         self.outputs.push(buf);
         Ok(p)
