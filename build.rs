@@ -491,11 +491,23 @@ fn gen_exports(cmds: &[&Command]) -> String {
         )
         .unwrap();
         // Only the outermost call of a thread is recorded (a real implementation calling its
-        // own exported functions reaches glray's exports again).
+        // own exported functions reaches glray's exports again). Commands that touch client
+        // state may need to look at memory before the real call (a buffer about to be unmapped).
+        let before = if ["geometry", "client", "context", "frame"].contains(&c.class.as_str()) {
+            let b: Vec<String> = c.params.iter().map(|p| bits(&p.rust, &ident(&p.name))).collect();
+            format!(
+                "if outer__ {{\n        crate::record::before_real(crate::commands::cmd::{}, &[{}]);\n    }}\n    ",
+                c.name,
+                b.join(", ")
+            )
+        } else {
+            String::new()
+        };
         writeln!(
             recorded,
-            "#[cold]\n#[inline(never)]\npub unsafe fn {name}({params}){ret} {{\n    \
+            "#[cold]\n#[inline(never)]\n#[allow(clippy::unnecessary_cast)]\npub unsafe fn {name}({params}){ret} {{\n    \
              let outer__ = crate::record::enter();\n    \
+             {before}\
              let ret__ = {call};\n    \
              if outer__ {{\n        \
              crate::record::with(|rec__| crate::record::generated::{name}(rec__, {args}{sep}ret__));\n        \

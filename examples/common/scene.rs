@@ -13,6 +13,8 @@ pub struct BufferFns {
     pub gen: unsafe extern "C" fn(i32, *mut u32),
     pub bind: unsafe extern "C" fn(u32, u32),
     pub data: unsafe extern "C" fn(u32, isize, *const c_void, u32),
+    pub map_range: unsafe extern "C" fn(u32, isize, isize, u32) -> *mut c_void,
+    pub unmap: unsafe extern "C" fn(u32) -> u8,
 }
 
 impl BufferFns {
@@ -21,13 +23,19 @@ impl BufferFns {
         let g = get_proc(c"glGenBuffers");
         let b = get_proc(c"glBindBuffer");
         let d = get_proc(c"glBufferData");
-        if g.is_null() || b.is_null() || d.is_null() {
+        let m = get_proc(c"glMapBufferRange");
+        let u = get_proc(c"glUnmapBuffer");
+        if [g, b, d, m, u].iter().any(|p| p.is_null()) {
             return None;
         }
         Some(BufferFns {
             gen: std::mem::transmute::<*const c_void, unsafe extern "C" fn(i32, *mut u32)>(g),
             bind: std::mem::transmute::<*const c_void, unsafe extern "C" fn(u32, u32)>(b),
             data: std::mem::transmute::<*const c_void, unsafe extern "C" fn(u32, isize, *const c_void, u32)>(d),
+            map_range: std::mem::transmute::<*const c_void, unsafe extern "C" fn(u32, isize, isize, u32) -> *mut c_void>(
+                m,
+            ),
+            unmap: std::mem::transmute::<*const c_void, unsafe extern "C" fn(u32) -> u8>(u),
         })
     }
 }
@@ -104,11 +112,20 @@ impl Scene {
         cube_faces();
         glEndList();
         let vbo = buffers.map(|b| {
+            // Allocated empty, filled through a mapping (as VTK does): tests that recording
+            // keeps what a program writes into mapped memory.
             let tri: [f32; 9] = [-0.5, -0.4, 0.0, 0.5, -0.4, 0.0, 0.0, 0.5, 0.0];
+            let bytes = std::mem::size_of_val(&tri);
             let mut id = 0;
             (b.gen)(1, &mut id);
             (b.bind)(GL_ARRAY_BUFFER, id);
-            (b.data)(GL_ARRAY_BUFFER, std::mem::size_of_val(&tri) as isize, tri.as_ptr().cast(), GL_STATIC_DRAW);
+            (b.data)(GL_ARRAY_BUFFER, bytes as isize, std::ptr::null(), GL_STATIC_DRAW);
+            const GL_MAP_WRITE_BIT: u32 = 0x0002;
+            let p = (b.map_range)(GL_ARRAY_BUFFER, 0, bytes as isize, GL_MAP_WRITE_BIT);
+            if !p.is_null() {
+                std::ptr::copy_nonoverlapping(tri.as_ptr().cast::<u8>(), p.cast::<u8>(), bytes);
+            }
+            (b.unmap)(GL_ARRAY_BUFFER);
             (b.bind)(GL_ARRAY_BUFFER, 0);
             (id, b)
         });

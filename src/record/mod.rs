@@ -116,9 +116,29 @@ pub fn with(f: impl FnOnce(&mut Recorder)) {
     *guard = None;
 }
 
+/// Called before the real call of commands that touch client state, with their arguments as
+/// bits: memory a program wrote through a mapped buffer must be read before glUnmapBuffer
+/// invalidates the mapping.
+pub fn before_real(cmd: usize, args: &[u64]) {
+    if matches!(cmd, cmd::glUnmapBuffer | cmd::glUnmapBufferARB) {
+        with(|rec| rec.capture_mapping(args[0] as u32));
+    }
+}
+
+/// A buffer mapped for writing: where, and which part of the buffer.
+struct Mapping {
+    ptr: u64,
+    offset: i64,
+    length: i64,
+}
+
 /// What the recorder knows per recorded thread.
 #[derive(Default)]
 struct ThreadState {
+    /// Buffers mapped for writing, by target.
+    mappings: HashMap<u32, Mapping>,
+    /// What a glUnmapBuffer about to return found in its mapping: (target, offset, bytes).
+    unmapped: Option<(u32, i64, Vec<u8>)>,
     arrays: ClientArrays,
     /// The drawable bound by the last MakeCurrent, and its size.
     drawable: (u64, u32, u32),
@@ -311,10 +331,51 @@ impl Recorder {
         }
     }
 
+    /// Before glUnmapBuffer: copies what the program wrote into the mapping.
+    fn capture_mapping(&mut self, target: u32) {
+        let st = self.state();
+        if let Some(m) = st.mappings.remove(&target) {
+            // SAFETY: the mapping is valid until the glUnmapBuffer that is about to run.
+            let bytes = unsafe { std::slice::from_raw_parts(m.ptr as usize as *const u8, m.length.max(0) as usize) };
+            st.unmapped = Some((target, m.offset, bytes.to_vec()));
+        }
+    }
+
     /// Called after a hooked command is recorded.
     pub fn after(&mut self, cmd: usize, args: &[u64], ret: u64) {
         self.state().arrays.track(cmd, args);
         match cmd {
+            cmd::glMapBuffer | cmd::glMapBufferARB if ret != 0 => {
+                const GL_READ_ONLY: u64 = 0x88B8;
+                const GL_BUFFER_SIZE: u32 = 0x8764;
+                if args[1] != GL_READ_ONLY {
+                    let mut size = 0i32;
+                    // SAFETY: the size of the buffer bound to the target just mapped.
+                    unsafe {
+                        real::glGetBufferParameteriv(args[0] as u32, GL_BUFFER_SIZE, (&mut size as *mut i32).cast())
+                    };
+                    self.state().mappings.insert(args[0] as u32, Mapping { ptr: ret, offset: 0, length: size as i64 });
+                }
+            }
+            cmd::glMapBufferRange if ret != 0 => {
+                const GL_MAP_WRITE_BIT: u64 = 0x0002;
+                if args[3] & GL_MAP_WRITE_BIT != 0 {
+                    let m = Mapping { ptr: ret, offset: args[1] as i64, length: args[2] as i64 };
+                    self.state().mappings.insert(args[0] as u32, m);
+                }
+            }
+            cmd::glUnmapBuffer | cmd::glUnmapBufferARB => {
+                // The trace gets the data as a glBufferSubData after the unmap (a mapped buffer
+                // takes no SubData), so that a replay ends with the same buffer contents.
+                if let Some((target, offset, bytes)) = self.state().unmapped.take() {
+                    self.begin(cmd::glBufferSubData, 4);
+                    self.e.uint(target as u64);
+                    self.e.int(offset);
+                    self.e.int(bytes.len() as i64);
+                    self.e.blob(&bytes);
+                    self.e.no_return();
+                }
+            }
             cmd::glXMakeCurrent if ret != 0 => self.bound(Kind::Glx, args[0], args[1], args[2]),
             cmd::glXMakeContextCurrent | cmd::glXMakeCurrentReadSGI if ret != 0 => {
                 self.bound(Kind::Glx, args[0], args[1], args[3])

@@ -8,7 +8,9 @@
 //!   client vertex arrays as blobs, so no ARRAYS events are needed;
 //! - apitrace does not record drawable sizes: the first glViewport a thread issues after a
 //!   MakeCurrent gives it (apitrace itself emits such a viewport call);
-//! - glXSwapBuffers/eglSwapBuffers end frames.
+//! - glXSwapBuffers/eglSwapBuffers end frames;
+//! - apitrace's `memcpy` pseudo-calls (what a program wrote into a mapped buffer) become a
+//!   glBufferSubData of that range after the buffer's glUnmapBuffer, as glray records them.
 
 use std::collections::HashMap;
 
@@ -373,9 +375,30 @@ fn encode(functions: &HashMap<u64, (String, usize)>, calls: &[Call]) -> Result<(
     let mut frame = 0u64;
     // Threads whose MakeCurrent waits for a size: (drawable).
     let mut waiting: HashMap<u32, u64> = HashMap::new();
+    // Buffers mapped now: address -> (target, offset in the buffer, length).
+    let mut mapped: HashMap<u64, (u64, i64, u64)> = HashMap::new();
+    // Writes into them, per target, to be replayed after the unmap: (offset, bytes).
+    let mut written: HashMap<u64, Vec<(i64, Vec<u8>)>> = HashMap::new();
+    let mut number = |e: &mut Encoder, ours: usize| {
+        if numbers[ours] == u32::MAX {
+            numbers[ours] = named;
+            named += 1;
+            e.name(crate::commands::COMMANDS[ours].name.to_bytes());
+        }
+        numbers[ours] as usize
+    };
     for call in calls {
         let (name, ours) = &functions[&(call.sig as u64)];
         let ours = *ours;
+        let arg = |i: usize| call.args.get(i).map_or(0, V::int) as u64;
+        if ours == COUNT && name == "memcpy" {
+            let dest = arg(0);
+            let hit = mapped.iter().find(|(ptr, (_, _, len))| dest >= **ptr && dest - **ptr < *len);
+            if let (Some((ptr, (target, offset, _))), Some(V::Blob(bytes))) = (hit, call.args.get(1)) {
+                written.entry(*target).or_default().push((offset + (dest - ptr) as i64, bytes.clone()));
+            }
+            continue;
+        }
         if ours == COUNT {
             *unknown.entry(name.clone()).or_default() += 1;
             continue;
@@ -391,12 +414,8 @@ fn encode(functions: &HashMap<u64, (String, usize)>, calls: &[Call]) -> Result<(
                 e.drawable(call.thread, drawable, w as u32, h as u32);
             }
         }
-        if numbers[ours] == u32::MAX {
-            numbers[ours] = named;
-            named += 1;
-            e.name(name.as_bytes());
-        }
-        e.begin_call(numbers[ours] as usize, call.thread, arg_codes.len() as u8);
+        let n = number(&mut e, ours);
+        e.begin_call(n, call.thread, arg_codes.len() as u8);
         for (i, code) in arg_codes.iter().enumerate() {
             encode_value(&mut e, *code, call.args.get(i).unwrap_or(&V::Null));
         }
@@ -408,8 +427,27 @@ fn encode(functions: &HashMap<u64, (String, usize)>, calls: &[Call]) -> Result<(
         }
         conversion.calls += 1;
         let ret_true = call.ret.as_ref().is_some_and(|r| r.int() != 0);
-        let arg = |i: usize| call.args.get(i).map_or(0, V::int) as u64;
+        let ret = call.ret.as_ref().map_or(0, V::int) as u64;
         match ours {
+            cmd::glMapBuffer | cmd::glMapBufferARB if ret != 0 => {
+                mapped.insert(ret, (arg(0), 0, u64::MAX));
+            }
+            cmd::glMapBufferRange if ret != 0 => {
+                mapped.insert(ret, (arg(0), arg(1) as i64, arg(2)));
+            }
+            cmd::glUnmapBuffer | cmd::glUnmapBufferARB => {
+                let target = arg(0);
+                mapped.retain(|_, (t, _, _)| *t != target);
+                for (offset, bytes) in written.remove(&target).unwrap_or_default() {
+                    let n = number(&mut e, cmd::glBufferSubData);
+                    e.begin_call(n, call.thread, 4);
+                    e.uint(target);
+                    e.int(offset);
+                    e.int(bytes.len() as i64);
+                    e.blob(&bytes);
+                    e.no_return();
+                }
+            }
             cmd::glXMakeCurrent if ret_true => {
                 if arg(2) != 0 {
                     waiting.insert(call.thread, arg(1));
