@@ -1,0 +1,14 @@
+//! glray's GL state machine, in pure Rust: what the capture layer (DESIGN.md: "capture") keeps
+//! of a context, with GL's error rules, so that it can be tested without any GL.
+//!
+//! - `error`: GL error codes and the error flag glGetError reads;
+//! - `matrix`: the matrix stacks (modelview, projection, texture, color) and every operation on
+//!   them, as Mesa implements them;
+//! - `primitive`: assembling glBegin/glEnd and glDrawArrays vertex streams into points, lines and
+//!   triangles, with the provoking vertex flat shading uses.
+//!
+//! Nothing here is wired into libglray.so yet: the capture of issue 4 builds on it.
+
+pub mod error;
+pub mod matrix;
+pub mod primitive;
