@@ -4,6 +4,7 @@
 
 use std::ffi::c_void;
 
+use glray_core::gltypes::{array_element_bytes, value_bytes};
 use glray_core::trace::{array_kind, ArrayData};
 
 use super::{bound_buffer, GL_ELEMENT_ARRAY_BUFFER_BINDING};
@@ -15,7 +16,6 @@ const GL_ELEMENT_ARRAY_BUFFER: u32 = 0x8893;
 const GL_TEXTURE0: u64 = 0x84C0;
 const GL_FLOAT: u32 = 0x1406;
 const GL_UNSIGNED_BYTE: u32 = 0x1401;
-const GL_BGRA: i32 = 0x80E1;
 const MAX_UNITS: usize = 32;
 
 #[derive(Debug, Clone, Copy)]
@@ -36,22 +36,7 @@ impl Array {
     }
 
     fn element_bytes(&self) -> u64 {
-        let comps = if self.size == GL_BGRA { 4 } else { self.size.max(1) as u64 };
-        match self.ty {
-            // Packed types: one 32-bit word per element.
-            0x8D9F | 0x8368 | 0x8C3B => 4,
-            t => comps * type_size(t),
-        }
-    }
-}
-
-/// Bytes of one value of a GL type.
-pub fn type_size(ty: u32) -> u64 {
-    match ty {
-        0x1400 | 0x1401 => 1,          // BYTE, UNSIGNED_BYTE
-        0x1402 | 0x1403 | 0x140B => 2, // SHORT, UNSIGNED_SHORT, HALF_FLOAT
-        0x140A => 8,                   // DOUBLE
-        _ => 4,                        // INT, UNSIGNED_INT, FLOAT, FIXED
+        array_element_bytes(self.size, self.ty)
     }
 }
 
@@ -305,7 +290,7 @@ fn index_range(count: i64, ty: u32, ptr: u64, base_vertex: i64) -> Option<(u64, 
     if count <= 0 {
         return None;
     }
-    let size = type_size(ty) as usize;
+    let size = value_bytes(ty) as usize;
     let bytes = (count as usize).checked_mul(size)?;
     let data: Vec<u8> = if bound_buffer(GL_ELEMENT_ARRAY_BUFFER_BINDING) != 0 {
         let mut v = vec![0u8; bytes];

@@ -2,6 +2,7 @@
 //! GL, GLX, EGL and OSMesa libraries without ever finding glray itself.
 
 pub mod config;
+pub mod gltypes;
 pub mod image;
 pub mod log;
 pub mod reallib;

@@ -195,6 +195,47 @@ pub fn open(kind: RealKind, user_path: Option<&str>, glray: Option<FileId>) -> R
     ))
 }
 
+/// OSMesa's context functions (osmesa.h), typed: what `glray replay` and `glray info` drive.
+pub struct OSMesaApi {
+    pub create_ext: unsafe extern "C" fn(u32, i32, i32, i32, *mut c_void) -> *mut c_void,
+    pub make_current: unsafe extern "C" fn(*mut c_void, *mut c_void, u32, i32, i32) -> u8,
+    pub destroy: unsafe extern "C" fn(*mut c_void),
+    pub get_proc: unsafe extern "C" fn(*const libc::c_char) -> *mut c_void,
+}
+
+impl OSMesaApi {
+    /// Looks the functions up in an opened libOSMesa.
+    pub fn load(lib: &RealLib) -> Result<OSMesaApi, String> {
+        let sym = |n: &CStr| {
+            let p = lib.sym(n);
+            if p.is_null() {
+                Err(format!("{} has no {}", lib.path, n.to_string_lossy()))
+            } else {
+                Ok(p)
+            }
+        };
+        // SAFETY: these names are osmesa.h's functions, with these signatures.
+        unsafe {
+            Ok(OSMesaApi {
+                create_ext: std::mem::transmute::<
+                    *mut c_void,
+                    unsafe extern "C" fn(u32, i32, i32, i32, *mut c_void) -> *mut c_void,
+                >(sym(c"OSMesaCreateContextExt")?),
+                make_current: std::mem::transmute::<
+                    *mut c_void,
+                    unsafe extern "C" fn(*mut c_void, *mut c_void, u32, i32, i32) -> u8,
+                >(sym(c"OSMesaMakeCurrent")?),
+                destroy: std::mem::transmute::<*mut c_void, unsafe extern "C" fn(*mut c_void)>(sym(
+                    c"OSMesaDestroyContext",
+                )?),
+                get_proc: std::mem::transmute::<*mut c_void, unsafe extern "C" fn(*const libc::c_char) -> *mut c_void>(
+                    sym(c"OSMesaGetProcAddress")?,
+                ),
+            })
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -461,33 +461,23 @@ fn run(dropin: bool, set: &[String], library: Option<PathBuf>, program: &[OsStri
 /// "RENDERER, GL VERSION" of Mesa, from a 1x1 OSMesa context (no display needed).
 fn osmesa_renderer(lib: &reallib::RealLib) -> Option<String> {
     use std::ffi::{c_void, CStr};
-    type Create = unsafe extern "C" fn(u32, i32, i32, i32, *mut c_void) -> *mut c_void;
-    type MakeCurrent = unsafe extern "C" fn(*mut c_void, *mut c_void, u32, i32, i32) -> u8;
-    type Destroy = unsafe extern "C" fn(*mut c_void);
     type GetString = unsafe extern "C" fn(u32) -> *const std::ffi::c_char;
-    let (create, make_current, destroy, get_string) = (
-        lib.sym(c"OSMesaCreateContextExt"),
-        lib.sym(c"OSMesaMakeCurrent"),
-        lib.sym(c"OSMesaDestroyContext"),
-        lib.sym(c"glGetString"),
-    );
-    if [create, make_current, destroy, get_string].iter().any(|p| p.is_null()) {
+    let api = reallib::OSMesaApi::load(lib).ok()?;
+    let get_string = lib.sym(c"glGetString");
+    if get_string.is_null() {
         return None;
     }
-    // SAFETY: the symbols come from libOSMesa and have osmesa.h's signatures; the buffer outlives
-    // the context, which is destroyed before returning.
+    // SAFETY: OSMesa's functions with osmesa.h's signatures; the buffer outlives the context,
+    // which is destroyed before returning.
     unsafe {
-        let create: Create = std::mem::transmute(create);
-        let make_current: MakeCurrent = std::mem::transmute(make_current);
-        let destroy: Destroy = std::mem::transmute(destroy);
-        let get_string: GetString = std::mem::transmute(get_string);
-        let ctx = create(0x1908 /* OSMESA_RGBA */, 0, 0, 0, std::ptr::null_mut());
+        let get_string: GetString = std::mem::transmute::<*mut c_void, GetString>(get_string);
+        let ctx = (api.create_ext)(0x1908 /* OSMESA_RGBA */, 0, 0, 0, std::ptr::null_mut());
         if ctx.is_null() {
             return None;
         }
         let mut pixel = [0u8; 4];
         let mut text = None;
-        if make_current(ctx, pixel.as_mut_ptr().cast(), 0x1401 /* GL_UNSIGNED_BYTE */, 1, 1) != 0 {
+        if (api.make_current)(ctx, pixel.as_mut_ptr().cast(), 0x1401 /* GL_UNSIGNED_BYTE */, 1, 1) != 0 {
             let s = |name: u32| {
                 let p = get_string(name);
                 (!p.is_null()).then(|| CStr::from_ptr(p).to_string_lossy().into_owned())
@@ -498,7 +488,7 @@ fn osmesa_renderer(lib: &reallib::RealLib) -> Option<String> {
                 s(0x1F02 /* GL_VERSION */).unwrap_or_default()
             ));
         }
-        destroy(ctx);
+        (api.destroy)(ctx);
         text
     }
 }

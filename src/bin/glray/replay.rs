@@ -12,7 +12,7 @@ use std::ffi::{c_char, c_void, CString};
 use std::path::{Path, PathBuf};
 
 use glray_core::image::Image;
-use glray_core::reallib::{self, RealKind, RealLib};
+use glray_core::reallib::{self, OSMesaApi, RealKind, RealLib};
 use glray_core::trace::{array_kind, ArrayData, Event, Reader, Value};
 
 use crate::commands::{cmd, lookup, Lib, COMMANDS, COUNT};
@@ -118,10 +118,7 @@ pub struct Summary {
 
 pub struct Replayer {
     osmesa: RealLib,
-    create: unsafe extern "C" fn(u32, i32, i32, i32, *mut c_void) -> *mut c_void,
-    make_current: unsafe extern "C" fn(*mut c_void, *mut c_void, u32, i32, i32) -> u8,
-    destroy: unsafe extern "C" fn(*mut c_void),
-    get_proc: unsafe extern "C" fn(*const c_char) -> *mut c_void,
+    api: OSMesaApi,
     /// Resolved OSMesa functions per command (null: not looked up yet).
     funcs: Vec<*mut c_void>,
     missing: HashSet<usize>,
@@ -153,36 +150,11 @@ pub struct Replayer {
 impl Replayer {
     pub fn new(out: &Path, frames: FrameSet, readpixels: bool, osmesa_path: Option<&str>) -> Result<Replayer, String> {
         let osmesa = reallib::open(RealKind::OSMesa, osmesa_path, None)?;
-        let sym = |n: &std::ffi::CStr| {
-            let p = osmesa.sym(n);
-            if p.is_null() {
-                Err(format!("{} has no {:?}", osmesa.path, n))
-            } else {
-                Ok(p)
-            }
-        };
-        // SAFETY: these are osmesa.h's functions with these signatures.
-        let (create, make_current, destroy, get_proc) = unsafe {
-            (
-                std::mem::transmute::<*mut c_void, unsafe extern "C" fn(u32, i32, i32, i32, *mut c_void) -> *mut c_void>(
-                    sym(c"OSMesaCreateContextExt")?,
-                ),
-                std::mem::transmute::<*mut c_void, unsafe extern "C" fn(*mut c_void, *mut c_void, u32, i32, i32) -> u8>(
-                    sym(c"OSMesaMakeCurrent")?,
-                ),
-                std::mem::transmute::<*mut c_void, unsafe extern "C" fn(*mut c_void)>(sym(c"OSMesaDestroyContext")?),
-                std::mem::transmute::<*mut c_void, unsafe extern "C" fn(*const c_char) -> *mut c_void>(sym(
-                    c"OSMesaGetProcAddress",
-                )?),
-            )
-        };
+        let api = OSMesaApi::load(&osmesa)?;
         std::fs::create_dir_all(out).map_err(|e| format!("--out {}: {e}", out.display()))?;
         Ok(Replayer {
             osmesa,
-            create,
-            make_current,
-            destroy,
-            get_proc,
+            api,
             funcs: vec![std::ptr::null_mut(); COUNT],
             missing: HashSet::new(),
             contexts: HashMap::new(),
@@ -211,7 +183,7 @@ impl Replayer {
             let mut p = self.osmesa.sym(name);
             if p.is_null() {
                 // SAFETY: a NUL-terminated name.
-                p = unsafe { (self.get_proc)(name.as_ptr()) };
+                p = unsafe { (self.api.get_proc)(name.as_ptr()) };
             }
             self.funcs[c] = if p.is_null() { std::ptr::dangling_mut::<c_void>() } else { p };
         }
@@ -401,7 +373,7 @@ impl Replayer {
                 _ => (24, 8),
             };
             // SAFETY: OSMesaCreateContextExt with an RGBA format and a shared context or null.
-            let ctx = unsafe { (self.create)(GL_RGBA, depth.clamp(0, 32), stencil.clamp(0, 8), 0, share) };
+            let ctx = unsafe { (self.api.create_ext)(GL_RGBA, depth.clamp(0, 32), stencil.clamp(0, 8), 0, share) };
             if ctx.is_null() {
                 return Err("OSMesa could not create a context".into());
             }
@@ -417,11 +389,11 @@ impl Replayer {
             if let Some(ctx) = self.contexts.remove(&handle(args.get(i))) {
                 if self.current.is_some_and(|(cur, _)| cur == ctx) {
                     // SAFETY: unbinding OSMesa's current context.
-                    unsafe { (self.make_current)(std::ptr::null_mut(), std::ptr::null_mut(), 0, 0, 0) };
+                    unsafe { (self.api.make_current)(std::ptr::null_mut(), std::ptr::null_mut(), 0, 0, 0) };
                     self.current = None;
                 }
                 // SAFETY: a context this replay created and no longer uses.
-                unsafe { (self.destroy)(ctx) };
+                unsafe { (self.api.destroy)(ctx) };
             }
         }
         Ok(())
@@ -464,7 +436,13 @@ impl Replayer {
         // SAFETY: the buffer holds width*height RGBA pixels and lives in `drawables` until it is
         // resized, when `current` is cleared and this runs again.
         let ok = unsafe {
-            (self.make_current)(osctx, d.pixels.as_mut_ptr().cast(), GL_UNSIGNED_BYTE, d.width as i32, d.height as i32)
+            (self.api.make_current)(
+                osctx,
+                d.pixels.as_mut_ptr().cast(),
+                GL_UNSIGNED_BYTE,
+                d.width as i32,
+                d.height as i32,
+            )
         };
         if ok == 0 {
             return Err(format!("OSMesaMakeCurrent failed for a {}x{} drawable", d.width, d.height));
@@ -599,17 +577,10 @@ impl Replayer {
 }
 
 fn element_bytes(a: &ArrayData) -> u64 {
-    let comps = if a.size == 0x80E1 { 4 } else { a.size.max(1) as u64 };
-    let ty = match a.gl_type {
-        0x1400 | 0x1401 => 1,
-        0x1402 | 0x1403 | 0x140B => 2,
-        0x140A => 8,
-        _ => 4,
-    };
     if a.kind == array_kind::EDGE_FLAG {
         1
     } else {
-        comps * ty
+        glray_core::gltypes::array_element_bytes(a.size, a.gl_type)
     }
 }
 
@@ -617,9 +588,9 @@ impl Drop for Replayer {
     fn drop(&mut self) {
         // SAFETY: unbinding and destroying the contexts this replay created.
         unsafe {
-            (self.make_current)(std::ptr::null_mut(), std::ptr::null_mut(), 0, 0, 0);
+            (self.api.make_current)(std::ptr::null_mut(), std::ptr::null_mut(), 0, 0, 0);
             for ctx in self.contexts.values() {
-                (self.destroy)(*ctx);
+                (self.api.destroy)(*ctx);
             }
         }
     }
