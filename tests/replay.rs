@@ -319,3 +319,28 @@ fn apitrace_traces_replay_to_the_programs_pictures() {
     let bytes = std::fs::read(&trace).unwrap();
     replay_fails(&bytes[..bytes.len() - 7], "apitrace-truncated", &["byte "]);
 }
+
+/// `%p` gives each GL process its own trace; a process that never calls GL (the shell) leaves
+/// no file behind.
+#[test]
+fn each_gl_process_records_its_own_trace() {
+    let dir = scratch("record-per-process");
+    let template = dir.join("t-%p.trace");
+    let scene = example("osmesa_scene");
+    let script = format!("{0} {1}/a.png 1 && {0} {1}/b.png 1", scene.display(), dir.display());
+    run_ok(
+        Command::new(glray_bin()).arg("run").arg("--record").arg(&template).args(["--", "sh", "-c", &script]),
+        "two recorded programs",
+    );
+    let traces: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "trace"))
+        .collect();
+    assert_eq!(traces.len(), 2, "{traces:?}");
+    for t in &traces {
+        let out = dir.join(t.file_stem().unwrap());
+        replay(t, &out, &[]);
+        assert!(out.join("frame-0000.png").exists());
+    }
+}

@@ -36,6 +36,10 @@ pub mod generated {
 
 static ACTIVE: AtomicBool = AtomicBool::new(false);
 static RECORDER: Mutex<Option<Recorder>> = Mutex::new(None);
+/// Set in a child process right after fork: its recorder still holds the parent's file.
+static FORKED: AtomicBool = AtomicBool::new(false);
+/// The path as the user gave it (with `%p`), for children.
+static TEMPLATE: Mutex<String> = Mutex::new(String::new());
 
 /// Whether calls are being recorded: one relaxed load on every call.
 #[inline(always)]
@@ -45,11 +49,42 @@ pub fn active() -> bool {
 
 /// Starts recording into `path` (opened at the first call).
 pub fn start(path: &str) {
+    *TEMPLATE.lock().unwrap_or_else(|e| e.into_inner()) = path.to_string();
     let path = path.replace("%p", &std::process::id().to_string());
     *RECORDER.lock().unwrap_or_else(|e| e.into_inner()) = Some(Recorder::new(PathBuf::from(path)));
     ACTIVE.store(true, Ordering::Relaxed);
-    // SAFETY: registering a plain extern "C" function with atexit.
-    unsafe { libc::atexit(finish_at_exit) };
+    // SAFETY: registering plain extern "C" functions with atexit and pthread_atfork.
+    unsafe {
+        libc::atexit(finish_at_exit);
+        libc::pthread_atfork(None, None, Some(forked_child));
+    }
+}
+
+extern "C" fn forked_child() {
+    FORKED.store(true, Ordering::Relaxed);
+}
+
+/// In a child after fork: with `%p` in the path the child records into a trace of its own
+/// (opened at its first call); otherwise it stops recording, since the parent's file and
+/// buffer are not its to write.
+fn after_fork() {
+    let template = TEMPLATE.try_lock().map(|t| t.clone()).unwrap_or_default();
+    // A lock held by a parent thread at fork time is never released in the child.
+    let Ok(mut guard) = RECORDER.try_lock() else {
+        ACTIVE.store(false, Ordering::Relaxed);
+        return;
+    };
+    if template.contains("%p") {
+        let path = template.replace("%p", &std::process::id().to_string());
+        *guard = Some(Recorder::new(PathBuf::from(path)));
+    } else {
+        *guard = None;
+        ACTIVE.store(false, Ordering::Relaxed);
+        glray_core::warn!(
+            "process {} (forked) is not recorded: put %p in GLRAY_RECORD to record children",
+            std::process::id()
+        );
+    }
 }
 
 extern "C" fn finish_at_exit() {
@@ -86,6 +121,12 @@ pub fn leave() {
 /// Runs `f` with the recorder, under the lock and a panic guard: an I/O error or a panic stops
 /// recording (with a message) but never the program.
 pub fn with(f: impl FnOnce(&mut Recorder)) {
+    if FORKED.swap(false, Ordering::Relaxed) {
+        after_fork();
+        if !active() {
+            return;
+        }
+    }
     let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
     let Some(rec) = guard.as_mut() else { return };
     let thread = THREAD.with(|t| {
