@@ -4,11 +4,13 @@
 //! - `error`: GL error codes and the error flag glGetError reads;
 //! - `matrix`: the matrix stacks (modelview, projection, texture, color) and every operation on
 //!   them, as Mesa implements them;
+//! - `immediate`: the current vertex attributes and glBegin/glEnd;
 //! - `primitive`: assembling glBegin/glEnd and glDrawArrays vertex streams into points, lines and
 //!   triangles, with the provoking vertex flat shading uses.
 //!
 //! Nothing here is wired into libglray.so yet: the capture of issue 4 builds on it.
 
 pub mod error;
+pub mod immediate;
 pub mod matrix;
 pub mod primitive;

@@ -1,0 +1,216 @@
+//! Immediate mode: the current vertex attributes, and glBegin/glEnd collecting vertices that
+//! each take the attributes current at their glVertex. GL's rules: glBegin inside glBegin,
+//! glEnd outside, and any command that is not per-vertex between them are INVALID_OPERATION; a
+//! bad mode is INVALID_ENUM; glVertex outside glBegin/glEnd does nothing (Mesa ignores it).
+//!
+//! Integer forms of glColor/glNormal are normalised the way Mesa does (`convert`); integer
+//! glVertex/glTexCoord values are taken as they are.
+
+use glam::{DVec3, DVec4};
+
+use crate::error::{GlError, GlResult};
+use crate::primitive::{assemble, Assembly, GL_POLYGON};
+
+/// Texture units with their own current texture coordinate.
+pub const TEXCOORD_UNITS: usize = 8;
+
+/// GL's conversions of integer attribute values to floats (Mesa's *_TO_FLOAT macros).
+pub mod convert {
+    /// GLubyte: c / 255.
+    pub fn ubyte(c: u8) -> f64 {
+        c as f64 / 255.0
+    }
+    /// GLbyte: (2c + 1) / 255, so that -128 and 127 map to -1 and 1.
+    pub fn byte(c: i8) -> f64 {
+        (2.0 * c as f64 + 1.0) / 255.0
+    }
+    /// GLushort: c / 65535.
+    pub fn ushort(c: u16) -> f64 {
+        c as f64 / 65535.0
+    }
+    /// GLshort: (2c + 1) / 65535.
+    pub fn short(c: i16) -> f64 {
+        (2.0 * c as f64 + 1.0) / 65535.0
+    }
+    /// GLuint: c / (2^32 - 1).
+    pub fn uint(c: u32) -> f64 {
+        c as f64 / u32::MAX as f64
+    }
+    /// GLint: (2c + 1) / (2^32 - 1).
+    pub fn int(c: i32) -> f64 {
+        (2.0 * c as f64 + 1.0) / u32::MAX as f64
+    }
+}
+
+/// A vertex with the attributes that were current when it was given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Vertex {
+    pub position: DVec4,
+    pub normal: DVec3,
+    pub color: DVec4,
+    pub texcoords: [DVec4; TEXCOORD_UNITS],
+    pub edge: bool,
+}
+
+/// The current attributes: what glNormal, glColor, glTexCoord and glEdgeFlag set.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Current {
+    pub normal: DVec3,
+    pub color: DVec4,
+    pub texcoords: [DVec4; TEXCOORD_UNITS],
+    pub edge: bool,
+}
+
+impl Default for Current {
+    /// GL's initial values: normal (0,0,1), color (1,1,1,1), texture coordinates (0,0,0,1).
+    fn default() -> Self {
+        Current {
+            normal: DVec3::Z,
+            color: DVec4::ONE,
+            texcoords: [DVec4::new(0.0, 0.0, 0.0, 1.0); TEXCOORD_UNITS],
+            edge: true,
+        }
+    }
+}
+
+/// The vertices of one glBegin/glEnd.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Batch {
+    pub mode: u32,
+    pub vertices: Vec<Vertex>,
+}
+
+impl Batch {
+    /// Its points, lines and triangles.
+    pub fn assemble(&self) -> Assembly {
+        assemble(self.mode, self.vertices.len()).expect("glBegin checked the mode")
+    }
+}
+
+/// Immediate-mode state of a context.
+#[derive(Debug, Default, Clone)]
+pub struct Immediate {
+    pub current: Current,
+    open: Option<u32>,
+    vertices: Vec<Vertex>,
+}
+
+impl Immediate {
+    /// Whether a glBegin is open.
+    pub fn inside(&self) -> bool {
+        self.open.is_some()
+    }
+
+    /// For every command that is not allowed between glBegin and glEnd.
+    pub fn outside(&self) -> GlResult {
+        if self.inside() {
+            Err(GlError::InvalidOperation)
+        } else {
+            Ok(())
+        }
+    }
+
+    pub fn begin(&mut self, mode: u32) -> GlResult {
+        self.outside()?;
+        if mode > GL_POLYGON {
+            return Err(GlError::InvalidEnum);
+        }
+        self.open = Some(mode);
+        self.vertices.clear();
+        Ok(())
+    }
+
+    pub fn end(&mut self) -> GlResult<Batch> {
+        let mode = self.open.take().ok_or(GlError::InvalidOperation)?;
+        Ok(Batch { mode, vertices: std::mem::take(&mut self.vertices) })
+    }
+
+    /// glVertex: (x, y, z, w); the 2- and 3-component forms pass z = 0 and w = 1.
+    pub fn vertex(&mut self, position: DVec4) {
+        if self.open.is_some() {
+            let c = &self.current;
+            self.vertices.push(Vertex {
+                position,
+                normal: c.normal,
+                color: c.color,
+                texcoords: c.texcoords,
+                edge: c.edge,
+            });
+        }
+    }
+
+    pub fn normal(&mut self, n: DVec3) {
+        self.current.normal = n;
+    }
+
+    /// glColor: the 3-component forms pass alpha 1.
+    pub fn color(&mut self, c: DVec4) {
+        self.current.color = c;
+    }
+
+    /// glTexCoord (unit 0) and glMultiTexCoord(GL_TEXTURE0 + unit).
+    pub fn tex_coord(&mut self, unit: usize, t: DVec4) -> GlResult {
+        *self.current.texcoords.get_mut(unit).ok_or(GlError::InvalidEnum)? = t;
+        Ok(())
+    }
+
+    pub fn edge_flag(&mut self, edge: bool) {
+        self.current.edge = edge;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::primitive::{GL_QUADS, GL_TRIANGLES};
+
+    #[test]
+    fn vertices_take_the_current_attributes() {
+        let mut im = Immediate::default();
+        im.begin(GL_TRIANGLES).unwrap();
+        im.color(DVec4::new(1.0, 0.0, 0.0, 1.0));
+        im.vertex(DVec4::new(0.0, 0.0, 0.0, 1.0));
+        im.normal(DVec3::X);
+        im.tex_coord(1, DVec4::new(0.5, 0.5, 0.0, 1.0)).unwrap();
+        im.vertex(DVec4::new(1.0, 0.0, 0.0, 1.0));
+        im.vertex(DVec4::new(0.0, 1.0, 0.0, 1.0));
+        let b = im.end().unwrap();
+        assert_eq!(b.vertices.len(), 3);
+        assert_eq!(b.vertices[0].normal, DVec3::Z, "the initial normal");
+        assert_eq!(b.vertices[0].color, DVec4::new(1.0, 0.0, 0.0, 1.0));
+        assert_eq!(b.vertices[1].normal, DVec3::X);
+        assert_eq!(b.vertices[2].texcoords[1], DVec4::new(0.5, 0.5, 0.0, 1.0));
+        assert_eq!(b.assemble().triangles.len(), 1);
+        // The current state outlives glEnd.
+        assert_eq!(im.current.normal, DVec3::X);
+    }
+
+    #[test]
+    fn begin_end_errors_follow_gl() {
+        let mut im = Immediate::default();
+        assert_eq!(im.end().unwrap_err(), GlError::InvalidOperation);
+        assert_eq!(im.begin(10), Err(GlError::InvalidEnum));
+        assert!(!im.inside());
+        im.begin(GL_QUADS).unwrap();
+        assert_eq!(im.begin(GL_QUADS), Err(GlError::InvalidOperation));
+        assert_eq!(im.outside(), Err(GlError::InvalidOperation));
+        assert_eq!(im.tex_coord(TEXCOORD_UNITS, DVec4::ZERO), Err(GlError::InvalidEnum));
+        assert_eq!(im.end().unwrap().mode, GL_QUADS);
+        // glVertex outside glBegin/glEnd is ignored.
+        im.vertex(DVec4::ONE);
+        im.begin(GL_QUADS).unwrap();
+        assert!(im.end().unwrap().vertices.is_empty());
+    }
+
+    #[test]
+    fn integer_forms_normalise_like_mesa() {
+        assert_eq!(convert::ubyte(255), 1.0);
+        assert_eq!(convert::ubyte(0), 0.0);
+        assert_eq!(convert::byte(127), 1.0);
+        assert_eq!(convert::byte(-128), -1.0);
+        assert_eq!(convert::ushort(65535), 1.0);
+        assert_eq!(convert::short(-32768), -1.0);
+        assert_eq!(convert::uint(u32::MAX), 1.0);
+        assert!((convert::int(i32::MAX) - 1.0).abs() < 1e-12);
+    }
+}
