@@ -5,6 +5,7 @@
 //! - `matrix`: the matrix stacks (modelview, projection, texture, color) and every operation on
 //!   them, as Mesa implements them;
 //! - `immediate`: the current vertex attributes and glBegin/glEnd;
+//! - `lighting`: the fixed-function lighting equation, per vertex, as a rasterizer evaluates it;
 //! - `lists`: display lists with Mesa's rules (generic over what a list holds);
 //! - `primitive`: assembling glBegin/glEnd and glDrawArrays vertex streams into points, lines and
 //!   triangles, with the provoking vertex flat shading uses.
@@ -13,6 +14,7 @@
 
 pub mod error;
 pub mod immediate;
+pub mod lighting;
 pub mod lists;
 pub mod matrix;
 pub mod primitive;

@@ -1,0 +1,224 @@
+//! The fixed-function lighting equation (OpenGL 2.1 spec, section 2.14.1), evaluated the way
+//! a rasterizer does per vertex, so that the GL look can match it: emission, the scene ambient,
+//! and for each enabled light attenuation x spotlight x (ambient + diffuse + specular). Light
+//! positions and spot directions are in eye coordinates (GL transforms them by the modelview of
+//! the moment glLight is called; the caller does that). Colour material and two-sided lighting
+//! are the caller's choice of `Material` and normal.
+
+use glam::{DVec3, DVec4};
+
+/// One light's parameters, with GL's initial values (`Light::new(0)` is GL_LIGHT0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Light {
+    pub enabled: bool,
+    pub ambient: DVec4,
+    pub diffuse: DVec4,
+    pub specular: DVec4,
+    /// Eye coordinates; w = 0 for a directional light.
+    pub position: DVec4,
+    /// Eye coordinates.
+    pub spot_direction: DVec3,
+    pub spot_exponent: f64,
+    /// Degrees; 180 means no spotlight.
+    pub spot_cutoff: f64,
+    pub constant_attenuation: f64,
+    pub linear_attenuation: f64,
+    pub quadratic_attenuation: f64,
+}
+
+impl Light {
+    /// GL's initial state of light `index`: light 0 is white, the others black.
+    pub fn new(index: usize) -> Light {
+        let white = if index == 0 { DVec4::ONE } else { DVec4::new(0.0, 0.0, 0.0, 1.0) };
+        Light {
+            enabled: false,
+            ambient: DVec4::new(0.0, 0.0, 0.0, 1.0),
+            diffuse: white,
+            specular: white,
+            position: DVec4::new(0.0, 0.0, 1.0, 0.0),
+            spot_direction: DVec3::new(0.0, 0.0, -1.0),
+            spot_exponent: 0.0,
+            spot_cutoff: 180.0,
+            constant_attenuation: 1.0,
+            linear_attenuation: 0.0,
+            quadratic_attenuation: 0.0,
+        }
+    }
+}
+
+/// A material, with GL's initial values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Material {
+    pub ambient: DVec4,
+    pub diffuse: DVec4,
+    pub specular: DVec4,
+    pub emission: DVec4,
+    pub shininess: f64,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            ambient: DVec4::new(0.2, 0.2, 0.2, 1.0),
+            diffuse: DVec4::new(0.8, 0.8, 0.8, 1.0),
+            specular: DVec4::new(0.0, 0.0, 0.0, 1.0),
+            emission: DVec4::new(0.0, 0.0, 0.0, 1.0),
+            shininess: 0.0,
+        }
+    }
+}
+
+/// glLightModel state, with GL's initial values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightModel {
+    pub ambient: DVec4,
+    pub local_viewer: bool,
+    pub two_side: bool,
+    /// GL_SEPARATE_SPECULAR_COLOR: specular goes to the secondary colour (added after texturing).
+    pub separate_specular: bool,
+}
+
+impl Default for LightModel {
+    fn default() -> Self {
+        LightModel {
+            ambient: DVec4::new(0.2, 0.2, 0.2, 1.0),
+            local_viewer: false,
+            two_side: false,
+            separate_specular: false,
+        }
+    }
+}
+
+/// The lit colour of a vertex at `position` (eye coordinates) with unit `normal` (eye
+/// coordinates, already flipped for a back face): the primary colour and the secondary
+/// (specular) colour, both clamped to [0, 1]. The alpha is the material's diffuse alpha.
+pub fn light_vertex(
+    position: DVec3,
+    normal: DVec3,
+    m: &Material,
+    lights: &[Light],
+    model: &LightModel,
+) -> (DVec4, DVec4) {
+    let mut primary = m.emission.truncate() + m.ambient.truncate() * model.ambient.truncate();
+    let mut specular = DVec3::ZERO;
+    let eye = if model.local_viewer { (-position).normalize_or_zero() } else { DVec3::Z };
+    for l in lights.iter().filter(|l| l.enabled) {
+        let (to_light, attenuation) = if l.position.w != 0.0 {
+            let p = l.position.truncate() / l.position.w;
+            let d = p - position;
+            let dist = d.length();
+            let att =
+                1.0 / (l.constant_attenuation + l.linear_attenuation * dist + l.quadratic_attenuation * dist * dist);
+            (d.normalize_or_zero(), att)
+        } else {
+            (l.position.truncate().normalize_or_zero(), 1.0)
+        };
+        let spot = if l.spot_cutoff == 180.0 {
+            1.0
+        } else {
+            let cos_angle = (-to_light).dot(l.spot_direction.normalize_or_zero());
+            if cos_angle < l.spot_cutoff.to_radians().cos() {
+                0.0
+            } else {
+                cos_angle.max(0.0).powf(l.spot_exponent)
+            }
+        };
+        let factor = attenuation * spot;
+        if factor == 0.0 {
+            continue;
+        }
+        let n_dot_l = normal.dot(to_light);
+        let mut term = m.ambient.truncate() * l.ambient.truncate();
+        if n_dot_l > 0.0 {
+            term += n_dot_l * m.diffuse.truncate() * l.diffuse.truncate();
+            let half = (to_light + eye).normalize_or_zero();
+            let n_dot_h = normal.dot(half).max(0.0);
+            // 0^0 is 1 in GL's equation: a shininess of 0 gives the full specular colour.
+            let power = if m.shininess == 0.0 { 1.0 } else { n_dot_h.powf(m.shininess) };
+            specular += factor * power * m.specular.truncate() * l.specular.truncate();
+        }
+        primary += factor * term;
+    }
+    let alpha = m.diffuse.w.clamp(0.0, 1.0);
+    let clamp = |c: DVec3| c.clamp(DVec3::ZERO, DVec3::ONE);
+    if model.separate_specular {
+        (clamp(primary).extend(alpha), clamp(specular).extend(0.0))
+    } else {
+        (clamp(primary + specular).extend(alpha), DVec4::ZERO)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn light0() -> Light {
+        Light { enabled: true, ..Light::new(0) }
+    }
+
+    fn close(a: DVec4, b: DVec4) -> bool {
+        a.abs_diff_eq(b, 1e-12)
+    }
+
+    #[test]
+    fn a_default_light_on_a_default_material_gives_gl_numbers() {
+        let m = Material::default();
+        let (c, s) = light_vertex(DVec3::new(0.0, 0.0, -5.0), DVec3::Z, &m, &[light0()], &LightModel::default());
+        // 0.2*0.2 scene ambient + 0.8 diffuse; no specular (material specular is black).
+        assert!(close(c, DVec4::new(0.84, 0.84, 0.84, 1.0)), "{c}");
+        assert_eq!(s, DVec4::ZERO);
+        // Facing away: only ambient terms.
+        let (c, _) = light_vertex(DVec3::ZERO, -DVec3::Z, &m, &[light0()], &LightModel::default());
+        assert!(close(c, DVec4::new(0.04, 0.04, 0.04, 1.0)), "{c}");
+        // Disabled lights do nothing; light 1 is black by default.
+        let (c, _) = light_vertex(
+            DVec3::ZERO,
+            DVec3::Z,
+            &m,
+            &[Light::new(0), Light { enabled: true, ..Light::new(1) }],
+            &LightModel::default(),
+        );
+        assert!(close(c, DVec4::new(0.04, 0.04, 0.04, 1.0)), "{c}");
+    }
+
+    #[test]
+    fn positional_lights_attenuate_and_spotlights_cut_off() {
+        let m = Material { ambient: DVec4::ZERO.with_w(1.0), diffuse: DVec4::ONE, ..Material::default() };
+        let model = LightModel { ambient: DVec4::ZERO, ..LightModel::default() };
+        let point = Light {
+            position: DVec4::new(0.0, 0.0, 2.0, 1.0),
+            constant_attenuation: 0.0,
+            quadratic_attenuation: 1.0,
+            ..light0()
+        };
+        let (c, _) = light_vertex(DVec3::ZERO, DVec3::Z, &m, &[point], &model);
+        assert!(close(c, DVec4::new(0.25, 0.25, 0.25, 1.0)), "1/d^2 at d = 2: {c}");
+        let spot = Light { spot_cutoff: 30.0, spot_direction: DVec3::new(0.0, 0.0, -1.0), spot_exponent: 2.0, ..point };
+        let (inside, _) = light_vertex(DVec3::ZERO, DVec3::Z, &m, &[spot], &model);
+        assert!(close(inside, DVec4::new(0.25, 0.25, 0.25, 1.0)), "on the axis: {inside}");
+        let (outside, _) = light_vertex(DVec3::new(2.0, 0.0, 0.0), DVec3::Z, &m, &[spot], &model);
+        assert!(close(outside, DVec4::new(0.0, 0.0, 0.0, 1.0)), "45 degrees off a 30-degree cone: {outside}");
+    }
+
+    #[test]
+    fn specular_highlights_follow_the_half_vector_and_can_be_separate() {
+        let m = Material { specular: DVec4::ONE, shininess: 10.0, ..Material::default() };
+        let model = LightModel { ambient: DVec4::ZERO, ..LightModel::default() };
+        // Infinite viewer, light along +z: the half vector is +z, the full highlight.
+        let (c, _) = light_vertex(DVec3::new(0.0, 0.0, -5.0), DVec3::Z, &m, &[light0()], &model);
+        assert!(close(c, DVec4::ONE), "0.8 diffuse + 1.0 specular, clamped: {c}");
+        let separate = LightModel { separate_specular: true, ..model };
+        let (p, s) = light_vertex(DVec3::new(0.0, 0.0, -5.0), DVec3::Z, &m, &[light0()], &separate);
+        assert!(close(p, DVec4::new(0.8, 0.8, 0.8, 1.0)), "{p}");
+        assert!(close(s, DVec4::new(1.0, 1.0, 1.0, 0.0)), "{s}");
+        // A light at 45 degrees: n.h = cos(22.5 degrees), raised to the shininess.
+        let tilted = Light { position: DVec4::new(1.0, 0.0, 1.0, 0.0), ..light0() };
+        let (_, s) = light_vertex(DVec3::ZERO, DVec3::Z, &m, &[tilted], &separate);
+        let expect = 22.5f64.to_radians().cos().powf(10.0);
+        assert!((s.x - expect).abs() < 1e-12, "{} vs {expect}", s.x);
+        // A local viewer sees the same highlight from straight above the vertex.
+        let local = LightModel { local_viewer: true, ..separate };
+        let (_, s) = light_vertex(DVec3::new(0.0, 0.0, -5.0), DVec3::Z, &m, &[tilted], &local);
+        assert!((s.x - expect).abs() < 1e-12);
+    }
+}
