@@ -1,6 +1,7 @@
 //! glray's GL state machine, in pure Rust: what the capture layer (DESIGN.md: "capture") keeps
 //! of a context, with GL's error rules, so that it can be tested without any GL.
 //!
+//! - `camera`: rays through pixel centres from the projection and viewport, window depth of hits;
 //! - `error`: GL error codes and the error flag glGetError reads;
 //! - `matrix`: the matrix stacks (modelview, projection, texture, color) and every operation on
 //!   them, as Mesa implements them;
@@ -12,6 +13,7 @@
 //!
 //! Nothing here is wired into libglray.so yet: the capture of issue 4 builds on it.
 
+pub mod camera;
 pub mod error;
 pub mod immediate;
 pub mod lighting;

@@ -1,0 +1,145 @@
+//! The camera a GL frame implies: rays through pixel centres from the projection matrix and the
+//! viewport, in eye coordinates (where GL lights and the modelview put everything), and the
+//! window depth of a hit, as the depth buffer (and glReadPixels of GL_DEPTH_COMPONENT) would
+//! hold it. Unprojecting the near and far planes works for perspective and orthographic
+//! projections alike, and bounds the ray to what GL would not clip.
+
+use glam::{DMat4, DVec3, DVec4};
+
+/// glViewport.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Viewport {
+    pub x: i32,
+    pub y: i32,
+    pub width: i32,
+    pub height: i32,
+}
+
+/// A ray in eye coordinates: points origin + t * direction for t in [0, t_max], the near plane
+/// at t = 0 and the far plane at t_max.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ray {
+    pub origin: DVec3,
+    pub direction: DVec3,
+    pub t_max: f64,
+}
+
+#[derive(Debug, Clone)]
+pub struct Camera {
+    projection: DMat4,
+    inverse: DMat4,
+    pub viewport: Viewport,
+    /// glDepthRange (near, far).
+    pub depth_range: (f64, f64),
+}
+
+impl Camera {
+    /// None for an empty viewport or a projection that cannot be inverted.
+    pub fn new(projection: DMat4, viewport: Viewport, depth_range: (f64, f64)) -> Option<Camera> {
+        if viewport.width <= 0 || viewport.height <= 0 || projection.determinant().abs() < 1e-300 {
+            return None;
+        }
+        Some(Camera { projection, inverse: projection.inverse(), viewport, depth_range })
+    }
+
+    /// Whether the projection is a perspective one (its last row is not (0, 0, 0, 1)).
+    pub fn is_perspective(&self) -> bool {
+        self.projection.row(3) != DVec4::new(0.0, 0.0, 0.0, 1.0)
+    }
+
+    fn unproject(&self, ndc: DVec3) -> DVec3 {
+        let p = self.inverse * ndc.extend(1.0);
+        p.truncate() / p.w
+    }
+
+    /// The ray through window position (x, y): (x + 0.5, y + 0.5) is a pixel's centre, y up as
+    /// in GL's window coordinates.
+    pub fn ray(&self, x: f64, y: f64) -> Ray {
+        let v = self.viewport;
+        let ndc_x = 2.0 * (x - v.x as f64) / v.width as f64 - 1.0;
+        let ndc_y = 2.0 * (y - v.y as f64) / v.height as f64 - 1.0;
+        let near = self.unproject(DVec3::new(ndc_x, ndc_y, -1.0));
+        let far = self.unproject(DVec3::new(ndc_x, ndc_y, 1.0));
+        let span = far - near;
+        let t_max = span.length();
+        Ray { origin: near, direction: span / t_max, t_max }
+    }
+
+    /// The window depth of an eye-space point: what the depth buffer would hold for it.
+    pub fn window_depth(&self, eye: DVec3) -> f64 {
+        let clip = self.projection * eye.extend(1.0);
+        let ndc_z = clip.z / clip.w;
+        let (n, f) = self.depth_range;
+        (ndc_z * (f - n) + (f + n)) / 2.0
+    }
+
+    /// The window position (x, y) an eye-space point lands on.
+    pub fn window_position(&self, eye: DVec3) -> (f64, f64) {
+        let clip = self.projection * eye.extend(1.0);
+        let v = self.viewport;
+        let (nx, ny) = (clip.x / clip.w, clip.y / clip.w);
+        (v.x as f64 + (nx + 1.0) * v.width as f64 / 2.0, v.y as f64 + (ny + 1.0) * v.height as f64 / 2.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::matrix::Matrices;
+
+    fn projection(f: impl FnOnce(&mut Matrices)) -> DMat4 {
+        let mut m = Matrices::default();
+        f(&mut m);
+        *m.top()
+    }
+
+    const VP: Viewport = Viewport { x: 0, y: 0, width: 200, height: 100 };
+
+    #[test]
+    fn perspective_rays_start_on_the_near_plane_and_pass_through_the_frustum_corners() {
+        let p = projection(|m| m.frustum(-2.0, 2.0, -1.0, 1.0, 1.0, 10.0).unwrap());
+        let cam = Camera::new(p, VP, (0.0, 1.0)).unwrap();
+        assert!(cam.is_perspective());
+        let centre = cam.ray(100.0, 50.0);
+        assert!(centre.origin.abs_diff_eq(DVec3::new(0.0, 0.0, -1.0), 1e-12), "{:?}", centre.origin);
+        assert!(centre.direction.abs_diff_eq(DVec3::new(0.0, 0.0, -1.0), 1e-12));
+        assert!((centre.t_max - 9.0).abs() < 1e-9);
+        // The window's top-right corner is the frustum's (2, 1) corner at the near plane.
+        let corner = cam.ray(200.0, 100.0);
+        assert!(corner.origin.abs_diff_eq(DVec3::new(2.0, 1.0, -1.0), 1e-9), "{:?}", corner.origin);
+        assert!(corner.direction.abs_diff_eq(DVec3::new(2.0, 1.0, -1.0).normalize(), 1e-9));
+        assert!((cam.window_depth(centre.origin)).abs() < 1e-12);
+        assert!((cam.window_depth(centre.origin + centre.direction * centre.t_max) - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn orthographic_rays_are_parallel() {
+        let p = projection(|m| m.ortho(0.0, 200.0, 0.0, 100.0, -1.0, 1.0).unwrap());
+        let cam = Camera::new(p, VP, (0.0, 1.0)).unwrap();
+        assert!(!cam.is_perspective());
+        let a = cam.ray(10.5, 20.5);
+        let b = cam.ray(150.5, 90.5);
+        assert!(a.direction.abs_diff_eq(b.direction, 1e-12));
+        assert!(a.origin.abs_diff_eq(DVec3::new(10.5, 20.5, 1.0), 1e-9), "{:?}", a.origin);
+        assert!((a.t_max - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn points_on_a_ray_land_on_its_pixel_at_increasing_depth() {
+        let p = projection(|m| m.frustum(-1.0, 1.0, -0.5, 0.5, 0.5, 50.0).unwrap());
+        let vp = Viewport { x: 10, y: 20, width: 64, height: 32 };
+        let cam = Camera::new(p, vp, (0.25, 0.75)).unwrap();
+        let r = cam.ray(30.5, 41.5);
+        let mut last = f64::NEG_INFINITY;
+        for t in [0.0, 0.5, 5.0, 20.0, r.t_max] {
+            let hit = r.origin + r.direction * t;
+            let (x, y) = cam.window_position(hit);
+            assert!((x - 30.5).abs() < 1e-6 && (y - 41.5).abs() < 1e-6, "t {t}: ({x}, {y})");
+            let d = cam.window_depth(hit);
+            assert!(d > last && (0.25 - 1e-9..=0.75 + 1e-9).contains(&d), "t {t}: depth {d}");
+            last = d;
+        }
+        assert!(Camera::new(DMat4::ZERO, vp, (0.0, 1.0)).is_none());
+        assert!(Camera::new(p, Viewport { width: 0, ..vp }, (0.0, 1.0)).is_none());
+    }
+}
