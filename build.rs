@@ -714,7 +714,7 @@ fn gen_replay(cmds: &[&Command]) -> String {
                 if p.c.contains("const") {
                     format!("r.input_pointer(&a[{i}])?")
                 } else {
-                    format!("r.output_pointer(cmd::{}, {i}, &a[{i}])?", c.name)
+                    format!("r.output_pointer(cmd::{}, &a[{i}])?", c.name)
                 }
             } else {
                 format!("<{} as FromValue>::from_value(&a[{i}], {i})?", p.rust)

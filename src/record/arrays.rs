@@ -7,11 +7,10 @@ use std::ffi::c_void;
 use glray_core::gltypes::{array_element_bytes, value_bytes};
 use glray_core::trace::{array_kind, ArrayData};
 
-use super::{bound_buffer, GL_ELEMENT_ARRAY_BUFFER_BINDING};
+use super::{bound_buffer, GL_ARRAY_BUFFER_BINDING, GL_ELEMENT_ARRAY_BUFFER_BINDING};
 use crate::commands::cmd;
 use crate::real;
 
-const GL_ARRAY_BUFFER_BINDING: u32 = 0x8894;
 const GL_ELEMENT_ARRAY_BUFFER: u32 = 0x8893;
 const GL_TEXTURE0: u64 = 0x84C0;
 const GL_FLOAT: u32 = 0x1406;

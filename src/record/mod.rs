@@ -474,7 +474,7 @@ impl Recorder {
     }
 }
 
-const GL_ARRAY_BUFFER_BINDING: u32 = 0x8894;
+pub(crate) const GL_ARRAY_BUFFER_BINDING: u32 = 0x8894;
 pub(crate) const GL_ELEMENT_ARRAY_BUFFER_BINDING: u32 = 0x8895;
 pub(crate) const GL_PIXEL_UNPACK_BUFFER_BINDING: u32 = 0x88EF;
 

@@ -42,7 +42,7 @@ pub fn pname_count_2(_: &mut Recorder, a: &[i64]) -> Mem {
     Mem::Elements(pname_values(a[1]))
 }
 
-/// Bytes of one index or list name of `ty` (glCallLists also takes 2/3/4_BYTES).
+/// Bytes of one list name of `ty` for glCallLists (which also takes 2/3/4_BYTES).
 fn list_type_size(ty: i64) -> usize {
     match ty {
         0x1400 | 0x1401 => 1,
@@ -56,7 +56,7 @@ pub fn indices(_: &mut Recorder, a: &[i64]) -> Mem {
     if bound_buffer(GL_ELEMENT_ARRAY_BUFFER_BINDING) != 0 {
         return Mem::Offset;
     }
-    Mem::Bytes((a[0].max(0) as usize).saturating_mul(list_type_size(a[1])))
+    Mem::Bytes((a[0].max(0) as usize).saturating_mul(glray_core::gltypes::value_bytes(a[1] as u32) as usize))
 }
 
 pub fn call_lists(_: &mut Recorder, a: &[i64]) -> Mem {

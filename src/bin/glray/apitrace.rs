@@ -428,6 +428,15 @@ fn encode(functions: &HashMap<u64, (String, usize)>, calls: &[Call]) -> Result<(
         conversion.calls += 1;
         let ret_true = call.ret.as_ref().is_some_and(|r| r.int() != 0);
         let ret = call.ret.as_ref().map_or(0, V::int) as u64;
+        // A successful GLX/EGL MakeCurrent: its drawable gets the size of the next viewport.
+        if let Some(ctx) = crate::replay::context_argument(ours).filter(|_| ret_true && ours != cmd::OSMesaMakeCurrent)
+        {
+            if arg(ctx) != 0 {
+                waiting.insert(call.thread, arg(1));
+            } else {
+                e.drawable(call.thread, 0, 0, 0);
+            }
+        }
         match ours {
             cmd::glMapBuffer | cmd::glMapBufferARB if ret != 0 => {
                 mapped.insert(ret, (arg(0), 0, u64::MAX));
@@ -446,20 +455,6 @@ fn encode(functions: &HashMap<u64, (String, usize)>, calls: &[Call]) -> Result<(
                     e.int(bytes.len() as i64);
                     e.blob(&bytes);
                     e.no_return();
-                }
-            }
-            cmd::glXMakeCurrent if ret_true => {
-                if arg(2) != 0 {
-                    waiting.insert(call.thread, arg(1));
-                } else {
-                    e.drawable(call.thread, 0, 0, 0);
-                }
-            }
-            cmd::glXMakeContextCurrent | cmd::glXMakeCurrentReadSGI | cmd::eglMakeCurrent if ret_true => {
-                if arg(3) != 0 {
-                    waiting.insert(call.thread, arg(1));
-                } else {
-                    e.drawable(call.thread, 0, 0, 0);
                 }
             }
             cmd::glXSwapBuffers

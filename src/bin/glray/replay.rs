@@ -112,7 +112,6 @@ pub struct Summary {
     pub calls: u64,
     pub frames_written: u64,
     pub readpixels_written: u64,
-    pub skipped_no_context: u64,
     pub missing: Vec<String>,
 }
 
@@ -221,14 +220,13 @@ impl Replayer {
     }
 
     /// A pointer argument GL writes through: scratch memory large enough for the call.
-    pub fn output_pointer(&mut self, c: usize, index: usize, v: &Value) -> Result<*mut c_void, String> {
+    pub fn output_pointer(&mut self, c: usize, v: &Value) -> Result<*mut c_void, String> {
         if matches!(v, Value::Null) {
             return Ok(std::ptr::null_mut());
         }
         if let Value::Offset(o) = v {
             return Ok(*o as usize as *mut c_void);
         }
-        let _ = index;
         if !matches!(c, cmd::glReadPixels | cmd::glReadnPixels | cmd::glReadnPixelsARB) {
             return Ok(self.scratch.as_mut_ptr().cast());
         }
@@ -261,8 +259,9 @@ fn share_argument(c: usize) -> Option<Option<usize>> {
     })
 }
 
-/// Which argument of a MakeCurrent is the context.
-fn context_argument(c: usize) -> Option<usize> {
+/// Which argument of a MakeCurrent is the context (the drawable is the next one, but for
+/// OSMesa, whose buffer is).
+pub(crate) fn context_argument(c: usize) -> Option<usize> {
     Some(match c {
         cmd::glXMakeCurrent => 2,
         cmd::glXMakeContextCurrent | cmd::glXMakeCurrentReadSGI | cmd::eglMakeCurrent => 3,
@@ -328,7 +327,6 @@ impl Replayer {
         }
         if !self.make_thread_current()? {
             // No context on this thread when the program called: GL ignored it then too.
-            self.summary.skipped_no_context += 1;
             return Ok(());
         }
         if matches!(c, cmd::glReadPixels | cmd::glReadnPixels | cmd::glReadnPixelsARB) && args.len() >= 4 {
