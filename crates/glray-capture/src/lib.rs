@@ -13,10 +13,16 @@
 //!
 //! Nothing here is wired into libglray.so yet: the capture of issue 4 builds on it.
 
+pub mod args;
 pub mod camera;
+pub mod context;
 pub mod error;
+pub mod events;
+pub mod frame;
 pub mod immediate;
 pub mod lighting;
 pub mod lists;
 pub mod matrix;
+pub mod ops;
 pub mod primitive;
+pub mod texture;

@@ -15,6 +15,7 @@ mod apitrace;
 #[allow(dead_code)]
 #[path = "../../commands.rs"]
 mod commands;
+mod raytrace;
 mod replay;
 
 /// Where `glray replay` sends the calls.
@@ -22,9 +23,10 @@ mod replay;
 enum Renderer {
     /// Mesa's OSMesa: the reference rasterizer.
     Osmesa,
-    /// glray's capture and ray tracer (not built yet).
+    /// glray's capture and ray tracer.
     Glray,
-    /// Both, with difference images and a report (not built yet).
+    /// Both, into OUT/osmesa and OUT/glray, with difference images (OUT/diff-NNNN.png) and a
+    /// comparison of each frame.
     Both,
 }
 
@@ -174,17 +176,78 @@ fn replay(
     frames: Option<String>,
     readpixels: bool,
 ) -> Result<(), String> {
-    if renderer != Renderer::Osmesa {
-        return Err(format!(
-            "--renderer {renderer:?} is not available yet: glray's capture and ray tracer come next; use --renderer osmesa"
-        )
-        .to_lowercase());
-    }
     let frames = frames.as_deref().map(replay::FrameSet::parse).transpose()?.unwrap_or_default();
     let data = load_trace(trace)?;
     let config = Config::resolve(&process_env(), &[])?;
+    match renderer {
+        Renderer::Osmesa => replay_osmesa(trace, &data, out, frames, readpixels, &config),
+        Renderer::Glray => replay_glray(trace, &data, out, &frames, readpixels),
+        Renderer::Both => {
+            let (mesa, ours) = (out.join("osmesa"), out.join("glray"));
+            replay_osmesa(trace, &data, &mesa, frames.clone(), readpixels, &config)?;
+            replay_glray(trace, &data, &ours, &frames, readpixels)?;
+            compare_dirs(&mesa, &ours, out)
+        }
+    }
+}
+
+fn replay_glray(
+    trace: &Path,
+    data: &[u8],
+    out: &Path,
+    frames: &replay::FrameSet,
+    readpixels: bool,
+) -> Result<(), String> {
+    let s = raytrace::run(data, out, frames, readpixels).map_err(|e| format!("{}: {e}", trace.display()))?;
+    println!(
+        "ray traced {} calls: {} frames ({} triangles) written to {}{}",
+        s.calls,
+        s.frames_written,
+        s.triangles,
+        out.display(),
+        if readpixels { format!(", {} glReadPixels images", s.readpixels_written) } else { String::new() }
+    );
+    Ok(())
+}
+
+/// Compares every image of `mesa` with glray's of the same name, the way `glray compare`
+/// counts (a pixel differs when a channel is off by more than 5%), writing OUT/diff-NAME.
+fn compare_dirs(mesa: &Path, ours: &Path, out: &Path) -> Result<(), String> {
+    use glray_core::image::{compare, Image};
+    let mut names: Vec<_> = std::fs::read_dir(mesa)
+        .map_err(|e| format!("{}: {e}", mesa.display()))?
+        .filter_map(|e| e.ok().map(|e| e.file_name()))
+        .filter(|n| n.to_string_lossy().ends_with(".png"))
+        .collect();
+    names.sort();
+    for name in names {
+        let (a, b) = (mesa.join(&name), ours.join(&name));
+        let n = name.to_string_lossy();
+        if !b.exists() {
+            println!("{n}: glray wrote no image");
+            continue;
+        }
+        let c = compare(&Image::read(&a)?, &Image::read(&b)?, 0.05)?;
+        c.diff.write_png(&out.join(format!("diff-{n}")))?;
+        println!(
+            "{n}: {:.3}% of pixels differ by more than 5%; PSNR {:.2} dB",
+            c.differing_share() * 100.0,
+            c.psnr
+        );
+    }
+    Ok(())
+}
+
+fn replay_osmesa(
+    trace: &Path,
+    data: &[u8],
+    out: &Path,
+    frames: replay::FrameSet,
+    readpixels: bool,
+    config: &Config,
+) -> Result<(), String> {
     let mut r = replay::Replayer::new(out, frames, readpixels, config.real_path("real_osmesa"))?;
-    let summary = r.run(&data).map_err(|e| format!("{}: {e}", trace.display()))?;
+    let summary = r.run(data).map_err(|e| format!("{}: {e}", trace.display()))?;
     println!(
         "replayed {} calls: {} frames written to {}{}",
         summary.calls,

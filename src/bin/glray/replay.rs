@@ -95,7 +95,7 @@ impl FrameSet {
         Ok(FrameSet(Some(ranges)))
     }
 
-    fn contains(&self, n: u64) -> bool {
+    pub fn contains(&self, n: u64) -> bool {
         self.0.as_ref().is_none_or(|r| r.iter().any(|(a, b)| (*a..=*b).contains(&n)))
     }
 }

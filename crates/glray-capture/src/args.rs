@@ -1,0 +1,125 @@
+//! Reading a recorded call's arguments (glray-core's `Value`s) as the numbers GL commands take:
+//! scalars, and the memory of pointer arguments as arrays of GL types. A value of the wrong kind
+//! reads as 0 (or an empty array): the trace reader has already checked the encoding, and GL
+//! itself would take garbage; capture must never panic on a bad trace.
+
+use glray_core::trace::Value;
+
+pub const GL_BYTE: u32 = 0x1400;
+pub const GL_UNSIGNED_BYTE: u32 = 0x1401;
+pub const GL_SHORT: u32 = 0x1402;
+pub const GL_UNSIGNED_SHORT: u32 = 0x1403;
+pub const GL_INT: u32 = 0x1404;
+pub const GL_UNSIGNED_INT: u32 = 0x1405;
+pub const GL_FLOAT: u32 = 0x1406;
+pub const GL_DOUBLE: u32 = 0x140A;
+pub const GL_HALF_FLOAT: u32 = 0x140B;
+
+pub fn int(a: &[Value], i: usize) -> i64 {
+    a.get(i).map_or(0, Value::as_int)
+}
+
+pub fn uint(a: &[Value], i: usize) -> u32 {
+    int(a, i) as u32
+}
+
+pub fn float(a: &[Value], i: usize) -> f64 {
+    match a.get(i) {
+        Some(Value::F32(x)) => *x as f64,
+        Some(Value::F64(x)) => *x,
+        Some(v) => v.as_int() as f64,
+        None => 0.0,
+    }
+}
+
+/// The recorded memory of a pointer argument (empty for null or unrecorded pointers).
+pub fn bytes<'a>(a: &[Value<'a>], i: usize) -> &'a [u8] {
+    match a.get(i) {
+        Some(Value::Blob(b)) | Some(Value::Str(b)) => b,
+        _ => &[],
+    }
+}
+
+/// Size in bytes of one element of a GL type; None for types glray does not read.
+pub fn type_size(ty: u32) -> Option<usize> {
+    Some(match ty {
+        GL_BYTE | GL_UNSIGNED_BYTE => 1,
+        GL_SHORT | GL_UNSIGNED_SHORT | GL_HALF_FLOAT => 2,
+        GL_INT | GL_UNSIGNED_INT | GL_FLOAT => 4,
+        GL_DOUBLE => 8,
+        _ => return None,
+    })
+}
+
+/// Element `i` of type `ty` in `b` (native byte order), as f64, without normalisation;
+/// None past the end.
+pub fn element(b: &[u8], ty: u32, i: usize) -> Option<f64> {
+    let size = type_size(ty)?;
+    let s = b.get(i * size..(i + 1) * size)?;
+    Some(match ty {
+        GL_BYTE => s[0] as i8 as f64,
+        GL_UNSIGNED_BYTE => s[0] as f64,
+        GL_SHORT => i16::from_ne_bytes([s[0], s[1]]) as f64,
+        GL_UNSIGNED_SHORT => u16::from_ne_bytes([s[0], s[1]]) as f64,
+        GL_HALF_FLOAT => half_to_f64(u16::from_ne_bytes([s[0], s[1]])),
+        GL_INT => i32::from_ne_bytes(s.try_into().ok()?) as f64,
+        GL_UNSIGNED_INT => u32::from_ne_bytes(s.try_into().ok()?) as f64,
+        GL_FLOAT => f32::from_ne_bytes(s.try_into().ok()?) as f64,
+        GL_DOUBLE => f64::from_ne_bytes(s.try_into().ok()?),
+        _ => return None,
+    })
+}
+
+/// GL's conversion of a normalised integer component to [-1, 1] or [0, 1] (OpenGL 2.1,
+/// table 2.9); floats pass unchanged.
+pub fn normalize(v: f64, ty: u32) -> f64 {
+    match ty {
+        GL_BYTE => (2.0 * v + 1.0) / 255.0,
+        GL_UNSIGNED_BYTE => v / 255.0,
+        GL_SHORT => (2.0 * v + 1.0) / 65535.0,
+        GL_UNSIGNED_SHORT => v / 65535.0,
+        GL_INT => (2.0 * v + 1.0) / 4294967295.0,
+        GL_UNSIGNED_INT => v / 4294967295.0,
+        _ => v,
+    }
+}
+
+/// The first `n` elements of a pointer argument as f64 (fewer if less memory was recorded).
+pub fn array(b: &[u8], ty: u32, n: usize) -> Vec<f64> {
+    (0..n).map_while(|i| element(b, ty, i)).collect()
+}
+
+fn half_to_f64(h: u16) -> f64 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exp = ((h >> 10) & 0x1f) as i32;
+    let frac = (h & 0x3ff) as f64;
+    sign * match exp {
+        0 => frac * 2f64.powi(-24),
+        31 => {
+            if frac == 0.0 {
+                f64::INFINITY
+            } else {
+                f64::NAN
+            }
+        }
+        _ => (1.0 + frac / 1024.0) * 2f64.powi(exp - 15),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn elements_and_normalisation() {
+        let b = [0xffu8, 0x7f];
+        assert_eq!(element(&b, GL_BYTE, 0), Some(-1.0));
+        assert_eq!(element(&b, GL_UNSIGNED_BYTE, 1), Some(127.0));
+        assert_eq!(element(&b, GL_UNSIGNED_BYTE, 2), None);
+        assert_eq!(normalize(255.0, GL_UNSIGNED_BYTE), 1.0);
+        assert_eq!(normalize(-128.0, GL_BYTE), -1.0);
+        assert_eq!(normalize(127.0, GL_BYTE), 1.0);
+        assert_eq!(half_to_f64(0x3c00), 1.0);
+        assert_eq!(array(&1.5f32.to_ne_bytes(), GL_FLOAT, 4), vec![1.5]);
+    }
+}

@@ -1,0 +1,285 @@
+//! 2D texture objects as glTexImage2D/glTexSubImage2D/glTexParameter leave them, and sampling
+//! them the way GL does (nearest or linear, mipmapped, REPEAT or CLAMP wraps). Texels are kept
+//! as RGBA floats expanded from the client's format; the base internal format is kept too,
+//! because the texture environment treats LUMINANCE, ALPHA and INTENSITY differently.
+
+use glam::{Vec2, Vec4};
+
+use crate::args::{self, GL_UNSIGNED_BYTE};
+
+pub const GL_NEAREST: u32 = 0x2600;
+pub const GL_LINEAR: u32 = 0x2601;
+pub const GL_NEAREST_MIPMAP_NEAREST: u32 = 0x2700;
+pub const GL_LINEAR_MIPMAP_NEAREST: u32 = 0x2701;
+pub const GL_NEAREST_MIPMAP_LINEAR: u32 = 0x2702;
+pub const GL_LINEAR_MIPMAP_LINEAR: u32 = 0x2703;
+pub const GL_REPEAT: u32 = 0x2901;
+pub const GL_MIRRORED_REPEAT: u32 = 0x8370;
+
+pub const GL_ALPHA: u32 = 0x1906;
+pub const GL_RGB: u32 = 0x1907;
+pub const GL_RGBA: u32 = 0x1908;
+pub const GL_LUMINANCE: u32 = 0x1909;
+pub const GL_LUMINANCE_ALPHA: u32 = 0x190A;
+pub const GL_INTENSITY: u32 = 0x8049;
+pub const GL_BGR: u32 = 0x80E0;
+pub const GL_BGRA: u32 = 0x80E1;
+pub const GL_RED: u32 = 0x1903;
+
+/// glPixelStore's unpack state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Unpack {
+    pub alignment: usize,
+    pub row_length: usize,
+    pub skip_rows: usize,
+    pub skip_pixels: usize,
+}
+
+impl Default for Unpack {
+    fn default() -> Self {
+        Unpack { alignment: 4, row_length: 0, skip_rows: 0, skip_pixels: 0 }
+    }
+}
+
+/// One mipmap level.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Level {
+    pub width: usize,
+    pub height: usize,
+    pub texels: Vec<Vec4>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Texture {
+    pub levels: Vec<Level>,
+    /// The base internal format (GL_RGB, GL_RGBA, GL_LUMINANCE, ...).
+    pub base_format: u32,
+    pub min_filter: u32,
+    pub mag_filter: u32,
+    pub wrap_s: u32,
+    pub wrap_t: u32,
+}
+
+impl Default for Texture {
+    fn default() -> Self {
+        Texture {
+            levels: Vec::new(),
+            base_format: GL_RGBA,
+            min_filter: GL_NEAREST_MIPMAP_LINEAR,
+            mag_filter: GL_LINEAR,
+            wrap_s: GL_REPEAT,
+            wrap_t: GL_REPEAT,
+        }
+    }
+}
+
+/// Components per pixel of a client format; None for formats glray does not read.
+fn components(format: u32) -> Option<usize> {
+    Some(match format {
+        GL_ALPHA | GL_LUMINANCE | GL_RED | GL_INTENSITY => 1,
+        GL_LUMINANCE_ALPHA => 2,
+        GL_RGB | GL_BGR => 3,
+        GL_RGBA | GL_BGRA => 4,
+        _ => return None,
+    })
+}
+
+/// The base internal format GL derives from glTexImage2D's internalformat argument.
+pub fn base_format(internal: u32) -> u32 {
+    match internal {
+        1 | GL_LUMINANCE | 0x803F..=0x8042 => GL_LUMINANCE,
+        2 | GL_LUMINANCE_ALPHA | 0x8043..=0x8048 => GL_LUMINANCE_ALPHA,
+        GL_ALPHA | 0x803B..=0x803E => GL_ALPHA,
+        GL_INTENSITY | 0x804A..=0x804D => GL_INTENSITY,
+        3 | GL_RGB | 0x2A10 | 0x804F..=0x8054 | 0x8C41 => GL_RGB,
+        _ => GL_RGBA,
+    }
+}
+
+/// Decodes client pixels into RGBA texels; None for an unsupported format or type, or too
+/// little memory.
+pub fn decode(
+    width: usize,
+    height: usize,
+    format: u32,
+    ty: u32,
+    unpack: &Unpack,
+    data: &[u8],
+) -> Option<Vec<Vec4>> {
+    let n = components(format)?;
+    let size = args::type_size(ty)?;
+    let row_pixels = if unpack.row_length > 0 { unpack.row_length } else { width };
+    let align = unpack.alignment.max(1);
+    let row_bytes = (row_pixels * n * size).div_ceil(align) * align;
+    let mut out = Vec::with_capacity(width * height);
+    for y in 0..height {
+        let row = (y + unpack.skip_rows) * row_bytes + unpack.skip_pixels * n * size;
+        for x in 0..width {
+            let first = (row + x * n * size) / size;
+            let mut c = [0.0f32; 4];
+            for (i, v) in c.iter_mut().enumerate().take(n) {
+                let raw = if row % size == 0 {
+                    args::element(data, ty, first + i)?
+                } else {
+                    let at = row + (x * n + i) * size;
+                    args::element(data.get(at..at + size)?, ty, 0)?
+                };
+                *v = args::normalize(raw, ty).clamp(0.0, 1.0) as f32;
+            }
+            out.push(match format {
+                GL_ALPHA => Vec4::new(0.0, 0.0, 0.0, c[0]),
+                GL_LUMINANCE | GL_INTENSITY => Vec4::new(c[0], c[0], c[0], 1.0),
+                GL_RED => Vec4::new(c[0], 0.0, 0.0, 1.0),
+                GL_LUMINANCE_ALPHA => Vec4::new(c[0], c[0], c[0], c[1]),
+                GL_RGB => Vec4::new(c[0], c[1], c[2], 1.0),
+                GL_BGR => Vec4::new(c[2], c[1], c[0], 1.0),
+                GL_BGRA => Vec4::new(c[2], c[1], c[0], c[3]),
+                _ => Vec4::new(c[0], c[1], c[2], c[3]),
+            });
+        }
+    }
+    Some(out)
+}
+
+/// Converts texels to the base internal format (what GL stores): LUMINANCE keeps red, ALPHA
+/// only alpha, INTENSITY red in all four.
+pub fn to_base(c: Vec4, base: u32) -> Vec4 {
+    match base {
+        GL_LUMINANCE => Vec4::new(c.x, c.x, c.x, 1.0),
+        GL_LUMINANCE_ALPHA => Vec4::new(c.x, c.x, c.x, c.w),
+        GL_ALPHA => Vec4::new(0.0, 0.0, 0.0, c.w),
+        GL_INTENSITY => Vec4::splat(c.x),
+        GL_RGB => c.truncate().extend(1.0),
+        _ => c,
+    }
+}
+
+impl Texture {
+    /// Whether the texture can be sampled (GL: "complete"): level 0 exists, and when the
+    /// minification filter uses mipmaps, every level down to 1x1.
+    pub fn complete(&self) -> bool {
+        let Some(base) = self.levels.first().filter(|l| l.width > 0 && l.height > 0) else {
+            return false;
+        };
+        if !self.mipmapped() {
+            return true;
+        }
+        let (mut w, mut h) = (base.width, base.height);
+        for level in &self.levels {
+            if level.width != w || level.height != h {
+                return false;
+            }
+            if w == 1 && h == 1 {
+                return true;
+            }
+            w = (w / 2).max(1);
+            h = (h / 2).max(1);
+        }
+        false
+    }
+
+    fn mipmapped(&self) -> bool {
+        !matches!(self.min_filter, GL_NEAREST | GL_LINEAR)
+    }
+
+    fn wrap(mode: u32, i: i64, n: usize) -> usize {
+        let n = n as i64;
+        let i = match mode {
+            GL_REPEAT => i.rem_euclid(n),
+            GL_MIRRORED_REPEAT => {
+                let m = i.rem_euclid(2 * n);
+                if m < n {
+                    m
+                } else {
+                    2 * n - 1 - m
+                }
+            }
+            _ => i.clamp(0, n - 1), // CLAMP, CLAMP_TO_EDGE (no border colour)
+        };
+        i as usize
+    }
+
+    fn texel(&self, l: &Level, x: i64, y: i64) -> Vec4 {
+        let x = Self::wrap(self.wrap_s, x, l.width);
+        let y = Self::wrap(self.wrap_t, y, l.height);
+        l.texels[y * l.width + x]
+    }
+
+    fn sample_level(&self, level: usize, uv: Vec2, linear: bool) -> Vec4 {
+        let l = &self.levels[level];
+        let x = uv.x * l.width as f32;
+        let y = uv.y * l.height as f32;
+        if !linear {
+            return self.texel(l, x.floor() as i64, y.floor() as i64);
+        }
+        let (x, y) = (x - 0.5, y - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let a = self.texel(l, x0, y0).lerp(self.texel(l, x0 + 1, y0), fx);
+        let b = self.texel(l, x0, y0 + 1).lerp(self.texel(l, x0 + 1, y0 + 1), fx);
+        a.lerp(b, fy)
+    }
+
+    /// The filtered texel at `uv` for a level of detail `lod` (log2 of texels per pixel).
+    pub fn sample(&self, uv: Vec2, lod: f32) -> Vec4 {
+        if !self.complete() {
+            return Vec4::ONE;
+        }
+        if lod <= 0.0 || !self.mipmapped() {
+            let filter = if lod <= 0.0 { self.mag_filter } else { self.min_filter };
+            return self.sample_level(0, uv, filter == GL_LINEAR);
+        }
+        let last = (self.levels.len() - 1) as f32;
+        let linear = matches!(self.min_filter, GL_LINEAR_MIPMAP_NEAREST | GL_LINEAR_MIPMAP_LINEAR);
+        match self.min_filter {
+            GL_NEAREST_MIPMAP_NEAREST | GL_LINEAR_MIPMAP_NEAREST => {
+                let level = (lod + 0.5).floor().clamp(0.0, last) as usize;
+                self.sample_level(level, uv, linear)
+            }
+            _ => {
+                let lod = lod.min(last);
+                let l0 = lod.floor() as usize;
+                let l1 = (l0 + 1).min(last as usize);
+                self.sample_level(l0, uv, linear).lerp(self.sample_level(l1, uv, linear), lod.fract())
+            }
+        }
+    }
+}
+
+/// The default pixel type for the tests below.
+#[allow(dead_code)]
+const UBYTE: u32 = GL_UNSIGNED_BYTE;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decode_honours_alignment_and_formats() {
+        // 1x2 RGB rows padded to 4 bytes.
+        let data = [255u8, 0, 0, 9, 0, 0, 255, 9];
+        let t = decode(1, 2, GL_RGB, UBYTE, &Unpack::default(), &data).unwrap();
+        assert_eq!(t, vec![Vec4::new(1.0, 0.0, 0.0, 1.0), Vec4::new(0.0, 0.0, 1.0, 1.0)]);
+        let t = decode(1, 1, GL_BGRA, UBYTE, &Unpack::default(), &[0, 0, 255, 0]).unwrap();
+        assert_eq!(t, vec![Vec4::new(1.0, 0.0, 0.0, 0.0)]);
+        assert!(decode(2, 2, GL_RGBA, UBYTE, &Unpack::default(), &[0; 15]).is_none());
+    }
+
+    #[test]
+    fn sampling_wraps_and_filters() {
+        let texels = vec![Vec4::ZERO, Vec4::ONE];
+        let t = Texture {
+            levels: vec![Level { width: 2, height: 1, texels }],
+            min_filter: GL_NEAREST,
+            mag_filter: GL_NEAREST,
+            ..Texture::default()
+        };
+        assert_eq!(t.sample(Vec2::new(0.25, 0.5), 0.0), Vec4::ZERO);
+        assert_eq!(t.sample(Vec2::new(1.75, 0.5), 0.0), Vec4::ONE, "REPEAT");
+        let t = Texture { mag_filter: GL_LINEAR, ..t };
+        assert_eq!(t.sample(Vec2::new(0.5, 0.5), 0.0), Vec4::splat(0.5));
+        let incomplete = Texture { min_filter: GL_LINEAR_MIPMAP_LINEAR, ..t };
+        assert!(!incomplete.complete());
+    }
+}

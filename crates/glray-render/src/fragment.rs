@@ -1,0 +1,132 @@
+//! The GL look of one hit: the fragment a rasterizer would have produced at that pixel.
+//! Colours and texture coordinates are interpolated with the hit's barycentric coordinates in
+//! eye space, which is GL's perspective-correct interpolation; then texturing with the texture
+//! environment, the secondary colour, and fog from the eye distance (OpenGL 2.1, 3.8-3.10).
+
+use glam::{DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
+use glray_capture::camera::Camera;
+use glray_capture::frame::{Frame, Triangle};
+use glray_capture::texture::{GL_ALPHA, GL_RGB};
+
+const GL_REPLACE: u32 = 0x1E01;
+const GL_MODULATE: u32 = 0x2100;
+const GL_DECAL: u32 = 0x2101;
+const GL_BLEND: u32 = 0x0BE2;
+const GL_ADD: u32 = 0x0104;
+const GL_LINEAR: u32 = 0x2601;
+const GL_EXP: u32 = 0x0800;
+const GL_EXP2: u32 = 0x0801;
+
+/// A fragment: its colour (before blending) and window depth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fragment {
+    pub color: Vec4,
+    pub depth: f64,
+}
+
+/// Barycentric weights of `p` in the triangle (in the plane of the triangle).
+fn barycentric(t: &Triangle, p: DVec3) -> DVec3 {
+    let [a, b, c] = t.positions.map(|v| v.as_dvec3());
+    let (e1, e2, d) = (b - a, c - a, p - a);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d1, d2) = (d.dot(e1), d.dot(e2));
+    let den = d11 * d22 - d12 * d12;
+    if den == 0.0 {
+        return DVec3::new(1.0, 0.0, 0.0);
+    }
+    let v = (d22 * d1 - d12 * d2) / den;
+    let w = (d11 * d2 - d12 * d1) / den;
+    DVec3::new(1.0 - v - w, v, w)
+}
+
+/// The texture level of detail of a triangle: log2 of texels per pixel, from its area on the
+/// screen and in the texture (constant over the triangle).
+fn lod(t: &Triangle, camera: &Camera, texels: f64) -> f32 {
+    let w = t.positions.map(|p| {
+        let (x, y) = camera.window_position(p.as_dvec3());
+        glam::DVec2::new(x, y)
+    });
+    let screen = ((w[1] - w[0]).perp_dot(w[2] - w[0])).abs();
+    let uv = t.texcoords.map(|c| c.as_dvec2());
+    let tex = ((uv[1] - uv[0]).perp_dot(uv[2] - uv[0])).abs() * texels;
+    if screen <= 0.0 || tex <= 0.0 {
+        return 0.0;
+    }
+    (0.5 * (tex / screen).log2()) as f32
+}
+
+/// The fragment of `triangle` at eye-space point `p`.
+pub fn shade(frame: &Frame, camera: &Camera, triangle: usize, p: DVec3) -> Fragment {
+    let t = &frame.triangles[triangle];
+    let surface = &frame.surfaces[t.surface as usize];
+    let b = barycentric(t, p).as_vec3();
+    let mix4 = |v: [Vec4; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
+    let mix3 = |v: [Vec3; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
+    let mix2 = |v: [Vec2; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
+    let mut c = mix4(t.colors);
+    if let Some(tx) = &surface.texturing {
+        let l0 = &tx.texture.levels[0];
+        let lod = lod(t, camera, (l0.width * l0.height) as f64);
+        let s = tx.texture.sample(mix2(t.texcoords), lod);
+        let base = tx.texture.base_format;
+        let (cf, af, ct, at) = (c.xyz(), c.w, s.xyz(), s.w);
+        c = match tx.env_mode {
+            GL_REPLACE => match base {
+                GL_ALPHA => cf.extend(at),
+                GL_RGB | 0x1909 => ct.extend(af), // RGB, LUMINANCE
+                _ => s,
+            },
+            GL_DECAL => match base {
+                GL_RGB => ct.extend(af),
+                _ => (cf * (1.0 - at) + ct * at).extend(af),
+            },
+            GL_BLEND => (cf * (Vec3::ONE - ct) + tx.env_color.xyz() * ct).extend(af * at),
+            GL_ADD => (cf + ct).min(Vec3::ONE).extend(af * at),
+            GL_MODULATE => match base {
+                GL_ALPHA => cf.extend(af * at),
+                _ => (cf * ct).extend(af * at),
+            },
+            _ => c,
+        };
+    }
+    let sec = mix3(t.secondary);
+    c = (c.xyz() + sec).min(Vec3::ONE).extend(c.w);
+    if let Some(fog) = &surface.fog {
+        // Mesa's fog coordinate: the eye-space distance along z.
+        let z = p.z.abs() as f32;
+        let f = match fog.mode {
+            GL_LINEAR => {
+                if fog.end == fog.start {
+                    1.0
+                } else {
+                    (fog.end - z) / (fog.end - fog.start)
+                }
+            }
+            GL_EXP2 => (-(fog.density * z).powi(2)).exp(),
+            GL_EXP => (-fog.density * z).exp(),
+            _ => 1.0,
+        }
+        .clamp(0.0, 1.0);
+        c = (c.xyz() * f + fog.color.xyz() * (1.0 - f)).extend(c.w);
+    }
+    Fragment { color: c.clamp(Vec4::ZERO, Vec4::ONE), depth: camera.window_depth(p) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn barycentric_weights_reproduce_the_point() {
+        let t = Triangle {
+            positions: [Vec3::ZERO, Vec3::X, Vec3::Y],
+            colors: [Vec4::ZERO; 3],
+            secondary: [Vec3::ZERO; 3],
+            texcoords: [Vec2::ZERO; 3],
+            surface: 0,
+            sequence: 0,
+        };
+        let b = barycentric(&t, DVec3::new(0.25, 0.5, 0.0));
+        assert!((b - DVec3::new(0.25, 0.25, 0.5)).length() < 1e-12, "{b}");
+    }
+}

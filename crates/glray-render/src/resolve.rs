@@ -1,0 +1,119 @@
+//! Which fragments of a pixel survive, as GL's per-fragment operations decide in drawing order:
+//! the depth test (with its function and mask), the alpha test and blending. When every draw
+//! of a frame is opaque and depth-tested with LESS or LEQUAL, that is simply the closest hit;
+//! otherwise every hit along the ray is replayed in drawing order against a depth and colour
+//! that start as the clear values.
+
+use glam::{Vec3, Vec4, Vec4Swizzles};
+use glray_capture::frame::{Frame, Surface};
+
+use crate::fragment::Fragment;
+use crate::scene::Hit;
+
+const GL_NEVER: u32 = 0x0200;
+const GL_LESS: u32 = 0x0201;
+const GL_EQUAL: u32 = 0x0202;
+const GL_LEQUAL: u32 = 0x0203;
+const GL_GREATER: u32 = 0x0204;
+const GL_NOTEQUAL: u32 = 0x0205;
+const GL_GEQUAL: u32 = 0x0206;
+
+/// Whether the closest hit decides every pixel of the frame.
+pub fn closest_hit_suffices(frame: &Frame) -> bool {
+    frame.surfaces.iter().all(|s| {
+        s.depth_test && s.depth_mask && matches!(s.depth_func, GL_LESS | GL_LEQUAL) && s.blend.is_none() && s.alpha_test.is_none()
+    })
+}
+
+/// A comparison function of glDepthFunc and glAlphaFunc.
+fn passes(func: u32, value: f64, reference: f64) -> bool {
+    match func {
+        GL_NEVER => false,
+        GL_LESS => value < reference,
+        GL_EQUAL => value == reference,
+        GL_LEQUAL => value <= reference,
+        GL_GREATER => value > reference,
+        GL_NOTEQUAL => value != reference,
+        GL_GEQUAL => value >= reference,
+        _ => true,
+    }
+}
+
+fn factor(f: u32, src: Vec4, dst: Vec4) -> Vec4 {
+    match f {
+        0 => Vec4::ZERO,
+        1 => Vec4::ONE,
+        0x0300 => src,
+        0x0301 => Vec4::ONE - src,
+        0x0302 => Vec4::splat(src.w),
+        0x0303 => Vec4::splat(1.0 - src.w),
+        0x0304 => Vec4::splat(dst.w),
+        0x0305 => Vec4::splat(1.0 - dst.w),
+        0x0306 => dst,
+        0x0307 => Vec4::ONE - dst,
+        0x0308 => {
+            let f = src.w.min(1.0 - dst.w);
+            Vec3::splat(f).extend(1.0)
+        }
+        _ => Vec4::ONE,
+    }
+}
+
+/// Colour of the framebuffer after `fragment` of `surface` (that passed the tests) lands on `dst`.
+fn blend(surface: &Surface, src: Vec4, dst: Vec4) -> Vec4 {
+    match surface.blend {
+        None => src,
+        Some((sf, df)) => (src * factor(sf, src, dst) + dst * factor(df, src, dst)).clamp(Vec4::ZERO, Vec4::ONE),
+    }
+}
+
+/// A pixel's colour and depth after all its fragments, in drawing order. `hits` come with
+/// their fragments; `clear` is the clear colour.
+pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], clear: Vec4) -> (Vec4, f64) {
+    hits.sort_by_key(|(h, _)| (frame.triangles[h.triangle].sequence, h.triangle));
+    let (mut color, mut depth) = (clear, 1.0f64);
+    for (h, f) in hits.iter() {
+        let s = &frame.surfaces[frame.triangles[h.triangle].surface as usize];
+        if let Some((func, reference)) = s.alpha_test {
+            if !passes(func, f.color.w as f64, reference as f64) {
+                continue;
+            }
+        }
+        if s.depth_test {
+            if !passes(s.depth_func, f.depth, depth) {
+                continue;
+            }
+            if s.depth_mask {
+                depth = f.depth;
+            }
+        }
+        color = blend(s, f.color, color);
+    }
+    (color, depth)
+}
+
+/// The colour a fragment leaves over the background when it is the closest hit.
+pub fn opaque(fragment: &Fragment) -> Vec4 {
+    fragment.color.xyz().extend(fragment.color.w)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn comparisons_and_blending() {
+        assert!(passes(GL_LESS, 0.2, 0.5) && !passes(GL_LESS, 0.5, 0.5) && passes(GL_LEQUAL, 0.5, 0.5));
+        let s = Surface {
+            texturing: None,
+            fog: None,
+            depth_test: true,
+            depth_func: GL_LESS,
+            depth_mask: true,
+            blend: Some((0x0302, 0x0303)),
+            alpha_test: None,
+        };
+        let c = blend(&s, Vec4::new(1.0, 0.0, 0.0, 0.25), Vec4::new(0.0, 0.0, 1.0, 1.0));
+        assert!((c - Vec4::new(0.25, 0.0, 0.75, 0.8125)).length() < 1e-6, "{c}");
+    }
+}

@@ -1,0 +1,98 @@
+//! `glray replay TRACE --renderer glray`: plays a trace into glray's capture (the same state
+//! machine the live library feeds) and writes each frame as glray's ray tracer renders it.
+//! With `--readpixels`, what a glReadPixels of the frame so far would return is written too.
+
+use std::path::{Path, PathBuf};
+
+use glray_capture::events::Capture;
+use glray_capture::frame::Frame;
+use glray_core::image::Image;
+use glray_core::trace::{Event, Reader};
+
+use crate::replay::FrameSet;
+
+#[derive(Debug, Default)]
+pub struct Summary {
+    pub calls: u64,
+    pub frames_written: u64,
+    pub readpixels_written: u64,
+    pub triangles: u64,
+}
+
+/// The size to render a frame at: the drawable, else the viewport's extent.
+fn size_of(frame: &Frame) -> (u32, u32) {
+    if frame.width > 0 && frame.height > 0 {
+        return (frame.width, frame.height);
+    }
+    frame.viewport.map_or((0, 0), |v| ((v.x + v.width).max(0) as u32, (v.y + v.height).max(0) as u32))
+}
+
+/// The frame rendered as a top-down RGB image.
+pub fn picture(frame: &Frame) -> Option<Image> {
+    let (w, h) = size_of(frame);
+    if w == 0 || h == 0 {
+        return None;
+    }
+    let r = glray_render::render(frame, w, h);
+    Some(Image::from_bottom_up(w, h, &r.rgba, 4))
+}
+
+/// The part of a top-down image a glReadPixels(x, y, w, h) reads (y counts from the bottom).
+fn crop(image: &Image, x: i64, y: i64, w: i64, h: i64) -> Option<Image> {
+    let (iw, ih) = (image.width as i64, image.height as i64);
+    if w <= 0 || h <= 0 || x < 0 || y < 0 || x + w > iw || y + h > ih {
+        return None;
+    }
+    let mut rgb = Vec::with_capacity((w * h * 3) as usize);
+    for row in 0..h {
+        let top = ih - 1 - (y + h - 1 - row);
+        let start = ((top * iw + x) * 3) as usize;
+        rgb.extend_from_slice(&image.rgb[start..start + (w * 3) as usize]);
+    }
+    Some(Image { width: w as u32, height: h as u32, rgb })
+}
+
+pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool) -> Result<Summary, String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("--out {}: {e}", out.display()))?;
+    let mut reader = Reader::new(data).map_err(|e| e.to_string())?;
+    let mut capture = Capture::default();
+    let mut summary = Summary::default();
+    let mut read_pixels: Vec<bool> = Vec::new();
+    while let Some(event) = reader.next_event().map_err(|e| e.to_string())? {
+        if let Event::Name { number } = event {
+            read_pixels.resize(number + 1, false);
+            read_pixels[number] = reader.names[number] == b"glReadPixels";
+        }
+        if let Event::Call { cmd, thread, args, .. } = &event {
+            summary.calls += 1;
+            let a: Vec<i64> = args.iter().map(|v| v.as_int()).collect();
+            // As the OSMesa replay does: reads of RGB or RGBA bytes, cropped to the rectangle.
+            if readpixels
+                && read_pixels.get(*cmd) == Some(&true)
+                && a.len() >= 6
+                && matches!(a[4], 0x1907 | 0x1908)
+                && a[5] == 0x1401
+            {
+                let frame = capture.context(*thread).frame().clone();
+                if let Some(image) = picture(&frame).and_then(|i| crop(&i, a[0], a[1], a[2], a[3])) {
+                    let path: PathBuf = out.join(format!("readpixels-{:04}.png", summary.readpixels_written));
+                    image.write_png(&path)?;
+                    summary.readpixels_written += 1;
+                }
+            }
+        }
+        let number = if let Event::Frame { number } = event { Some(number) } else { None };
+        let names = &reader.names;
+        if let Some((_, frame)) = capture.event(&event, |n| names[n]) {
+            let number = number.unwrap_or_default();
+            if frames.contains(number) {
+                summary.triangles += frame.triangles.len() as u64;
+                if let Some(image) = picture(&frame) {
+                    image.write_png(&out.join(format!("frame-{number:04}.png")))?;
+                    summary.frames_written += 1;
+                }
+            }
+        }
+    }
+    Ok(summary)
+}
