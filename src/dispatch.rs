@@ -42,6 +42,11 @@ const SEEN_GLVND: u8 = 1;
 const SEEN_OSMESA: u8 = 2;
 
 /// Makes this thread's GL calls go to `backend` (called after a successful MakeCurrent).
+/// The backend of this thread's current context.
+pub fn backend() -> Backend {
+    BACKEND.with(|b| b.get())
+}
+
 pub fn set_backend(backend: Backend) {
     BACKEND.with(|b| b.set(backend));
     let bit = match backend {

@@ -19,6 +19,7 @@ mod dlopen_hook;
 pub mod exports;
 mod ffi_guard;
 mod handlers;
+mod raytrace;
 mod real;
 mod record;
 mod runtime;

@@ -51,8 +51,12 @@ fn init() -> Runtime {
         own_path.as_ref().map_or("?".into(), |p| p.to_string_lossy()),
         if config.enable() { "" } else { " (pass-through: enable = false)" }
     );
-    if let Some(path) = config.record() {
-        crate::record::start(path);
+    let capture = config.enable() && config.preset() != "off";
+    if capture {
+        crate::raytrace::configure(&config);
+    }
+    if capture || config.record().is_some() {
+        crate::record::start(config.record(), capture);
     }
     Runtime { config, own_path, own_file, own_base: info.dli_fbase }
 }

@@ -47,11 +47,16 @@ pub fn active() -> bool {
     ACTIVE.load(Ordering::Relaxed)
 }
 
-/// Starts recording into `path` (opened at the first call).
-pub fn start(path: &str) {
-    *TEMPLATE.lock().unwrap_or_else(|e| e.into_inner()) = path.to_string();
-    let path = path.replace("%p", &std::process::id().to_string());
-    *RECORDER.lock().unwrap_or_else(|e| e.into_inner()) = Some(Recorder::new(PathBuf::from(path)));
+/// Starts recording: into the trace file `path` (opened at the first call; `%p` is the
+/// process id) and/or, with `capture`, into glray's capture (each call's events are handed to
+/// `crate::raytrace` as soon as they are recorded). One recorder serves both, so that the
+/// trace file and the ray tracer see exactly the same calls and client memory.
+pub fn start(path: Option<&str>, capture: bool) {
+    if let Some(path) = path {
+        *TEMPLATE.lock().unwrap_or_else(|e| e.into_inner()) = path.to_string();
+    }
+    let path = path.map(|p| PathBuf::from(p.replace("%p", &std::process::id().to_string())));
+    *RECORDER.lock().unwrap_or_else(|e| e.into_inner()) = Some(Recorder::new(path, capture));
     ACTIVE.store(true, Ordering::Relaxed);
     // SAFETY: registering plain extern "C" functions with atexit and pthread_atfork.
     unsafe {
@@ -74,9 +79,13 @@ fn after_fork() {
         ACTIVE.store(false, Ordering::Relaxed);
         return;
     };
+    let capture = guard.as_ref().is_some_and(|r| r.capture);
     if template.contains("%p") {
         let path = template.replace("%p", &std::process::id().to_string());
-        *guard = Some(Recorder::new(PathBuf::from(path)));
+        *guard = Some(Recorder::new(Some(PathBuf::from(path)), capture));
+    } else if capture {
+        // The child keeps ray tracing what it draws, without the parent's trace file.
+        *guard = Some(Recorder::new(None, true));
     } else {
         *guard = None;
         ACTIVE.store(false, Ordering::Relaxed);
@@ -105,6 +114,11 @@ pub fn finish() {
 thread_local! {
     static THREAD: std::cell::Cell<u32> = const { std::cell::Cell::new(u32::MAX) };
     static INSIDE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// This thread's number in the recording (None before its first recorded call).
+pub fn thread_number() -> Option<u32> {
+    Some(THREAD.with(|t| t.get())).filter(|t| *t != u32::MAX)
 }
 
 /// Marks this thread as inside a recorded call; false if it already was (the call is nested:
@@ -138,10 +152,13 @@ pub fn with(f: impl FnOnce(&mut Recorder)) {
     });
     rec.thread = thread;
     let ok = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        if rec.file.is_none() {
+        if rec.file.is_none() && rec.path.is_some() {
             rec.open()?;
         }
         f(rec);
+        if rec.capture {
+            rec.feed_capture();
+        }
         if rec.e.len() > (8 << 20) {
             rec.flush();
         }
@@ -161,6 +178,7 @@ pub fn with(f: impl FnOnce(&mut Recorder)) {
 /// bits: memory a program wrote through a mapped buffer must be read before glUnmapBuffer
 /// invalidates the mapping.
 pub fn before_real(cmd: usize, args: &[u64]) {
+    crate::raytrace::before(cmd, args);
     if matches!(cmd, cmd::glUnmapBuffer | cmd::glUnmapBufferARB) {
         with(|rec| rec.capture_mapping(args[0] as u32));
     }
@@ -197,7 +215,14 @@ enum Kind {
 
 pub struct Recorder {
     pub e: Encoder,
-    path: PathBuf,
+    /// The trace file, if recording to one.
+    path: Option<PathBuf>,
+    /// Whether calls go to glray's capture too.
+    capture: bool,
+    /// How much of `e` capture has been given.
+    fed: usize,
+    /// How many commands capture knows the names of.
+    fed_names: usize,
     file: Option<std::fs::File>,
     thread: u32,
     next_thread: u32,
@@ -211,10 +236,13 @@ pub struct Recorder {
 }
 
 impl Recorder {
-    fn new(path: PathBuf) -> Recorder {
+    fn new(path: Option<PathBuf>, capture: bool) -> Recorder {
         Recorder {
             e: Encoder::new(),
             path,
+            capture,
+            fed: 0,
+            fed_names: 0,
             file: None,
             thread: 0,
             next_thread: 0,
@@ -228,21 +256,44 @@ impl Recorder {
     }
 
     fn open(&mut self) -> Result<(), String> {
-        let file = std::fs::File::create(&self.path)
-            .map_err(|e| format!("cannot create the trace {}: {e}", self.path.display()))?;
+        let Some(path) = self.path.clone() else { return Ok(()) };
+        let file =
+            std::fs::File::create(&path).map_err(|e| format!("cannot create the trace {}: {e}", path.display()))?;
         let mut header = Encoder::new();
         header.header();
         let file = self.file.insert(file);
-        header.flush_to(file).map_err(|e| format!("writing {}: {e}", self.path.display()))?;
-        glray_core::info!("recording to {}", self.path.display());
+        header.flush_to(file).map_err(|e| format!("writing {}: {e}", path.display()))?;
+        glray_core::info!("recording to {}", path.display());
         Ok(())
     }
 
     fn flush(&mut self) {
+        if self.capture {
+            // Capture must see every event before the buffer is emptied.
+            self.feed_capture();
+        }
         if let Some(f) = self.file.as_mut() {
             if let Err(e) = self.e.flush_to(f).and_then(|_| f.flush()) {
-                self.error = Some(format!("writing {}: {e}", self.path.display()));
+                let path = self.path.as_deref().unwrap_or(std::path::Path::new("?"));
+                self.error = Some(format!("writing {}: {e}", path.display()));
             }
+        } else {
+            self.e.clear();
+        }
+        self.fed = 0;
+    }
+
+    /// Hands the events recorded since the last call to capture.
+    fn feed_capture(&mut self) {
+        let bytes = &self.e.bytes()[self.fed..];
+        if !bytes.is_empty() {
+            self.fed_names = crate::raytrace::feed(bytes, self.fed_names);
+        }
+        if self.file.is_none() {
+            self.e.clear();
+            self.fed = 0;
+        } else {
+            self.fed = self.e.len();
         }
     }
 

@@ -404,6 +404,10 @@ pub struct Context {
     frame: Frame,
     sequence: u32,
     normal_matrix: Option<(DMat4, DMat3)>,
+    /// A shader program is in use: draws go through shaders capture cannot follow.
+    programmable: bool,
+    /// Counts changes to the frame (draws, clears), so that a frame is presented once.
+    revision: u64,
 }
 
 impl Default for Context {
@@ -425,6 +429,8 @@ impl Default for Context {
             frame: Frame { depth_range: (0.0, 1.0), ..Frame::default() },
             sequence: 0,
             normal_matrix: None,
+            programmable: false,
+            revision: 0,
         }
     }
 }
@@ -481,6 +487,11 @@ impl Context {
         };
         self.sequence = 0;
         std::mem::replace(&mut self.frame, next)
+    }
+
+    /// Changes whenever the frame does.
+    pub fn revision(&self) -> u64 {
+        self.revision
     }
 
     /// The frame so far.
@@ -707,10 +718,7 @@ impl Context {
             Op::ColorMaterial => {
                 let (face, mode) = (args::uint(a, 0), args::uint(a, 1));
                 if !matches!(face, GL_FRONT | GL_BACK | GL_FRONT_AND_BACK)
-                    || !matches!(
-                        mode,
-                        GL_EMISSION | GL_AMBIENT | GL_DIFFUSE | GL_SPECULAR | GL_AMBIENT_AND_DIFFUSE
-                    )
+                    || !matches!(mode, GL_EMISSION | GL_AMBIENT | GL_DIFFUSE | GL_SPECULAR | GL_AMBIENT_AND_DIFFUSE)
                 {
                     return Err(GlError::InvalidEnum);
                 }
@@ -747,12 +755,14 @@ impl Context {
                 _ => return Err(GlError::InvalidEnum),
             },
             Op::ClearColor => {
-                self.s.clear_color = Vec4::from_array(std::array::from_fn(|i| args::float(a, i) as f32))
-                    .clamp(Vec4::ZERO, Vec4::ONE)
+                self.s.clear_color =
+                    Vec4::from_array(std::array::from_fn(|i| args::float(a, i) as f32)).clamp(Vec4::ZERO, Vec4::ONE)
             }
             Op::Clear => {
+                self.revision += 1;
                 if args::uint(a, 0) & GL_COLOR_BUFFER_BIT != 0 {
                     // What was drawn before is covered: the frame starts again.
+                    self.frame.unsupported_draws = 0;
                     self.frame.triangles.clear();
                     self.frame.surfaces.clear();
                     self.frame.projection = None;
@@ -788,15 +798,27 @@ impl Context {
                     self.imm.current = current;
                 }
             }
-            Op::VertexPointer => {
-                self.set_pointer(GL_VERTEX_ARRAY, args::int(a, 0) as i32, args::uint(a, 1), args::int(a, 2) as i32, a.get(3).unwrap_or(&Value::Null))
-            }
-            Op::NormalPointer => {
-                self.set_pointer(GL_NORMAL_ARRAY, 3, args::uint(a, 0), args::int(a, 1) as i32, a.get(2).unwrap_or(&Value::Null))
-            }
-            Op::ColorPointer => {
-                self.set_pointer(GL_COLOR_ARRAY, args::int(a, 0) as i32, args::uint(a, 1), args::int(a, 2) as i32, a.get(3).unwrap_or(&Value::Null))
-            }
+            Op::VertexPointer => self.set_pointer(
+                GL_VERTEX_ARRAY,
+                args::int(a, 0) as i32,
+                args::uint(a, 1),
+                args::int(a, 2) as i32,
+                a.get(3).unwrap_or(&Value::Null),
+            ),
+            Op::NormalPointer => self.set_pointer(
+                GL_NORMAL_ARRAY,
+                3,
+                args::uint(a, 0),
+                args::int(a, 1) as i32,
+                a.get(2).unwrap_or(&Value::Null),
+            ),
+            Op::ColorPointer => self.set_pointer(
+                GL_COLOR_ARRAY,
+                args::int(a, 0) as i32,
+                args::uint(a, 1),
+                args::int(a, 2) as i32,
+                a.get(3).unwrap_or(&Value::Null),
+            ),
             Op::TexCoordPointer => self.set_pointer(
                 GL_TEXTURE_COORD_ARRAY,
                 args::int(a, 0) as i32,
@@ -873,7 +895,9 @@ impl Context {
                 }
             }
             Op::TexEnv => match args::uint(a, 1) {
-                GL_TEXTURE_ENV_MODE => self.s.env_mode = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0) as u32,
+                GL_TEXTURE_ENV_MODE => {
+                    self.s.env_mode = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0) as u32
+                }
                 GL_TEXTURE_ENV_COLOR => self.s.env_color = vec4(self.color_param(a, 2, ty)),
                 _ => {}
             },
@@ -966,6 +990,8 @@ impl Context {
             Op::GetError => {
                 // The real GL answered; capture's own errors are checked by its tests.
             }
+            Op::UseProgram => self.programmable = args::uint(a, 0) != 0,
+            Op::VertexAttribPointer => {}
         }
         Ok(())
     }
@@ -1134,7 +1160,12 @@ impl Context {
         let norm = |k: usize, default: f64| raw.get(k).map_or(default, |x| args::normalize(*x, f.ty));
         match f.attr {
             Attr::Vertex => {
-                let p = DVec4::new(get(0, 0.0), get(1, 0.0), if f.n > 2 { get(2, 0.0) } else { 0.0 }, if f.n > 3 { get(3, 1.0) } else { 1.0 });
+                let p = DVec4::new(
+                    get(0, 0.0),
+                    get(1, 0.0),
+                    if f.n > 2 { get(2, 0.0) } else { 0.0 },
+                    if f.n > 3 { get(3, 1.0) } else { 1.0 },
+                );
                 if self.imm.inside() {
                     let out = self.vertex_stage(p);
                     self.open.push(out);
@@ -1147,7 +1178,12 @@ impl Context {
                 self.imm.color(DVec4::new(norm(0, 0.0), norm(1, 0.0), norm(2, 0.0), alpha));
             }
             Attr::TexCoord | Attr::MultiTexCoord => {
-                let t = DVec4::new(get(0, 0.0), if f.n > 1 { get(1, 0.0) } else { 0.0 }, if f.n > 2 { get(2, 0.0) } else { 0.0 }, if f.n > 3 { get(3, 1.0) } else { 1.0 });
+                let t = DVec4::new(
+                    get(0, 0.0),
+                    if f.n > 1 { get(1, 0.0) } else { 0.0 },
+                    if f.n > 2 { get(2, 0.0) } else { 0.0 },
+                    if f.n > 3 { get(3, 1.0) } else { 1.0 },
+                );
                 self.imm.tex_coord(unit, t)?;
             }
             Attr::SecondaryColor => {}
@@ -1210,8 +1246,7 @@ impl Context {
             }
             let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
             let (f0, f1) = light_vertex(p, n, &mats[0], &s.lights, &s.model);
-            let (b0, b1) =
-                if s.model.two_side { light_vertex(p, -n, &mats[1], &s.lights, &s.model) } else { (f0, f1) };
+            let (b0, b1) = if s.model.two_side { light_vertex(p, -n, &mats[1], &s.lights, &s.model) } else { (f0, f1) };
             ([f0, b0], [f1, b1])
         } else {
             let c = cur.color.clamp(DVec4::ZERO, DVec4::ONE);
@@ -1262,11 +1297,7 @@ impl Context {
                 let n = args::int(a, 3).max(0) as usize;
                 let firsts = args::array(args::bytes(a, 1), GL_INT, n);
                 let counts = args::array(args::bytes(a, 2), GL_INT, n);
-                firsts
-                    .iter()
-                    .zip(&counts)
-                    .map(|(f, c)| (*f as u64..(*f + c.max(0.0)) as u64).collect())
-                    .collect()
+                firsts.iter().zip(&counts).map(|(f, c)| (*f as u64..(*f + c.max(0.0)) as u64).collect()).collect()
             }
             Op::DrawElements | Op::DrawRangeElements => {
                 let (count, ty, idx) = if op == Op::DrawElements { (1, 2, 3) } else { (3, 4, 5) };
@@ -1315,7 +1346,12 @@ impl Context {
         };
         let size = args::type_size(ty).unwrap_or(4);
         let bytes = bytes.get(start..).unwrap_or(&[]);
-        (0..count).map_while(|i| args::element(bytes, ty, i)).map(|x| x as u64).take(count).take_while(|_| size > 0).collect()
+        (0..count)
+            .map_while(|i| args::element(bytes, ty, i))
+            .map(|x| x as u64)
+            .take(count)
+            .take_while(|_| size > 0)
+            .collect()
     }
 
     /// Where each array (vertex, normal, color, texcoord 0) of the next draw comes from.
@@ -1388,10 +1424,11 @@ impl Context {
     fn surface(&mut self) -> u32 {
         let s = &self.s;
         let texturing = if s.texture_2d {
-            self.textures
-                .get(&s.bound_texture)
-                .filter(|t| t.complete())
-                .map(|t| Texturing { texture: t.clone(), env_mode: s.env_mode, env_color: s.env_color })
+            self.textures.get(&s.bound_texture).filter(|t| t.complete()).map(|t| Texturing {
+                texture: t.clone(),
+                env_mode: s.env_mode,
+                env_color: s.env_color,
+            })
         } else {
             None
         };
@@ -1430,6 +1467,11 @@ impl Context {
 
     /// Assembles one draw's vertices into the frame's triangles.
     fn draw(&mut self, mode: u32, verts: &[Out]) {
+        self.revision += 1;
+        if self.programmable {
+            self.frame.unsupported_draws += 1;
+            return;
+        }
         let Ok(asm) = assemble(mode, verts.len()) else { return };
         if verts.is_empty() || (asm.triangles.is_empty() && asm.lines.is_empty() && asm.points.is_empty()) {
             return;
@@ -1468,20 +1510,13 @@ impl Context {
             let [a, b, c] = t.map(|i| clip[i as usize]);
             // The window-space winding, from clip coordinates (exact even for triangles that
             // cross the near plane, which clipping keeps on the same plane).
-            let det = DMat3::from_cols(
-                DVec3::new(a.x, a.y, a.w),
-                DVec3::new(b.x, b.y, b.w),
-                DVec3::new(c.x, c.y, c.w),
-            )
-            .determinant();
+            let det = DMat3::from_cols(DVec3::new(a.x, a.y, a.w), DVec3::new(b.x, b.y, b.w), DVec3::new(c.x, c.y, c.w))
+                .determinant();
             if det == 0.0 {
                 continue;
             }
             let front = (det > 0.0) == self.s.front_ccw;
-            if self.s.cull
-                && (self.s.cull_face == GL_FRONT_AND_BACK
-                    || (self.s.cull_face == GL_FRONT) == front)
-            {
+            if self.s.cull && (self.s.cull_face == GL_FRONT_AND_BACK || (self.s.cull_face == GL_FRONT) == front) {
                 continue;
             }
             let face = if front { 0 } else { 1 };

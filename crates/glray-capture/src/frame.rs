@@ -75,6 +75,9 @@ pub struct Frame {
     /// Draws left out of the ray-traced scene (another projection or viewport than the
     /// camera's: 2D overlays), counted for the log.
     pub skipped_draws: u32,
+    /// Draws capture cannot follow (shaders, generic vertex attributes): a frame with any
+    /// is not ray traced, the real GL's picture stands.
+    pub unsupported_draws: u32,
     /// Drawable size, when known.
     pub width: u32,
     pub height: u32,

@@ -4,8 +4,8 @@
 //! glMultiTexCoord2fARB, ...: about 200 names) are parsed from their name's suffix, the way the
 //! GL spec builds those names, instead of being listed.
 
-use crate::args::{GL_BYTE, GL_DOUBLE, GL_FLOAT, GL_INT, GL_SHORT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT};
 use crate::args::GL_UNSIGNED_SHORT;
+use crate::args::{GL_BYTE, GL_DOUBLE, GL_FLOAT, GL_INT, GL_SHORT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT};
 
 /// A per-vertex attribute.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -136,6 +136,8 @@ ops! {
     PointSize = "glPointSize";
     ClipPlane = "glClipPlane";
     GetError = "glGetError";
+    UseProgram = "glUseProgram" | "glUseProgramObjectARB";
+    VertexAttribPointer = "glVertexAttribPointer" | "glVertexAttribPointerARB" | "glVertexAttribIPointer";
 }
 
 /// The parameter type a command name's suffix gives (GL_FLOAT when it gives none).
@@ -222,6 +224,7 @@ impl Op {
                 | Op::DeleteTextures
                 | Op::PixelStore
                 | Op::GetError
+                | Op::VertexAttribPointer
         )
     }
 }

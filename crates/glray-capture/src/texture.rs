@@ -98,14 +98,7 @@ pub fn base_format(internal: u32) -> u32 {
 
 /// Decodes client pixels into RGBA texels; None for an unsupported format or type, or too
 /// little memory.
-pub fn decode(
-    width: usize,
-    height: usize,
-    format: u32,
-    ty: u32,
-    unpack: &Unpack,
-    data: &[u8],
-) -> Option<Vec<Vec4>> {
+pub fn decode(width: usize, height: usize, format: u32, ty: u32, unpack: &Unpack, data: &[u8]) -> Option<Vec<Vec4>> {
     let n = components(format)?;
     let size = args::type_size(ty)?;
     let row_pixels = if unpack.row_length > 0 { unpack.row_length } else { width };

@@ -30,6 +30,8 @@ pub struct Setting {
 }
 
 pub const LOG_LEVELS: &[&str] = &["off", "error", "warn", "info", "debug"];
+pub const PRESETS: &[&str] = &["off", "gl"];
+pub const TRIGGERS: &[&str] = &["auto", "swap", "finish", "flush", "readpixels"];
 
 /// Every setting glray has. docs/settings.md is checked against this table by a test.
 pub const SETTINGS: &[Setting] = &[
@@ -59,6 +61,29 @@ pub const SETTINGS: &[Setting] = &[
         default: "",
         doc: "Record every GL/GLX/EGL/OSMesa call of the program into this trace file (docs/trace-format.md); \
               `%p` becomes the process id. Empty: no recording.",
+    },
+    Setting {
+        key: "preset",
+        kind: Kind::Choice(PRESETS),
+        default: "gl",
+        doc: "What the program's frames become: `gl`, ray traced in the look of GL's fixed-function pipeline \
+              (matching what Mesa draws); `off`, the real GL's own frames (glray only passes calls through, \
+              and records if asked).",
+    },
+    Setting {
+        key: "trigger",
+        kind: Kind::Choice(TRIGGERS),
+        default: "auto",
+        doc: "When a frame is ray traced and put in place: `auto`, at the first of a buffer swap (GLX, EGL), \
+              glFinish/glFlush of an OSMesa context, or a glReadPixels of a frame not yet presented; `swap`, \
+              `finish`, `flush` or `readpixels`, only there.",
+    },
+    Setting {
+        key: "dump_scene",
+        kind: Kind::Path,
+        default: "",
+        doc: "Write each ray-traced frame's captured scene into this directory: scene-NNNN.obj + .mtl (eye \
+              coordinates) and scene-NNNN.json (triangles, draws, camera). Empty: no dump.",
     },
     Setting {
         key: "real_opengl",
@@ -281,6 +306,21 @@ impl Config {
     /// The trace file to record into, if any.
     pub fn record(&self) -> Option<&str> {
         Some(self.get("record")).filter(|p| !p.is_empty())
+    }
+
+    /// The preset frames are ray traced with (`off`: pass-through).
+    pub fn preset(&self) -> &str {
+        self.get("preset")
+    }
+
+    /// When frames are ray traced and presented.
+    pub fn trigger(&self) -> &str {
+        self.get("trigger")
+    }
+
+    /// Where to dump each frame's scene, if anywhere.
+    pub fn dump_scene(&self) -> Option<&str> {
+        Some(self.get("dump_scene")).filter(|p| !p.is_empty())
     }
 
     /// The user's path for a real library, if set.

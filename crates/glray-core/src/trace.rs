@@ -164,6 +164,11 @@ impl Encoder {
         Ok(())
     }
 
+    /// Drops the events not flushed yet.
+    pub fn clear(&mut self) {
+        self.buf.clear();
+    }
+
     pub fn header(&mut self) {
         self.buf.extend_from_slice(MAGIC);
         self.buf.extend_from_slice(&VERSION.to_le_bytes());
@@ -356,6 +361,22 @@ impl<'a> Reader<'a> {
         }
         let _flags = r.take(4, "the flags")?;
         Ok(r)
+    }
+
+    /// Reads events without a header, for a stream of them cut into pieces (the live library
+    /// hands each call's events over as it records them): `named` commands were named by
+    /// earlier pieces (their names read as empty here).
+    pub fn events(data: &'a [u8], named: usize) -> Reader<'a> {
+        Reader {
+            data,
+            pos: 0,
+            event_start: 0,
+            version: VERSION,
+            names: vec![&[][..]; named],
+            calls: 0,
+            in_call: false,
+            ended: false,
+        }
     }
 
     /// The offset of the next event.

@@ -21,7 +21,11 @@ const GL_GEQUAL: u32 = 0x0206;
 /// Whether the closest hit decides every pixel of the frame.
 pub fn closest_hit_suffices(frame: &Frame) -> bool {
     frame.surfaces.iter().all(|s| {
-        s.depth_test && s.depth_mask && matches!(s.depth_func, GL_LESS | GL_LEQUAL) && s.blend.is_none() && s.alpha_test.is_none()
+        s.depth_test
+            && s.depth_mask
+            && matches!(s.depth_func, GL_LESS | GL_LEQUAL)
+            && s.blend.is_none()
+            && s.alpha_test.is_none()
     })
 }
 

@@ -229,11 +229,7 @@ fn compare_dirs(mesa: &Path, ours: &Path, out: &Path) -> Result<(), String> {
         }
         let c = compare(&Image::read(&a)?, &Image::read(&b)?, 0.05)?;
         c.diff.write_png(&out.join(format!("diff-{n}")))?;
-        println!(
-            "{n}: {:.3}% of pixels differ by more than 5%; PSNR {:.2} dB",
-            c.differing_share() * 100.0,
-            c.psnr
-        );
+        println!("{n}: {:.3}% of pixels differ by more than 5%; PSNR {:.2} dB", c.differing_share() * 100.0, c.psnr);
     }
     Ok(())
 }

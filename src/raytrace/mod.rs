@@ -1,0 +1,173 @@
+//! Live ray tracing inside the host program: the recorder hands every call's events to
+//! `feed` (the same events a trace file holds), capture follows them per thread, and at the
+//! frame trigger (`before`, called before the real swap, finish, flush or read-back) the
+//! frame is ray traced and put into the real framebuffer (`present`), where the swap shows it
+//! and glReadPixels reads it.
+//!
+//! Frames capture cannot follow (shaders, generic attributes) are left as the real GL drew
+//! them. Nothing here may stop the host: errors are logged and ray tracing turns off.
+
+mod dump;
+mod present;
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+
+use glray_capture::events::Capture;
+use glray_core::config::Config;
+use glray_core::trace::{Event, Reader};
+
+use crate::commands::cmd;
+use crate::dispatch::{self, Backend};
+
+static ON: AtomicBool = AtomicBool::new(false);
+static LIVE: Mutex<Option<Live>> = Mutex::new(None);
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Trigger {
+    Auto,
+    Swap,
+    Finish,
+    Flush,
+    ReadPixels,
+}
+
+struct Live {
+    capture: Capture,
+    /// Command names by the recorder's numbers.
+    names: Vec<Vec<u8>>,
+    trigger: Trigger,
+    dump: Option<PathBuf>,
+    /// The frame revision each thread presented last.
+    presented: HashMap<u32, u64>,
+    frames: u64,
+}
+
+/// Turns live ray tracing on with the settings in force (before recording starts).
+pub fn configure(config: &Config) {
+    let trigger = match config.trigger() {
+        "swap" => Trigger::Swap,
+        "finish" => Trigger::Finish,
+        "flush" => Trigger::Flush,
+        "readpixels" => Trigger::ReadPixels,
+        _ => Trigger::Auto,
+    };
+    let live = Live {
+        capture: Capture::default(),
+        names: Vec::new(),
+        trigger,
+        dump: config.dump_scene().map(PathBuf::from),
+        presented: HashMap::new(),
+        frames: 0,
+    };
+    *LIVE.lock().unwrap_or_else(|e| e.into_inner()) = Some(live);
+    ON.store(true, Ordering::Relaxed);
+}
+
+fn stop(why: &str) {
+    ON.store(false, Ordering::Relaxed);
+    glray_core::error!("ray tracing stopped: {why}; the program's own frames are shown from here on");
+}
+
+/// Capture follows the events of one recorded call; returns how many commands are named.
+pub fn feed(bytes: &[u8], named: usize) -> usize {
+    if !ON.load(Ordering::Relaxed) {
+        return named;
+    }
+    let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(live) = guard.as_mut() else { return named };
+    let mut reader = Reader::events(bytes, named);
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<(), String> {
+        while let Some(event) = reader.next_event().map_err(|e| e.to_string())? {
+            if let Event::Name { number } = event {
+                live.names.resize(number + 1, Vec::new());
+                live.names[number] = reader.names[number].to_vec();
+            }
+            let names = &live.names;
+            live.capture.event(&event, |n| names.get(n).map_or(&[][..], |v| &v[..]));
+        }
+        Ok(())
+    }));
+    match result {
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => stop(&format!("capture could not read a call: {e}")),
+        Err(_) => stop("internal error in capture"),
+    }
+    reader.names.len()
+}
+
+/// Called before the real call of every frame-class command (and draws): presents the frame
+/// when this call is the trigger.
+pub fn before(c: usize, args: &[u64]) {
+    if !ON.load(Ordering::Relaxed) {
+        return;
+    }
+    let at = match c {
+        cmd::glXSwapBuffers
+        | cmd::eglSwapBuffers
+        | cmd::eglSwapBuffersWithDamageKHR
+        | cmd::eglSwapBuffersWithDamageEXT => Trigger::Swap,
+        cmd::glFinish => Trigger::Finish,
+        cmd::glFlush => Trigger::Flush,
+        cmd::glReadPixels | cmd::glReadnPixels => Trigger::ReadPixels,
+        _ => return,
+    };
+    let _ = args;
+    let Some(thread) = crate::record::thread_number() else { return };
+    let result = std::panic::catch_unwind(|| {
+        let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
+        let Some(live) = guard.as_mut() else { return };
+        let fires = match live.trigger {
+            // A GLX/EGL frame ends at its swap; an OSMesa one (no swap) at glFinish or glFlush.
+            Trigger::Auto => match at {
+                Trigger::Swap | Trigger::ReadPixels => true,
+                _ => dispatch::backend() == Backend::OSMesa,
+            },
+            t => t == at,
+        };
+        if fires {
+            live.present(thread);
+        }
+    });
+    if result.is_err() {
+        stop("internal error while ray tracing a frame");
+    }
+}
+
+impl Live {
+    fn present(&mut self, thread: u32) {
+        let ctx = self.capture.context(thread);
+        let revision = ctx.revision();
+        if self.presented.get(&thread) == Some(&revision) {
+            return;
+        }
+        self.presented.insert(thread, revision);
+        let frame = ctx.frame();
+        if frame.unsupported_draws > 0 {
+            glray_core::debug!("frame left to the real GL: {} draws use shaders", frame.unsupported_draws);
+            return;
+        }
+        if frame.triangles.is_empty() {
+            return;
+        }
+        let (w, h) = if frame.width > 0 && frame.height > 0 {
+            (frame.width, frame.height)
+        } else {
+            frame.viewport.map_or((0, 0), |v| ((v.x + v.width).max(0) as u32, (v.y + v.height).max(0) as u32))
+        };
+        if w == 0 || h == 0 {
+            return;
+        }
+        let rendered = glray_render::render(frame, w, h);
+        if let Some(dir) = &self.dump {
+            if let Err(e) = dump::write(dir, self.frames, frame) {
+                glray_core::warn!("dump_scene: {e}");
+            }
+        }
+        self.frames += 1;
+        // SAFETY: called on the thread whose context is current, before its swap/finish/read.
+        unsafe { present::draw(&rendered) };
+    }
+}
