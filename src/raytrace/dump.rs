@@ -39,11 +39,11 @@ pub fn write(dir: &Path, number: u64, frame: &Frame) -> Result<(), String> {
         _ => "null".into(),
     };
     let json = format!(
-        "{{\"frame\":{number},\"triangles\":{},\"surfaces\":{},\"textured_surfaces\":{},\"skipped_draws\":{},\"unsupported_draws\":{},\"width\":{},\"height\":{},\"clear_color\":{:?},\"camera\":{camera}}}\n",
+        "{{\"frame\":{number},\"triangles\":{},\"surfaces\":{},\"textured_surfaces\":{},\"cameras\":{},\"unsupported_draws\":{},\"width\":{},\"height\":{},\"clear_color\":{:?},\"camera\":{camera}}}\n",
         frame.triangles.len(),
         frame.surfaces.len(),
         frame.surfaces.iter().filter(|s| s.texturing.is_some()).count(),
-        frame.skipped_draws,
+        frame.cameras.len(),
         frame.unsupported_draws,
         frame.width,
         frame.height,

@@ -42,6 +42,8 @@ struct Live {
     dump: Option<PathBuf>,
     /// The frame revision each thread presented last.
     presented: HashMap<u32, u64>,
+    /// Each thread's last ray-traced frame, for frames drawn without a clear.
+    last: HashMap<u32, glray_render::Rendered>,
     frames: u64,
 }
 
@@ -60,6 +62,7 @@ pub fn configure(config: &Config) {
         trigger,
         dump: config.dump_scene().map(PathBuf::from),
         presented: HashMap::new(),
+        last: HashMap::new(),
         frames: 0,
     };
     *LIVE.lock().unwrap_or_else(|e| e.into_inner()) = Some(live);
@@ -160,7 +163,7 @@ impl Live {
         if w == 0 || h == 0 {
             return;
         }
-        let rendered = glray_render::render(frame, w, h);
+        let rendered = glray_render::render(frame, w, h, self.last.get(&thread));
         if let Some(dir) = &self.dump {
             if let Err(e) = dump::write(dir, self.frames, frame) {
                 glray_core::warn!("dump_scene: {e}");
@@ -169,5 +172,6 @@ impl Live {
         self.frames += 1;
         // SAFETY: called on the thread whose context is current, before its swap/finish/read.
         unsafe { present::draw(&rendered) };
+        self.last.insert(thread, rendered);
     }
 }

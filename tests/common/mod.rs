@@ -65,7 +65,9 @@ pub enum Way {
 pub const GLRAY_WAYS: [Way; 2] = [Way::Preload, Way::Dropin];
 
 /// A command for `program` run `way`, with `preload` helpers (e.g. frameshot) before glray, and a
-/// time limit (coreutils `timeout`, which kills it if it hangs).
+/// time limit (coreutils `timeout`, which kills it if it hangs). glray passes frames through
+/// (GLRAY_PRESET=off): the interposer and recording tests compare with the real GL byte for
+/// byte; tests of ray-traced frames set GLRAY_PRESET themselves.
 pub fn command(way: Way, preload: &[&Path], program: &Path, seconds: u32) -> Command {
     let mut cmd = Command::new("timeout");
     cmd.arg("-k").arg("5").arg(seconds.to_string()).arg(program);
@@ -75,7 +77,7 @@ pub fn command(way: Way, preload: &[&Path], program: &Path, seconds: u32) -> Com
             cmd.env_remove(k);
         }
     }
-    cmd.env_remove("LD_PRELOAD").env_remove("LD_LIBRARY_PATH");
+    cmd.env_remove("LD_PRELOAD").env_remove("LD_LIBRARY_PATH").env("GLRAY_PRESET", "off");
     match way {
         Way::Plain => {}
         Way::Preload => preloads.push(libglray().display().to_string()),

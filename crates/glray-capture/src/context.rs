@@ -13,13 +13,13 @@ use glray_core::trace::{ArrayData, Value};
 use crate::args::{self, GL_INT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT};
 use crate::camera::Viewport;
 use crate::error::{ErrorFlag, GlError, GlResult};
-use crate::frame::{Fog, Frame, Surface, Texturing, Triangle};
+use crate::frame::{Fog, Frame, Surface, Texturing, Triangle, View};
 use crate::immediate::{Immediate, TEXCOORD_UNITS};
 use crate::lighting::{light_vertex, Light, LightModel, Material};
 use crate::lists::{DisplayLists, MAX_NESTING};
 use crate::matrix::{from_gl, Matrices};
 use crate::ops::{Attr, AttrForm, Op};
-use crate::primitive::{assemble, GL_POLYGON, GL_QUADS};
+use crate::primitive::{assemble, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
 use crate::texture::{self, Level, Texture, Unpack};
 
 // Enable caps.
@@ -760,6 +760,9 @@ impl Context {
             }
             Op::Clear => {
                 self.revision += 1;
+                if args::uint(a, 0) & GL_DEPTH_BUFFER_BIT != 0 {
+                    self.frame.depth_cleared = true;
+                }
                 if args::uint(a, 0) & GL_COLOR_BUFFER_BIT != 0 {
                     // What was drawn before is covered: the frame starts again.
                     self.frame.unsupported_draws = 0;
@@ -767,8 +770,9 @@ impl Context {
                     self.frame.surfaces.clear();
                     self.frame.projection = None;
                     self.frame.viewport = None;
-                    self.frame.skipped_draws = 0;
+                    self.frame.cameras.clear();
                     self.frame.clear_color = self.s.clear_color;
+                    self.frame.cleared = true;
                 }
             }
             Op::NewList => self.lists.new_list(args::uint(a, 0), args::uint(a, 1))?,
@@ -1478,19 +1482,19 @@ impl Context {
         }
         let projection = *self.matrices.projection.top();
         let viewport = self.s.viewport;
-        match (self.frame.projection, self.frame.viewport) {
-            (None, _) => {
-                self.frame.projection = Some(projection);
-                self.frame.viewport = Some(viewport);
-                self.frame.depth_range = self.s.depth_range;
-            }
-            (Some(p), Some(v)) if p == projection && v == viewport => {}
-            _ => {
-                // Another camera: a 2D overlay or an inset, not part of the ray-traced scene.
-                self.frame.skipped_draws += 1;
-                return;
-            }
+        if self.frame.projection.is_none() {
+            self.frame.projection = Some(projection);
+            self.frame.viewport = Some(viewport);
+            self.frame.depth_range = self.s.depth_range;
         }
+        let view = View { projection, viewport };
+        let camera = match self.frame.cameras.iter().rposition(|c| *c == view) {
+            Some(i) => i as u32,
+            None => {
+                self.frame.cameras.push(view);
+                (self.frame.cameras.len() - 1) as u32
+            }
+        };
         let surface = self.surface();
         let sequence = self.sequence;
         self.sequence += 1;
@@ -1506,7 +1510,26 @@ impl Context {
         let mut tris = Vec::new();
         let mut lines: Vec<([u32; 2], u32)> = asm.lines.clone();
         let mut points: Vec<u32> = asm.points.clone();
-        for &(t, provoking) in &asm.triangles {
+        let polygon_of = |mode: u32, triangle: usize| match mode {
+            GL_QUADS | GL_QUAD_STRIP => triangle / 2,
+            GL_POLYGON => 0,
+            _ => triangle,
+        };
+        // Edges two triangles of one polygon share: the diagonals of the split.
+        let mut diagonals = std::collections::HashSet::new();
+        if self.s.polygon_mode.contains(&GL_LINE) && matches!(mode, GL_QUADS | GL_QUAD_STRIP | GL_POLYGON) {
+            let mut seen = std::collections::HashSet::new();
+            for (index, (t, _)) in asm.triangles.iter().enumerate() {
+                let polygon = polygon_of(mode, index);
+                for (x, y) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                    let key = (polygon, x.min(y), x.max(y));
+                    if !seen.insert(key) {
+                        diagonals.insert(key);
+                    }
+                }
+            }
+        }
+        for (index, &(t, provoking)) in asm.triangles.iter().enumerate() {
             let [a, b, c] = t.map(|i| clip[i as usize]);
             // The window-space winding, from clip coordinates (exact even for triangles that
             // cross the near plane, which clipping keeps on the same plane).
@@ -1522,18 +1545,13 @@ impl Context {
             let face = if front { 0 } else { 1 };
             match self.s.polygon_mode[face] {
                 GL_LINE => {
-                    // Edges of the original polygon only: quads and polygons keep their
-                    // diagonals hidden (GL's edge flags for the split).
-                    let [i, j, k] = t;
-                    let is_split = matches!(mode, GL_QUADS | 8 | GL_POLYGON);
-                    lines.push(([i, j], provoking));
-                    lines.push(([j, k], provoking));
-                    if !is_split {
-                        lines.push(([k, i], provoking));
-                    } else if mode == GL_POLYGON && i == 0 && k as usize == verts.len() - 1 {
-                        lines.push(([k, i], provoking));
-                    } else if (mode == GL_QUADS) && k == i + 3 {
-                        lines.push(([k, i], provoking));
+                    // The edges of the polygon the program drew: a quad or polygon split into
+                    // triangles keeps its diagonals hidden (GL's edge flags for the split).
+                    let polygon = polygon_of(mode, index);
+                    for (x, y) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                        if !diagonals.contains(&(polygon, x.min(y), x.max(y))) {
+                            lines.push(([x, y], provoking));
+                        }
                     }
                     continue;
                 }
@@ -1552,6 +1570,8 @@ impl Context {
                 texcoords: vs.map(tex),
                 surface,
                 sequence,
+                camera,
+                clip_w: t.map(|i| clip[i as usize].w as f32),
             });
         }
         let inverse = projection.inverse();
@@ -1590,6 +1610,8 @@ impl Context {
                     texcoords: tri.map(|k| pick(k).1),
                     surface,
                     sequence,
+                    camera,
+                    clip_w: tri.map(|k| if k < 2 { ca.w } else { cb.w } as f32),
                 });
             }
         }
@@ -1608,9 +1630,205 @@ impl Context {
                     texcoords: [tex(v); 3],
                     surface,
                     sequence,
+                    camera,
+                    clip_w: [c.w as f32; 3],
                 });
             }
         }
         self.frame.triangles.extend(tris);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ops::op_for;
+
+    /// Calls a command by name with scalar arguments (floats as F64, the rest as Int).
+    fn call(c: &mut Context, name: &str, args: &[Value]) {
+        let (op, ty) = op_for(name).unwrap_or_else(|| panic!("{name} is not followed"));
+        c.call(op, ty, args);
+    }
+
+    fn i(v: i64) -> Value<'static> {
+        Value::Int(v)
+    }
+
+    fn f(v: f64) -> Value<'static> {
+        Value::F64(v)
+    }
+
+    fn context() -> Context {
+        let mut c = Context::default();
+        c.set_drawable(100, 100);
+        call(&mut c, "glMatrixMode", &[i(0x1701)]);
+        call(&mut c, "glOrtho", &[f(-1.0), f(1.0), f(-1.0), f(1.0), f(-1.0), f(1.0)]);
+        call(&mut c, "glMatrixMode", &[i(0x1700)]);
+        c
+    }
+
+    fn triangle(c: &mut Context, ccw: bool) {
+        call(c, "glBegin", &[i(4)]);
+        let pts = if ccw { [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)] } else { [(0.0, 0.0), (0.0, 1.0), (1.0, 0.0)] };
+        for (x, y) in pts {
+            call(c, "glVertex2f", &[f(x), f(y)]);
+        }
+        call(c, "glEnd", &[]);
+    }
+
+    #[test]
+    fn commands_inside_begin_end_raise_invalid_operation() {
+        let mut c = context();
+        call(&mut c, "glBegin", &[i(4)]);
+        call(&mut c, "glMatrixMode", &[i(0x1700)]);
+        call(&mut c, "glColor3f", &[f(1.0), f(0.0), f(0.0)]); // allowed
+        call(&mut c, "glEnd", &[]);
+        assert_eq!(c.errors.take(), 0x0502);
+        call(&mut c, "glEnd", &[]);
+        assert_eq!(c.errors.take(), 0x0502, "glEnd without glBegin");
+        call(&mut c, "glBegin", &[i(10)]);
+        assert_eq!(c.errors.take(), 0x0500, "a mode that is not a primitive");
+        call(&mut c, "glShadeModel", &[i(0)]);
+        assert_eq!(c.errors.take(), 0x0500);
+        call(&mut c, "glLineWidth", &[f(0.0)]);
+        assert_eq!(c.errors.take(), 0x0501);
+    }
+
+    #[test]
+    fn attribute_stack_overflows_and_restores_by_mask() {
+        let mut c = context();
+        call(&mut c, "glPopAttrib", &[]);
+        assert_eq!(c.errors.take(), 0x0504);
+        call(&mut c, "glPushAttrib", &[i(GL_ENABLE_BIT as i64)]);
+        call(&mut c, "glEnable", &[i(GL_CULL_FACE as i64)]);
+        call(&mut c, "glCullFace", &[i(GL_FRONT as i64)]);
+        call(&mut c, "glPopAttrib", &[]);
+        assert!(!c.s.cull, "GL_ENABLE_BIT restores the enable");
+        assert_eq!(c.s.cull_face, GL_FRONT, "but not the face, which GL_POLYGON_BIT saves");
+        for _ in 0..MAX_ATTRIB_DEPTH {
+            call(&mut c, "glPushAttrib", &[i(0xFFFFF)]);
+        }
+        assert_eq!(c.errors.take(), 0);
+        call(&mut c, "glPushAttrib", &[i(0xFFFFF)]);
+        assert_eq!(c.errors.take(), 0x0503);
+    }
+
+    #[test]
+    fn culling_facing_and_flat_shading() {
+        let mut c = context();
+        call(&mut c, "glEnable", &[i(GL_CULL_FACE as i64)]);
+        triangle(&mut c, true);
+        triangle(&mut c, false);
+        assert_eq!(c.frame().triangles.len(), 1, "the clockwise (back) one is culled");
+        call(&mut c, "glFrontFace", &[i(GL_CW as i64)]);
+        triangle(&mut c, false);
+        assert_eq!(c.frame().triangles.len(), 2, "with GL_CW it is the front one");
+        // Flat shading takes the provoking (last) vertex's colour.
+        call(&mut c, "glShadeModel", &[i(GL_FLAT as i64)]);
+        call(&mut c, "glBegin", &[i(4)]);
+        for (k, (x, y)) in [(0.0, 0.0), (0.0, 1.0), (1.0, 0.0)].into_iter().enumerate() {
+            call(&mut c, "glColor3f", &[f(k as f64 / 2.0), f(0.0), f(0.0)]);
+            call(&mut c, "glVertex2f", &[f(x), f(y)]);
+        }
+        call(&mut c, "glEnd", &[]);
+        let t = c.frame().triangles.last().unwrap();
+        assert!(t.colors.iter().all(|col| col.x == 1.0), "{:?}", t.colors);
+    }
+
+    #[test]
+    fn lists_compile_execute_and_nest() {
+        let mut c = context();
+        call(&mut c, "glNewList", &[i(1), i(0x1300)]); // GL_COMPILE
+        triangle(&mut c, true);
+        call(&mut c, "glEndList", &[]);
+        assert_eq!(c.frame().triangles.len(), 0, "GL_COMPILE draws nothing");
+        call(&mut c, "glNewList", &[i(2), i(0x1301)]); // COMPILE_AND_EXECUTE, calling list 1
+        call(&mut c, "glTranslatef", &[f(0.5), f(0.0), f(0.0)]);
+        call(&mut c, "glCallList", &[i(1)]);
+        call(&mut c, "glEndList", &[]);
+        assert_eq!(c.frame().triangles.len(), 1);
+        call(&mut c, "glLoadIdentity", &[]);
+        call(&mut c, "glListBase", &[i(1)]);
+        call(&mut c, "glCallLists", &[i(2), i(0x1401), Value::Blob(&[0, 1])]);
+        let t = &c.frame().triangles;
+        assert_eq!(t.len(), 3, "lists 1 and 2 through glListBase");
+        assert_eq!(t[1].positions[0].x, 0.0);
+        assert_eq!(t[2].positions[0].x, 0.5, "list 2's translate, then list 1 nested");
+        call(&mut c, "glNewList", &[i(3), i(0x1300)]);
+        call(&mut c, "glNewList", &[i(4), i(0x1300)]);
+        assert_eq!(c.errors.take(), 0x0502, "glNewList inside glNewList");
+    }
+
+    #[test]
+    fn polygon_mode_line_keeps_quad_diagonals_hidden() {
+        let mut c = context();
+        call(&mut c, "glPolygonMode", &[i(GL_FRONT_AND_BACK as i64), i(GL_LINE as i64)]);
+        call(&mut c, "glBegin", &[i(7)]); // GL_QUADS
+        for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            call(&mut c, "glVertex2f", &[f(x), f(y)]);
+        }
+        call(&mut c, "glEnd", &[]);
+        assert_eq!(c.frame().triangles.len(), 8, "four edges, two triangles each");
+    }
+
+    #[test]
+    fn arrays_from_buffers_and_client_memory() {
+        let mut c = context();
+        let floats: Vec<u8> = [0f32, 0.0, 1.0, 0.0, 0.0, 1.0].iter().flat_map(|v| v.to_ne_bytes()).collect();
+        // A buffer object.
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(7)]);
+        call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(24), Value::Blob(&floats), i(0x88E4)]);
+        call(&mut c, "glVertexPointer", &[i(2), i(0x1406), i(0), Value::Offset(0)]);
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        call(&mut c, "glDrawArrays", &[i(4), i(0), i(3)]);
+        assert_eq!(c.frame().triangles.len(), 1);
+        // Client memory, as the trace's arrays event gives it, with client indices.
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(0)]);
+        c.set_arrays(&[ArrayData {
+            kind: 0,
+            index: 0,
+            size: 2,
+            gl_type: 0x1406,
+            stride: 0,
+            normalized: false,
+            first: 0,
+            bytes: &floats,
+        }]);
+        call(&mut c, "glDrawElements", &[i(4), i(3), i(0x1401), Value::Blob(&[2, 1, 0])]);
+        let t = &c.frame().triangles;
+        assert_eq!(t.len(), 2);
+        assert_eq!(t[1].positions[0], Vec3::new(0.0, 1.0, 0.0), "index 2 first");
+        call(&mut c, "glDrawArrays", &[i(4), i(-1), i(3)]);
+        assert_eq!(c.errors.take(), 0x0501);
+    }
+
+    #[test]
+    fn lighting_uses_color_material_and_two_sides() {
+        let mut c = context();
+        call(&mut c, "glEnable", &[i(GL_LIGHTING as i64)]);
+        call(&mut c, "glEnable", &[i(GL_LIGHT0 as i64)]);
+        call(&mut c, "glEnable", &[i(GL_COLOR_MATERIAL as i64)]);
+        call(&mut c, "glLightModeli", &[i(GL_LIGHT_MODEL_TWO_SIDE as i64), i(1)]);
+        call(&mut c, "glColor3f", &[f(1.0), f(0.0), f(0.0)]);
+        triangle(&mut c, true);
+        triangle(&mut c, false);
+        let t = &c.frame().triangles;
+        // Front: red diffuse 1 * light 1 * n.l 1 + ambient 0.2 * 1 (scene ambient).
+        assert!((t[0].colors[0] - Vec4::new(1.0, 0.0, 0.0, 1.0)).length() < 1e-6, "{:?}", t[0].colors[0]);
+        // Back face: the normal is flipped, the light does not reach it; only ambient is left.
+        assert!((t[1].colors[0] - Vec4::new(0.2, 0.0, 0.0, 1.0)).length() < 1e-6, "{:?}", t[1].colors[0]);
+    }
+
+    #[test]
+    fn a_color_clear_starts_the_frame_again() {
+        let mut c = context();
+        triangle(&mut c, true);
+        call(&mut c, "glClearColor", &[f(0.5), f(0.25), f(0.0), f(1.0)]);
+        call(&mut c, "glClear", &[i(GL_COLOR_BUFFER_BIT as i64)]);
+        assert!(c.frame().triangles.is_empty() && c.frame().cleared);
+        assert_eq!(c.frame().clear_color, Vec4::new(0.5, 0.25, 0.0, 1.0));
+        call(&mut c, "glUseProgram", &[i(3)]);
+        triangle(&mut c, true);
+        assert_eq!(c.frame().unsupported_draws, 1, "shaders are not followed");
     }
 }

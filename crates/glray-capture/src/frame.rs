@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use glam::{DMat4, Vec2, Vec3, Vec4};
+use glam::{DMat4, DVec4, Vec2, Vec3, Vec4};
 
 use crate::camera::Viewport;
 use crate::texture::Texture;
@@ -26,6 +26,18 @@ pub struct Triangle {
     pub surface: u32,
     /// The draw's place in the frame, for ties and for painter's order.
     pub sequence: u32,
+    /// Index into `Frame::cameras`: the projection and viewport it was drawn with.
+    pub camera: u32,
+    /// Clip-space w of each corner under its own projection: the rasterizer interpolates
+    /// perspective-correctly with these (1 for orthographic draws: linear on the screen).
+    pub clip_w: [f32; 3],
+}
+
+/// A projection and viewport draws were made with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    pub projection: DMat4,
+    pub viewport: Viewport,
 }
 
 /// glFog state.
@@ -72,9 +84,14 @@ pub struct Frame {
     pub depth_range: (f64, f64),
     /// glClearColor at the last glClear of the colour buffer.
     pub clear_color: Vec4,
-    /// Draws left out of the ray-traced scene (another projection or viewport than the
-    /// camera's: 2D overlays), counted for the log.
-    pub skipped_draws: u32,
+    /// Whether the colour buffer was cleared this frame; if not, the frame is drawn over the
+    /// previous one (programs that leave trails rely on the buffer keeping its contents).
+    pub cleared: bool,
+    /// Whether the depth buffer was cleared this frame.
+    pub depth_cleared: bool,
+    /// Every projection and viewport the frame's draws used (3D scene, backgrounds, 2D
+    /// overlays); `unified` brings them into one camera.
+    pub cameras: Vec<View>,
     /// Draws capture cannot follow (shaders, generic vertex attributes): a frame with any
     /// is not ray traced, the real GL's picture stands.
     pub unsupported_draws: u32,
@@ -86,5 +103,54 @@ pub struct Frame {
 impl Frame {
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty()
+    }
+
+    /// The frame seen through one camera: the one most triangles were drawn with. Triangles
+    /// drawn with another projection or viewport (a background, a 2D overlay, an inset) are
+    /// carried into that camera's eye space through clip space, which keeps every pixel they
+    /// cover and every window depth they have: the rasterizer's picture, traced by one camera.
+    pub fn unified(&self) -> Frame {
+        let mut counts = vec![0usize; self.cameras.len()];
+        for t in &self.triangles {
+            counts[t.camera as usize] += 1;
+        }
+        let Some(main) = (0..counts.len()).max_by_key(|&i| (counts[i], std::cmp::Reverse(i))) else {
+            return self.clone();
+        };
+        let to = self.cameras[main];
+        let to_inverse = to.projection.inverse();
+        let maps: Vec<DMat4> = self
+            .cameras
+            .iter()
+            .map(|from| {
+                // Window coordinates of `from`'s viewport, as NDC of `to`'s, applied in clip space.
+                let (fv, tv) = (from.viewport, to.viewport);
+                let sx = fv.width as f64 / tv.width.max(1) as f64;
+                let sy = fv.height as f64 / tv.height.max(1) as f64;
+                let tx = (2.0 * (fv.x - tv.x) as f64 + fv.width as f64) / tv.width.max(1) as f64 - 1.0;
+                let ty = (2.0 * (fv.y - tv.y) as f64 + fv.height as f64) / tv.height.max(1) as f64 - 1.0;
+                let window = DMat4::from_cols(
+                    DVec4::new(sx, 0.0, 0.0, 0.0),
+                    DVec4::new(0.0, sy, 0.0, 0.0),
+                    DVec4::new(0.0, 0.0, 1.0, 0.0),
+                    DVec4::new(tx, ty, 0.0, 1.0),
+                );
+                to_inverse * window * from.projection
+            })
+            .collect();
+        let mut out = self.clone();
+        out.projection = Some(to.projection);
+        out.viewport = Some(to.viewport);
+        for t in &mut out.triangles {
+            if t.camera as usize != main {
+                let m = maps[t.camera as usize];
+                t.positions = t.positions.map(|p| {
+                    let e = m * p.as_dvec3().extend(1.0);
+                    (e.truncate() / e.w).as_vec3()
+                });
+                t.camera = main as u32;
+            }
+        }
+        out
     }
 }

@@ -39,6 +39,37 @@ fn barycentric(t: &Triangle, p: DVec3) -> DVec3 {
     DVec3::new(1.0 - v - w, v, w)
 }
 
+/// The interpolation weights the rasterizer uses at `p`: barycentric coordinates on the screen,
+/// made perspective-correct with each corner's own clip w (so that a draw brought in from
+/// another camera interpolates as it was drawn). Falls back to eye-space weights when a
+/// corner lies behind the eye (the rasterizer would have clipped the triangle first).
+fn weights(t: &Triangle, camera: &Camera, p: DVec3) -> DVec3 {
+    if t.clip_w.iter().any(|w| *w <= 0.0) {
+        return barycentric(t, p);
+    }
+    let w = t.positions.map(|v| {
+        let (x, y) = camera.window_position(v.as_dvec3());
+        glam::DVec2::new(x, y)
+    });
+    let (x, y) = camera.window_position(p);
+    let q = glam::DVec2::new(x, y);
+    let area = (w[1] - w[0]).perp_dot(w[2] - w[0]);
+    if area == 0.0 || !area.is_finite() {
+        return barycentric(t, p);
+    }
+    let b = DVec3::new(
+        (w[1] - q).perp_dot(w[2] - q) / area,
+        (w[2] - q).perp_dot(w[0] - q) / area,
+        (w[0] - q).perp_dot(w[1] - q) / area,
+    );
+    let persp: DVec3 = b / DVec3::from_array(t.clip_w.map(|w| w as f64));
+    let sum = persp.x + persp.y + persp.z;
+    if sum == 0.0 || !sum.is_finite() {
+        return barycentric(t, p);
+    }
+    persp / sum
+}
+
 /// The texture level of detail of a triangle: log2 of texels per pixel, from its area on the
 /// screen and in the texture (constant over the triangle).
 fn lod(t: &Triangle, camera: &Camera, texels: f64) -> f32 {
@@ -59,7 +90,7 @@ fn lod(t: &Triangle, camera: &Camera, texels: f64) -> f32 {
 pub fn shade(frame: &Frame, camera: &Camera, triangle: usize, p: DVec3) -> Fragment {
     let t = &frame.triangles[triangle];
     let surface = &frame.surfaces[t.surface as usize];
-    let b = barycentric(t, p).as_vec3();
+    let b = weights(t, camera, p).as_vec3();
     let mix4 = |v: [Vec4; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix3 = |v: [Vec3; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix2 = |v: [Vec2; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
@@ -125,6 +156,8 @@ mod tests {
             texcoords: [Vec2::ZERO; 3],
             surface: 0,
             sequence: 0,
+            camera: 0,
+            clip_w: [1.0; 3],
         };
         let b = barycentric(&t, DVec3::new(0.25, 0.5, 0.0));
         assert!((b - DVec3::new(0.25, 0.25, 0.5)).length() < 1e-12, "{b}");

@@ -2,12 +2,14 @@
 //! machine the live library feeds) and writes each frame as glray's ray tracer renders it.
 //! With `--readpixels`, what a glReadPixels of the frame so far would return is written too.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use glray_capture::events::Capture;
 use glray_capture::frame::Frame;
 use glray_core::image::Image;
 use glray_core::trace::{Event, Reader};
+use glray_render::Rendered;
 
 use crate::replay::FrameSet;
 
@@ -27,14 +29,15 @@ fn size_of(frame: &Frame) -> (u32, u32) {
     frame.viewport.map_or((0, 0), |v| ((v.x + v.width).max(0) as u32, (v.y + v.height).max(0) as u32))
 }
 
-/// The frame rendered as a top-down RGB image.
-pub fn picture(frame: &Frame) -> Option<Image> {
+/// The frame rendered (over `previous` if it did not clear), and as a top-down RGB image.
+pub fn picture(frame: &Frame, previous: Option<&Rendered>) -> Option<(Rendered, Image)> {
     let (w, h) = size_of(frame);
     if w == 0 || h == 0 {
         return None;
     }
-    let r = glray_render::render(frame, w, h);
-    Some(Image::from_bottom_up(w, h, &r.rgba, 4))
+    let r = glray_render::render(frame, w, h, previous);
+    let image = Image::from_bottom_up(w, h, &r.rgba, 4);
+    Some((r, image))
 }
 
 /// The part of a top-down image a glReadPixels(x, y, w, h) reads (y counts from the bottom).
@@ -58,6 +61,7 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool) -> Resu
     let mut capture = Capture::default();
     let mut summary = Summary::default();
     let mut read_pixels: Vec<bool> = Vec::new();
+    let mut last: HashMap<u32, Rendered> = HashMap::new();
     while let Some(event) = reader.next_event().map_err(|e| e.to_string())? {
         if let Event::Name { number } = event {
             read_pixels.resize(number + 1, false);
@@ -74,7 +78,8 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool) -> Resu
                 && a[5] == 0x1401
             {
                 let frame = capture.context(*thread).frame().clone();
-                if let Some(image) = picture(&frame).and_then(|i| crop(&i, a[0], a[1], a[2], a[3])) {
+                let image = picture(&frame, last.get(thread)).and_then(|(_, i)| crop(&i, a[0], a[1], a[2], a[3]));
+                if let Some(image) = image {
                     let path: PathBuf = out.join(format!("readpixels-{:04}.png", summary.readpixels_written));
                     image.write_png(&path)?;
                     summary.readpixels_written += 1;
@@ -83,14 +88,16 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool) -> Resu
         }
         let number = if let Event::Frame { number } = event { Some(number) } else { None };
         let names = &reader.names;
-        if let Some((_, frame)) = capture.event(&event, |n| names[n]) {
+        if let Some((thread, frame)) = capture.event(&event, |n| names[n]) {
             let number = number.unwrap_or_default();
-            if frames.contains(number) {
-                summary.triangles += frame.triangles.len() as u64;
-                if let Some(image) = picture(&frame) {
+            // Every frame is rendered (a later one may draw over it); the chosen ones written.
+            if let Some((rendered, image)) = picture(&frame, last.get(&thread)) {
+                if frames.contains(number) {
+                    summary.triangles += frame.triangles.len() as u64;
                     image.write_png(&out.join(format!("frame-{number:04}.png")))?;
                     summary.frames_written += 1;
                 }
+                last.insert(thread, rendered);
             }
         }
     }
