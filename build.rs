@@ -493,15 +493,27 @@ fn gen_exports(cmds: &[&Command]) -> String {
         // Only the outermost call of a thread is recorded (a real implementation calling its
         // own exported functions reaches glray's exports again). Commands that touch client
         // state may need to look at memory before the real call (a buffer about to be unmapped).
+        // Geometry the ray tracer takes is not rasterized by the real GL (that is the speed-up):
+        // before_real says so, and the real call is skipped.
         let before = if ["geometry", "client", "context", "frame"].contains(&c.class.as_str()) {
             let b: Vec<String> = c.params.iter().map(|p| bits(&p.rust, &ident(&p.name))).collect();
             format!(
-                "if outer__ {{\n        crate::record::before_real(crate::commands::cmd::{}, &[{}]);\n    }}\n    ",
+                "let skip__ = outer__ && crate::record::before_real(crate::commands::cmd::{}, &[{}]);\n    ",
                 c.name,
                 b.join(", ")
             )
+        } else if c.class == "vertex" && c.name.starts_with("glVertex") {
+            // Vertices of a glBegin the real GL did not get.
+            "let skip__ = outer__ && crate::raytrace::in_skipped_begin();\n    ".to_string()
         } else {
             String::new()
+        };
+        let call = if before.is_empty() {
+            call.clone()
+        } else if c.class == "geometry" || c.class == "vertex" {
+            format!("if skip__ {{ Default::default() }} else {{ {call} }}")
+        } else {
+            format!("{{ let _ = skip__; {call} }}")
         };
         writeln!(
             recorded,

@@ -42,6 +42,8 @@ struct Live {
     dump: Option<PathBuf>,
     /// The frame revision each thread presented last.
     presented: HashMap<u32, u64>,
+    /// Threads that have had a frame presented.
+    shown: std::collections::HashSet<u32>,
     /// Each thread's last ray-traced frame, for frames drawn without a clear.
     last: HashMap<u32, glray_render::Rendered>,
     frames: u64,
@@ -63,6 +65,7 @@ pub fn configure(config: &Config) {
         dump: config.dump_scene().map(PathBuf::from),
         presented: HashMap::new(),
         last: HashMap::new(),
+        shown: Default::default(),
         frames: 0,
     };
     *LIVE.lock().unwrap_or_else(|e| e.into_inner()) = Some(live);
@@ -101,42 +104,100 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
     reader.names.len()
 }
 
-/// Called before the real call of every frame-class command (and draws): presents the frame
-/// when this call is the trigger.
-pub fn before(c: usize, args: &[u64]) {
+thread_local! {
+    /// The real GL did not get this thread's open glBegin: its vertices and glEnd skip it too.
+    static SKIPPED_BEGIN: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether this thread is between a glBegin and glEnd the real GL did not get.
+#[inline]
+pub fn in_skipped_begin() -> bool {
+    SKIPPED_BEGIN.with(|s| s.get())
+}
+
+/// Called before the real call of every geometry, client, context and frame command. Presents
+/// the frame when this call is the trigger (or a raster operation about to draw over it), and
+/// says whether the real call is to be skipped: geometry the ray tracer takes is not
+/// rasterized as well.
+pub fn before(c: usize, args: &[u64]) -> bool {
     if !ON.load(Ordering::Relaxed) {
-        return;
+        return false;
     }
+    let _ = args;
+    if c == cmd::glEnd {
+        return SKIPPED_BEGIN.with(|s| s.replace(false));
+    }
+    let geometry = matches!(
+        c,
+        cmd::glBegin
+            | cmd::glRects
+            | cmd::glRectsv
+            | cmd::glRecti
+            | cmd::glRectiv
+            | cmd::glRectf
+            | cmd::glRectfv
+            | cmd::glRectd
+            | cmd::glRectdv
+            | cmd::glDrawArrays
+            | cmd::glDrawArraysEXT
+            | cmd::glDrawElements
+            | cmd::glDrawRangeElements
+            | cmd::glDrawRangeElementsEXT
+            | cmd::glMultiDrawArrays
+            | cmd::glMultiDrawArraysEXT
+            | cmd::glCallList
+            | cmd::glCallLists
+    );
     let at = match c {
         cmd::glXSwapBuffers
         | cmd::eglSwapBuffers
         | cmd::eglSwapBuffersWithDamageKHR
-        | cmd::eglSwapBuffersWithDamageEXT => Trigger::Swap,
-        cmd::glFinish => Trigger::Finish,
-        cmd::glFlush => Trigger::Flush,
-        cmd::glReadPixels | cmd::glReadnPixels => Trigger::ReadPixels,
-        _ => return,
+        | cmd::eglSwapBuffersWithDamageEXT => Some(Trigger::Swap),
+        cmd::glFinish => Some(Trigger::Finish),
+        cmd::glFlush => Some(Trigger::Flush),
+        cmd::glReadPixels | cmd::glReadnPixels => Some(Trigger::ReadPixels),
+        _ => None,
     };
-    let _ = args;
-    let Some(thread) = crate::record::thread_number() else { return };
+    let raster = matches!(c, cmd::glBitmap | cmd::glDrawPixels | cmd::glCopyPixels);
+    if !geometry && at.is_none() && !raster {
+        return false;
+    }
+    let Some(thread) = crate::record::thread_number() else { return false };
     let result = std::panic::catch_unwind(|| {
         let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
-        let Some(live) = guard.as_mut() else { return };
-        let fires = match live.trigger {
+        let Some(live) = guard.as_mut() else { return false };
+        if geometry {
+            // Only once a frame of this thread has been presented: that proves its frames
+            // reach a trigger, so what is not rasterized will be shown.
+            let skip = live.shown.contains(&thread) && live.capture.context(thread).takes_draws();
+            if c == cmd::glBegin {
+                SKIPPED_BEGIN.with(|s| s.set(skip));
+            }
+            return skip;
+        }
+        if raster {
+            // Text and images drawn over the scene: the scene goes in first.
+            if !live.capture.context(thread).compiling() {
+                live.present(thread);
+            }
+            return false;
+        }
+        let fires = match (live.trigger, at) {
             // A GLX/EGL frame ends at its swap; an OSMesa one (no swap) at glFinish or glFlush.
-            Trigger::Auto => match at {
-                Trigger::Swap | Trigger::ReadPixels => true,
-                _ => dispatch::backend() == Backend::OSMesa,
-            },
-            t => t == at,
+            (Trigger::Auto, Some(Trigger::Swap | Trigger::ReadPixels)) => true,
+            (Trigger::Auto, Some(_)) => dispatch::backend() == Backend::OSMesa,
+            (t, Some(a)) => t == a,
+            _ => false,
         };
         if fires {
             live.present(thread);
         }
+        false
     });
-    if result.is_err() {
+    result.unwrap_or_else(|_| {
         stop("internal error while ray tracing a frame");
-    }
+        false
+    })
 }
 
 impl Live {
@@ -150,6 +211,8 @@ impl Live {
         let frame = ctx.frame();
         if frame.unsupported_draws > 0 {
             glray_core::debug!("frame left to the real GL: {} draws use shaders", frame.unsupported_draws);
+            // The real GL rasterizes everything again from the next frame on.
+            self.shown.remove(&thread);
             return;
         }
         if frame.triangles.is_empty() {
@@ -172,6 +235,7 @@ impl Live {
         self.frames += 1;
         // SAFETY: called on the thread whose context is current, before its swap/finish/read.
         unsafe { present::draw(&rendered) };
+        self.shown.insert(thread);
         self.last.insert(thread, rendered);
     }
 }

@@ -176,12 +176,13 @@ pub fn with(f: impl FnOnce(&mut Recorder)) {
 
 /// Called before the real call of commands that touch client state, with their arguments as
 /// bits: memory a program wrote through a mapped buffer must be read before glUnmapBuffer
-/// invalidates the mapping.
-pub fn before_real(cmd: usize, args: &[u64]) {
-    crate::raytrace::before(cmd, args);
+/// invalidates the mapping. True when the real call is to be skipped (geometry the ray
+/// tracer takes instead of the rasterizer).
+pub fn before_real(cmd: usize, args: &[u64]) -> bool {
     if matches!(cmd, cmd::glUnmapBuffer | cmd::glUnmapBufferARB) {
         with(|rec| rec.capture_mapping(args[0] as u32));
     }
+    crate::raytrace::before(cmd, args)
 }
 
 /// A buffer mapped for writing: where, and which part of the buffer.

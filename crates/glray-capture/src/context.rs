@@ -408,6 +408,8 @@ pub struct Context {
     programmable: bool,
     /// Counts changes to the frame (draws, clears), so that a frame is presented once.
     revision: u64,
+    /// The framebuffer object draws go to (0: the window's or OSMesa's buffer).
+    framebuffer: u32,
 }
 
 impl Default for Context {
@@ -431,6 +433,7 @@ impl Default for Context {
             normal_matrix: None,
             programmable: false,
             revision: 0,
+            framebuffer: 0,
         }
     }
 }
@@ -492,6 +495,19 @@ impl Context {
     /// Changes whenever the frame does.
     pub fn revision(&self) -> u64 {
         self.revision
+    }
+
+    /// Whether a draw now would be taken by capture alone, so that the real GL need not
+    /// rasterize it: fixed-function, not being compiled into a list (the real list must keep
+    /// its geometry), and into the default framebuffer (a framebuffer object may be a texture
+    /// the program draws with later, which capture does not follow).
+    pub fn takes_draws(&self) -> bool {
+        !self.programmable && self.lists.compiling().is_none() && self.framebuffer == 0
+    }
+
+    /// Whether a display list is being compiled.
+    pub fn compiling(&self) -> bool {
+        self.lists.compiling().is_some()
     }
 
     /// The frame so far.
@@ -995,6 +1011,12 @@ impl Context {
                 // The real GL answered; capture's own errors are checked by its tests.
             }
             Op::UseProgram => self.programmable = args::uint(a, 0) != 0,
+            Op::BindFramebuffer => {
+                // GL_FRAMEBUFFER or GL_DRAW_FRAMEBUFFER: where draws go.
+                if matches!(args::uint(a, 0), 0x8D40 | 0x8CA9) {
+                    self.framebuffer = args::uint(a, 1);
+                }
+            }
             Op::VertexAttribPointer => {}
         }
         Ok(())

@@ -137,6 +137,7 @@ ops! {
     ClipPlane = "glClipPlane";
     GetError = "glGetError";
     UseProgram = "glUseProgram" | "glUseProgramObjectARB";
+    BindFramebuffer = "glBindFramebuffer" | "glBindFramebufferEXT";
     VertexAttribPointer = "glVertexAttribPointer" | "glVertexAttribPointerARB" | "glVertexAttribIPointer";
 }
 
@@ -225,6 +226,7 @@ impl Op {
                 | Op::PixelStore
                 | Op::GetError
                 | Op::VertexAttribPointer
+                | Op::BindFramebuffer
         )
     }
 }
