@@ -522,7 +522,9 @@ fn gen_exports(cmds: &[&Command]) -> String {
              {before}\
              let ret__ = {call};\n    \
              if outer__ {{\n        \
+             if crate::record::wants(crate::commands::cmd::{name}) {{\n            \
              crate::record::with(|rec__| crate::record::generated::{name}(rec__, {args}{sep}ret__));\n        \
+             }}\n        \
              crate::record::leave();\n    \
              }}\n    \
              ret__\n}}",

@@ -113,6 +113,7 @@ fn xscreensaver_hacks_are_ray_traced_like_mesa() {
         ("moebius", "lines (wireframe) and lit solids"),
         ("cubenetic", "textures with texgen"),
         ("glplanet", "a textured, lit sphere"),
+        ("atlantis", "a background in another projection at z = 1, eye-linear texgen"),
     ] {
         eprintln!("{name}: {kind}");
         ray_traced_like_mesa(name, &hack(name), &["-window"], 4, 0.02);

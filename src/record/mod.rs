@@ -17,11 +17,11 @@ use std::ffi::{c_void, CStr};
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 
 use glray_core::trace::Encoder;
 
-use crate::commands::{cmd, COMMANDS};
+use crate::commands::{cmd, Class, COMMANDS};
 use crate::real;
 
 pub use arrays::ClientArrays;
@@ -35,6 +35,8 @@ pub mod generated {
 }
 
 static ACTIVE: AtomicBool = AtomicBool::new(false);
+/// Whether calls go to a trace file (not only to capture).
+static TO_FILE: AtomicBool = AtomicBool::new(false);
 static RECORDER: Mutex<Option<Recorder>> = Mutex::new(None);
 /// Set in a child process right after fork: its recorder still holds the parent's file.
 static FORKED: AtomicBool = AtomicBool::new(false);
@@ -56,6 +58,7 @@ pub fn start(path: Option<&str>, capture: bool) {
         *TEMPLATE.lock().unwrap_or_else(|e| e.into_inner()) = path.to_string();
     }
     let path = path.map(|p| PathBuf::from(p.replace("%p", &std::process::id().to_string())));
+    TO_FILE.store(path.is_some(), Ordering::Relaxed);
     *RECORDER.lock().unwrap_or_else(|e| e.into_inner()) = Some(Recorder::new(path, capture));
     ACTIVE.store(true, Ordering::Relaxed);
     // SAFETY: registering plain extern "C" functions with atexit and pthread_atfork.
@@ -114,6 +117,28 @@ pub fn finish() {
 thread_local! {
     static THREAD: std::cell::Cell<u32> = const { std::cell::Cell::new(u32::MAX) };
     static INSIDE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether a call of `cmd` is to be recorded: always into a trace file; for capture alone,
+/// only the commands capture follows and those the recorder itself needs (draws, client
+/// arrays, contexts, frame ends). Queries and the rest then cost no lock and no encoding.
+#[inline]
+pub fn wants(cmd: usize) -> bool {
+    static CAPTURE_WANTS: OnceLock<Vec<bool>> = OnceLock::new();
+    if TO_FILE.load(Ordering::Relaxed) {
+        return true;
+    }
+    let wants = CAPTURE_WANTS.get_or_init(|| {
+        COMMANDS
+            .iter()
+            .map(|c| {
+                let name = c.name.to_str().unwrap_or("");
+                glray_capture::ops::op_for(name).is_some()
+                    || matches!(c.class, Class::Geometry | Class::Client | Class::Context | Class::Frame)
+            })
+            .collect()
+    });
+    wants.get(cmd).copied().unwrap_or(true)
 }
 
 /// This thread's number in the recording (None before its first recorded call).

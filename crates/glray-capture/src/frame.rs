@@ -135,7 +135,7 @@ impl Frame {
                     DVec4::new(0.0, 0.0, 1.0, 0.0),
                     DVec4::new(tx, ty, 0.0, 1.0),
                 );
-                to_inverse * window * from.projection
+                window * from.projection
             })
             .collect();
         let mut out = self.clone();
@@ -145,7 +145,12 @@ impl Frame {
             if t.camera as usize != main {
                 let m = maps[t.camera as usize];
                 t.positions = t.positions.map(|p| {
-                    let e = m * p.as_dvec3().extend(1.0);
+                    let mut c = m * p.as_dvec3().extend(1.0);
+                    // Backgrounds drawn exactly on the near or far plane (z = +-1 with an
+                    // identity projection) stay a hair inside, where rays reach them.
+                    const INSIDE: f64 = 1.0 - 1e-5;
+                    c.z = c.z.clamp(-INSIDE * c.w.abs(), INSIDE * c.w.abs());
+                    let e = to_inverse * c;
                     (e.truncate() / e.w).as_vec3()
                 });
                 t.camera = main as u32;
