@@ -177,3 +177,27 @@ fn preset_off_leaves_frames_to_the_real_gl() {
     run_ok(&mut cmd, "osmesa_scene preset=off");
     assert!(!scenes.exists(), "nothing is ray traced with preset = off");
 }
+
+#[test]
+fn the_trigger_setting_chooses_where_frames_are_ray_traced() {
+    // osmesa_scene's frames end at glFinish (no swap exists for OSMesa).
+    let dir = scratch("rt-trigger");
+    let program = example("osmesa_scene");
+    for (trigger, traced) in [("auto", true), ("finish", true), ("swap", false), ("flush", false)] {
+        let scenes = dir.join(format!("scenes-{trigger}"));
+        let mut cmd = command(Way::Preload, &[], &program, 60);
+        cmd.arg(dir.join(format!("{trigger}.png")))
+            .arg("3")
+            .env("GLRAY_PRESET", "gl")
+            .env("GLRAY_TRIGGER", trigger)
+            .env("GLRAY_DUMP_SCENE", &scenes);
+        run_ok(&mut cmd, &format!("osmesa_scene trigger={trigger}"));
+        assert_eq!(scenes.exists(), traced, "trigger={trigger}");
+    }
+    // A bad value names the setting and the allowed values; the program still runs.
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.arg(dir.join("bad.png")).arg("1").env("GLRAY_TRIGGER", "sometimes");
+    let out = run_ok(&mut cmd, "osmesa_scene trigger=sometimes");
+    let err = stderr(&out);
+    assert!(err.contains("trigger") && err.contains("auto, swap, finish, flush, readpixels"), "{err}");
+}

@@ -42,16 +42,6 @@ pub fn pname_count_2(_: &mut Recorder, a: &[i64]) -> Mem {
     Mem::Elements(pname_values(a[1]))
 }
 
-/// Bytes of one list name of `ty` for glCallLists (which also takes 2/3/4_BYTES).
-fn list_type_size(ty: i64) -> usize {
-    match ty {
-        0x1400 | 0x1401 => 1,
-        0x1402 | 0x1403 | 0x1407 => 2, // SHORT, UNSIGNED_SHORT, 2_BYTES
-        0x1408 => 3,                   // 3_BYTES
-        _ => 4,                        // INT, UNSIGNED_INT, FLOAT, 4_BYTES
-    }
-}
-
 pub fn indices(_: &mut Recorder, a: &[i64]) -> Mem {
     if bound_buffer(GL_ELEMENT_ARRAY_BUFFER_BINDING) != 0 {
         return Mem::Offset;
@@ -60,7 +50,9 @@ pub fn indices(_: &mut Recorder, a: &[i64]) -> Mem {
 }
 
 pub fn call_lists(_: &mut Recorder, a: &[i64]) -> Mem {
-    Mem::Bytes((a[0].max(0) as usize).saturating_mul(list_type_size(a[1])))
+    // A bad type records 4 bytes a name; the real GL raises GL_INVALID_ENUM.
+    let size = glray_capture::lists::name_size(a[1] as u32).unwrap_or(4);
+    Mem::Bytes((a[0].max(0) as usize).saturating_mul(size))
 }
 
 /// Bytes per pixel of a format/type pair (packed types count once per pixel).

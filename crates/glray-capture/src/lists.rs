@@ -39,6 +39,18 @@ impl<T> Default for DisplayLists<T> {
     }
 }
 
+/// Bytes of one list name of `ty` in glCallLists (which also takes 2/3/4_BYTES); None for a
+/// type glCallLists does not accept. The recorder sizes the array with it too.
+pub fn name_size(ty: u32) -> Option<usize> {
+    Some(match ty {
+        0x1400 | 0x1401 => 1,                   // BYTE, UNSIGNED_BYTE
+        0x1402 | 0x1403 | 0x1407 => 2,          // SHORT, UNSIGNED_SHORT, 2_BYTES
+        0x1408 => 3,                            // 3_BYTES
+        0x1404 | 0x1405 | 0x1406 | 0x1409 => 4, // INT, UNSIGNED_INT, FLOAT, 4_BYTES
+        _ => return None,
+    })
+}
+
 impl<T> DisplayLists<T> {
     pub fn gen_lists(&mut self, range: i32) -> GlResult<u32> {
         if range < 0 {
@@ -129,13 +141,7 @@ impl<T> DisplayLists<T> {
             return Err(GlError::InvalidValue);
         }
         let n = n as usize;
-        let size = match ty {
-            0x1400 | 0x1401 => 1,                   // BYTE, UNSIGNED_BYTE
-            0x1402 | 0x1403 | 0x1407 => 2,          // SHORT, UNSIGNED_SHORT, 2_BYTES
-            0x1408 => 3,                            // 3_BYTES
-            0x1404 | 0x1405 | 0x1406 | 0x1409 => 4, // INT, UNSIGNED_INT, FLOAT, 4_BYTES
-            _ => return Err(GlError::InvalidEnum),
-        };
+        let size = name_size(ty).ok_or(GlError::InvalidEnum)?;
         let bytes = data.get(..n * size).ok_or(GlError::InvalidValue)?;
         let names = bytes.chunks_exact(size).map(|c| {
             let offset: i64 = match ty {

@@ -86,6 +86,16 @@ pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered
                 if hits.is_empty() {
                     continue;
                 }
+                // A ray through a shared edge hits both triangles; the rasterizer's fill rule
+                // gives the pixel to one of them, so one hit per draw and depth is kept.
+                hits.sort_by(|a, b| {
+                    let (sa, sb) = (frame.triangles[a.triangle].sequence, frame.triangles[b.triangle].sequence);
+                    sa.cmp(&sb).then(a.t.total_cmp(&b.t)).then(a.triangle.cmp(&b.triangle))
+                });
+                hits.dedup_by(|b, a| {
+                    frame.triangles[a.triangle].sequence == frame.triangles[b.triangle].sequence
+                        && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1e-3)
+                });
                 frags.clear();
                 frags.extend(hits.iter().map(|hit| (*hit, shade(frame, &camera, hit.triangle, at(hit)))));
                 let under = &row[4 * x..4 * x + 4];
@@ -97,4 +107,127 @@ pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered
         }
     });
     Rendered { width, height, rgba, depth }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DMat4, Vec2, Vec3};
+    use glray_capture::camera::Viewport;
+    use glray_capture::frame::{Fog, Surface, Triangle};
+
+    fn surface() -> Surface {
+        Surface {
+            texturing: None,
+            fog: None,
+            depth_test: true,
+            depth_func: 0x0201,
+            depth_mask: true,
+            blend: None,
+            alpha_test: None,
+        }
+    }
+
+    fn quad(z: f32, color: Vec4, surface: u32, sequence: u32) -> [Triangle; 2] {
+        let corners =
+            [Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(1.0, 1.0, z), Vec3::new(-1.0, 1.0, z)];
+        let tri = |a: usize, b: usize, c: usize| Triangle {
+            positions: [corners[a], corners[b], corners[c]],
+            colors: [color; 3],
+            secondary: [Vec3::ZERO; 3],
+            texcoords: [Vec2::ZERO; 3],
+            surface,
+            sequence,
+            camera: 0,
+            clip_w: [1.0; 3],
+        };
+        [tri(0, 1, 2), tri(0, 2, 3)]
+    }
+
+    /// An orthographic frame (eye z from -1 near to -10 far) of 8x8 pixels.
+    fn frame(triangles: Vec<Triangle>, surfaces: Vec<Surface>) -> Frame {
+        // glOrtho(-1, 1, -1, 1, 1, 10).
+        let mut m = glray_capture::matrix::Matrices::default();
+        m.matrix_mode(0x1701).unwrap();
+        m.ortho(-1.0, 1.0, -1.0, 1.0, 1.0, 10.0).unwrap();
+        let projection: DMat4 = *m.top();
+        let viewport = Viewport { x: 0, y: 0, width: 8, height: 8 };
+        Frame {
+            triangles,
+            surfaces,
+            projection: Some(projection),
+            viewport: Some(viewport),
+            cameras: vec![glray_capture::frame::View { projection, viewport }],
+            depth_range: (0.0, 1.0),
+            clear_color: Vec4::new(0.0, 0.0, 1.0, 1.0),
+            cleared: true,
+            width: 8,
+            height: 8,
+            ..Frame::default()
+        }
+    }
+
+    fn pixel(r: &Rendered, x: usize, y: usize) -> [u8; 4] {
+        let i = 4 * (y * r.width as usize + x);
+        r.rgba[i..i + 4].try_into().unwrap()
+    }
+
+    #[test]
+    fn the_nearest_surface_wins_and_depth_is_written() {
+        let red = quad(-5.0, Vec4::new(1.0, 0.0, 0.0, 1.0), 0, 0);
+        let green = quad(-3.0, Vec4::new(0.0, 1.0, 0.0, 1.0), 0, 1);
+        let f = frame([red, green].concat(), vec![surface()]);
+        let r = render(&f, 8, 8, None);
+        assert_eq!(pixel(&r, 4, 4), [0, 255, 0, 255]);
+        // Window depth of eye z = -3 between near 1 and far 10 (orthographic: linear).
+        assert!((r.depth[4 * 8 + 4] - 2.0 / 9.0).abs() < 1e-5, "{}", r.depth[36]);
+        let empty = render(&frame(vec![], vec![surface()]), 8, 8, None);
+        assert_eq!(pixel(&empty, 0, 0), [0, 0, 255, 255], "the clear colour");
+    }
+
+    #[test]
+    fn blending_and_disabled_depth_test_follow_drawing_order() {
+        // A half-transparent white quad drawn last, behind the red one, with depth test off.
+        let mut over = surface();
+        over.depth_test = false;
+        over.blend = Some((0x0302, 0x0303));
+        let red = quad(-3.0, Vec4::new(1.0, 0.0, 0.0, 1.0), 0, 0);
+        let white = quad(-5.0, Vec4::new(1.0, 1.0, 1.0, 0.5), 1, 1);
+        let r = render(&frame([red, white].concat(), vec![surface(), over]), 8, 8, None);
+        // Alpha blends too: 0.5 * 0.5 + 1 * 0.5.
+        assert_eq!(pixel(&r, 4, 4), [255, 128, 128, 191]);
+    }
+
+    #[test]
+    fn fog_mixes_by_eye_distance() {
+        let mut fogged = surface();
+        fogged.fog = Some(Fog { mode: 0x2601, density: 1.0, start: 2.0, end: 6.0, color: Vec4::ONE });
+        let black = quad(-4.0, Vec4::new(0.0, 0.0, 0.0, 1.0), 0, 0);
+        let r = render(&frame(black.to_vec(), vec![fogged]), 8, 8, None);
+        // Linear fog at distance 4 between 2 and 6: half fog colour.
+        assert_eq!(pixel(&r, 4, 4)[..3], [128, 128, 128]);
+    }
+
+    #[test]
+    fn images_do_not_depend_on_the_thread_count() {
+        let mut tris = Vec::new();
+        for k in 0..50 {
+            let z = -2.0 - k as f32 * 0.1;
+            let mut q = quad(z, Vec4::new(k as f32 / 50.0, 0.5, 0.2, 1.0), 0, k);
+            for t in &mut q {
+                for p in &mut t.positions {
+                    *p *= 0.2 + 0.015 * k as f32;
+                    p.z = z;
+                }
+            }
+            tris.extend(q);
+        }
+        let f = frame(tris, vec![surface()]);
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| render(&f, 8, 8, None))
+        };
+        let one = run(1);
+        assert_eq!(one, run(2));
+        assert_eq!(one, run(8));
+    }
 }
