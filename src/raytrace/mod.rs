@@ -39,6 +39,7 @@ struct Live {
     /// Command names by the recorder's numbers.
     names: Vec<Vec<u8>>,
     trigger: Trigger,
+    options: glray_render::Options,
     dump: Option<PathBuf>,
     /// The frame revision each thread presented last.
     presented: HashMap<u32, u64>,
@@ -62,6 +63,7 @@ pub fn configure(config: &Config) {
         capture: Capture::default(),
         names: Vec::new(),
         trigger,
+        options: glray_render::Options { per_pixel_lighting: config.per_pixel_lighting() },
         dump: config.dump_scene().map(PathBuf::from),
         presented: HashMap::new(),
         last: HashMap::new(),
@@ -226,7 +228,7 @@ impl Live {
         if w == 0 || h == 0 {
             return;
         }
-        let rendered = glray_render::render(frame, w, h, self.last.get(&thread));
+        let rendered = glray_render::render(frame, w, h, self.last.get(&thread), &self.options);
         if let Some(dir) = &self.dump {
             if let Err(e) = dump::write(dir, self.frames, frame) {
                 glray_core::warn!("dump_scene: {e}");

@@ -13,7 +13,7 @@ use glray_core::trace::{ArrayData, Value};
 use crate::args::{self, GL_INT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT};
 use crate::camera::Viewport;
 use crate::error::{ErrorFlag, GlError, GlResult};
-use crate::frame::{Fog, Frame, Surface, Texturing, Triangle, View};
+use crate::frame::{Fog, Frame, Lighting, Surface, Texturing, Triangle, View, NO_LIGHTING};
 use crate::immediate::{Immediate, TEXCOORD_UNITS};
 use crate::lighting::{light_vertex, Light, LightModel, Material};
 use crate::lists::{DisplayLists, MAX_NESTING};
@@ -308,6 +308,9 @@ struct Out {
     colors: [DVec4; 2],
     secondary: [DVec4; 2],
     tex: DVec4,
+    /// Eye-space normal as lighting used it, and the current colour.
+    normal: DVec3,
+    base: DVec4,
 }
 
 /// A vertex as an array draw fetched it, before the vertex stage (what a list keeps of a
@@ -784,6 +787,7 @@ impl Context {
                     self.frame.unsupported_draws = 0;
                     self.frame.triangles.clear();
                     self.frame.surfaces.clear();
+                    self.frame.lightings.clear();
                     self.frame.projection = None;
                     self.frame.viewport = None;
                     self.frame.cameras.clear();
@@ -1230,6 +1234,17 @@ impl Context {
         n
     }
 
+    /// The lighting state of the moment, as a frame keeps it.
+    fn lighting_state(&self) -> Lighting {
+        let s = &self.s;
+        Lighting {
+            lights: s.lights.iter().filter(|l| l.enabled).copied().collect(),
+            model: s.model,
+            materials: s.materials,
+            color_material: s.color_material.then_some((s.color_material_face, s.color_material_mode)),
+        }
+    }
+
     /// The fixed-function vertex stage: eye position, lighting of both faces, texture
     /// coordinates (texgen, texture matrix).
     fn vertex_stage(&mut self, object: DVec4) -> Out {
@@ -1237,6 +1252,7 @@ impl Context {
         let eye = mv * object;
         let cur = self.imm.current;
         let s = &self.s;
+        let mut normal = DVec3::Z;
         let (colors, secondary) = if s.lighting {
             let nm = self.normal_matrix(&mv);
             let s = &self.s;
@@ -1249,27 +1265,9 @@ impl Context {
                     n /= len;
                 }
             }
-            let mut mats = s.materials;
-            if s.color_material {
-                let faces: &[usize] = match s.color_material_face {
-                    GL_FRONT => &[0],
-                    GL_BACK => &[1],
-                    _ => &[0, 1],
-                };
-                for &f in faces {
-                    let m = &mut mats[f];
-                    match s.color_material_mode {
-                        GL_AMBIENT => m.ambient = cur.color,
-                        GL_DIFFUSE => m.diffuse = cur.color,
-                        GL_SPECULAR => m.specular = cur.color,
-                        GL_EMISSION => m.emission = cur.color,
-                        _ => {
-                            m.ambient = cur.color;
-                            m.diffuse = cur.color;
-                        }
-                    }
-                }
-            }
+            normal = n;
+            let mats = self.lighting_state().materials(cur.color);
+            let s = &self.s;
             let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
             let (f0, f1) = light_vertex(p, n, &mats[0], &s.lights, &s.model);
             let (b0, b1) = if s.model.two_side { light_vertex(p, -n, &mats[1], &s.lights, &s.model) } else { (f0, f1) };
@@ -1302,7 +1300,7 @@ impl Context {
             }
         }
         let tex = *self.matrices.texture[0].top() * tex;
-        Out { eye, colors, secondary, tex }
+        Out { eye, colors, secondary, tex, normal, base: cur.color }
     }
 
     /// The vertices an array draw fetches, one list per primitive run.
@@ -1518,6 +1516,15 @@ impl Context {
             }
         };
         let surface = self.surface();
+        let lighting = if self.s.lighting {
+            let l = self.lighting_state();
+            if self.frame.lightings.last() != Some(&l) {
+                self.frame.lightings.push(l);
+            }
+            (self.frame.lightings.len() - 1) as u32
+        } else {
+            NO_LIGHTING
+        };
         let sequence = self.sequence;
         self.sequence += 1;
         let clip: Vec<DVec4> = verts.iter().map(|v| projection * v.eye).collect();
@@ -1594,6 +1601,10 @@ impl Context {
                 sequence,
                 camera,
                 clip_w: t.map(|i| clip[i as usize].w as f32),
+                normals: vs.map(|v| (if front { v.normal } else { -v.normal }).as_vec3()),
+                base_colors: if flat { [vec4(pv.base); 3] } else { vs.map(|v| vec4(v.base)) },
+                lighting,
+                back: !front,
             });
         }
         let inverse = projection.inverse();
@@ -1634,6 +1645,10 @@ impl Context {
                     sequence,
                     camera,
                     clip_w: tri.map(|k| if k < 2 { ca.w } else { cb.w } as f32),
+                    normals: [Vec3::Z; 3],
+                    base_colors: [Vec4::ONE; 3],
+                    lighting: NO_LIGHTING,
+                    back: false,
                 });
             }
         }
@@ -1654,6 +1669,10 @@ impl Context {
                     sequence,
                     camera,
                     clip_w: [c.w as f32; 3],
+                    normals: [Vec3::Z; 3],
+                    base_colors: [Vec4::ONE; 3],
+                    lighting: NO_LIGHTING,
+                    back: false,
                 });
             }
         }

@@ -9,6 +9,7 @@ use std::sync::Arc;
 use glam::{DMat4, DVec4, Vec2, Vec3, Vec4};
 
 use crate::camera::Viewport;
+use crate::lighting::{Light, LightModel, Material};
 use crate::texture::Texture;
 
 /// One triangle, ready to trace.
@@ -31,6 +32,56 @@ pub struct Triangle {
     /// Clip-space w of each corner under its own projection: the rasterizer interpolates
     /// perspective-correctly with these (1 for orthographic draws: linear on the screen).
     pub clip_w: [f32; 3],
+    /// For lighting per pixel: eye-space normals (facing the viewer's side already), the
+    /// colour glColorMaterial would use, and the draw's lighting (`NO_LIGHTING` if unlit).
+    pub normals: [Vec3; 3],
+    pub base_colors: [Vec4; 3],
+    pub lighting: u32,
+    /// Whether the back face is the one seen (two-sided lighting uses the back material).
+    pub back: bool,
+}
+
+/// `Triangle::lighting` of a triangle drawn without GL_LIGHTING.
+pub const NO_LIGHTING: u32 = u32::MAX;
+
+/// The lighting state of a draw, so that the lighting equation can also run per pixel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Lighting {
+    /// The enabled lights, in eye coordinates.
+    pub lights: Vec<Light>,
+    pub model: LightModel,
+    /// Front and back.
+    pub materials: [Material; 2],
+    /// glColorMaterial's (face, mode) when GL_COLOR_MATERIAL is on.
+    pub color_material: Option<(u32, u32)>,
+}
+
+impl Lighting {
+    /// The materials with `color` put in by glColorMaterial, as GL does at each vertex.
+    pub fn materials(&self, color: DVec4) -> [Material; 2] {
+        let mut mats = self.materials;
+        if let Some((face, mode)) = self.color_material {
+            let faces: &[usize] = match face {
+                0x0404 => &[0],
+                0x0405 => &[1],
+                _ => &[0, 1],
+            };
+            for &f in faces {
+                let m = &mut mats[f];
+                match mode {
+                    0x1200 => m.ambient = color,
+                    0x1201 => m.diffuse = color,
+                    0x1202 => m.specular = color,
+                    0x1600 => m.emission = color,
+                    _ => {
+                        m.ambient = color;
+                        m.diffuse = color;
+                    }
+                }
+            }
+        }
+        mats
+    }
 }
 
 /// A projection and viewport draws were made with.
@@ -89,6 +140,8 @@ pub struct Frame {
     pub cleared: bool,
     /// Whether the depth buffer was cleared this frame.
     pub depth_cleared: bool,
+    /// The lighting of lit draws (`Triangle::lighting` indexes it).
+    pub lightings: Vec<Lighting>,
     /// Every projection and viewport the frame's draws used (3D scene, backgrounds, 2D
     /// overlays); `unified` brings them into one camera.
     pub cameras: Vec<View>,
@@ -105,18 +158,26 @@ impl Frame {
         self.triangles.is_empty()
     }
 
+    /// The camera most triangles were drawn with (the one `unified` keeps).
+    pub fn main_camera(&self) -> u32 {
+        let mut counts = vec![0usize; self.cameras.len()];
+        for t in &self.triangles {
+            if let Some(c) = counts.get_mut(t.camera as usize) {
+                *c += 1;
+            }
+        }
+        (0..counts.len()).max_by_key(|&i| (counts[i], std::cmp::Reverse(i))).unwrap_or(0) as u32
+    }
+
     /// The frame seen through one camera: the one most triangles were drawn with. Triangles
     /// drawn with another projection or viewport (a background, a 2D overlay, an inset) are
     /// carried into that camera's eye space through clip space, which keeps every pixel they
     /// cover and every window depth they have: the rasterizer's picture, traced by one camera.
     pub fn unified(&self) -> Frame {
-        let mut counts = vec![0usize; self.cameras.len()];
-        for t in &self.triangles {
-            counts[t.camera as usize] += 1;
-        }
-        let Some(main) = (0..counts.len()).max_by_key(|&i| (counts[i], std::cmp::Reverse(i))) else {
+        if self.cameras.is_empty() {
             return self.clone();
-        };
+        }
+        let main = self.main_camera() as usize;
         let to = self.cameras[main];
         let to_inverse = to.projection.inverse();
         let maps: Vec<DMat4> = self
@@ -143,6 +204,8 @@ impl Frame {
         out.viewport = Some(to.viewport);
         for t in &mut out.triangles {
             if t.camera as usize != main {
+                // Carried over from another camera: lit as drawn (the eye space differs).
+                t.lighting = NO_LIGHTING;
                 let m = maps[t.camera as usize];
                 t.positions = t.positions.map(|p| {
                     let mut c = m * p.as_dvec3().extend(1.0);

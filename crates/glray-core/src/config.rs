@@ -32,6 +32,7 @@ pub struct Setting {
 pub const LOG_LEVELS: &[&str] = &["off", "error", "warn", "info", "debug"];
 pub const PRESETS: &[&str] = &["off", "gl"];
 pub const TRIGGERS: &[&str] = &["auto", "swap", "finish", "flush", "readpixels"];
+pub const LIGHTING: &[&str] = &["vertex", "pixel"];
 
 /// Every setting glray has. docs/settings.md is checked against this table by a test.
 pub const SETTINGS: &[Setting] = &[
@@ -77,6 +78,14 @@ pub const SETTINGS: &[Setting] = &[
         doc: "When a frame is ray traced and put in place: `auto`, at the first of a buffer swap (GLX, EGL), \
               glFinish/glFlush of an OSMesa context, or a glReadPixels of a frame not yet presented; `swap`, \
               `finish`, `flush` or `readpixels`, only there.",
+    },
+    Setting {
+        key: "lighting",
+        kind: Kind::Choice(LIGHTING),
+        default: "vertex",
+        doc: "Where the GL look evaluates the lighting equation: `vertex`, at the vertices, colours interpolated \
+              across triangles (Gouraud, as GL does); `pixel`, at every pixel with the interpolated normal \
+              (smoother highlights on coarse meshes; no longer identical to GL).",
     },
     Setting {
         key: "dump_scene",
@@ -316,6 +325,11 @@ impl Config {
     /// When frames are ray traced and presented.
     pub fn trigger(&self) -> &str {
         self.get("trigger")
+    }
+
+    /// Whether lighting runs per pixel (else per vertex).
+    pub fn per_pixel_lighting(&self) -> bool {
+        self.get("lighting") == "pixel"
     }
 
     /// Where to dump each frame's scene, if anywhere.

@@ -5,7 +5,8 @@
 
 use glam::{DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
 use glray_capture::camera::Camera;
-use glray_capture::frame::{Frame, Triangle};
+use glray_capture::frame::{Frame, Triangle, NO_LIGHTING};
+use glray_capture::lighting::light_vertex;
 use glray_capture::texture::{GL_ALPHA, GL_RGB};
 
 const GL_REPLACE: u32 = 0x1E01;
@@ -86,15 +87,27 @@ fn lod(t: &Triangle, camera: &Camera, texels: f64) -> f32 {
     (0.5 * (tex / screen).log2()) as f32
 }
 
-/// The fragment of `triangle` at eye-space point `p`.
-pub fn shade(frame: &Frame, camera: &Camera, triangle: usize, p: DVec3) -> Fragment {
+/// The fragment of `triangle` at eye-space point `p`. With `per_pixel`, lit triangles run the
+/// lighting equation at the point with the interpolated normal (Phong shading) instead of
+/// interpolating the colours lit at the corners (Gouraud, what GL does).
+pub fn shade(frame: &Frame, camera: &Camera, triangle: usize, p: DVec3, per_pixel: bool) -> Fragment {
     let t = &frame.triangles[triangle];
     let surface = &frame.surfaces[t.surface as usize];
     let b = weights(t, camera, p).as_vec3();
     let mix4 = |v: [Vec4; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix3 = |v: [Vec3; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix2 = |v: [Vec2; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
-    let mut c = mix4(t.colors);
+    let lit_here = per_pixel && t.lighting != NO_LIGHTING && t.camera == frame.main_camera();
+    let (mut c, sec) = if lit_here {
+        let l = &frame.lightings[t.lighting as usize];
+        let mats = l.materials(mix4(t.base_colors).as_dvec4());
+        let n = mix3(t.normals).as_dvec3().normalize_or_zero();
+        let m = &mats[t.back as usize];
+        let (primary, secondary) = light_vertex(p, n, m, &l.lights, &l.model);
+        (primary.as_vec4(), secondary.truncate().as_vec3())
+    } else {
+        (mix4(t.colors), mix3(t.secondary))
+    };
     if let Some(tx) = &surface.texturing {
         let l0 = &tx.texture.levels[0];
         let lod = lod(t, camera, (l0.width * l0.height) as f64);
@@ -120,7 +133,6 @@ pub fn shade(frame: &Frame, camera: &Camera, triangle: usize, p: DVec3) -> Fragm
             _ => c,
         };
     }
-    let sec = mix3(t.secondary);
     c = (c.xyz() + sec).min(Vec3::ONE).extend(c.w);
     if let Some(fog) = &surface.fog {
         // Mesa's fog coordinate: the eye-space distance along z.
@@ -158,6 +170,10 @@ mod tests {
             sequence: 0,
             camera: 0,
             clip_w: [1.0; 3],
+            normals: [Vec3::Z; 3],
+            base_colors: [Vec4::ONE; 3],
+            lighting: NO_LIGHTING,
+            back: false,
         };
         let b = barycentric(&t, DVec3::new(0.25, 0.5, 0.0));
         assert!((b - DVec3::new(0.25, 0.25, 0.5)).length() < 1e-12, "{b}");

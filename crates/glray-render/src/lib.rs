@@ -12,4 +12,4 @@ pub mod render;
 pub mod resolve;
 pub mod scene;
 
-pub use render::{render, Rendered};
+pub use render::{render, Options, Rendered};

@@ -27,9 +27,16 @@ fn to_u8(c: Vec4) -> [u8; 4] {
     c.to_array().map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)
 }
 
+/// How to render.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Options {
+    /// Evaluate lighting per pixel instead of interpolating per-vertex colours.
+    pub per_pixel_lighting: bool,
+}
+
 /// Renders `frame` into a `width` x `height` image. A frame that did not clear the colour
 /// buffer is drawn over `previous` (the last frame of the same drawable), as GL would.
-pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered>) -> Rendered {
+pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered>, options: &Options) -> Rendered {
     let unified;
     let frame = if frame.cameras.len() > 1 {
         unified = frame.unified();
@@ -55,6 +62,7 @@ pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered
     };
     let scene = Scene::build(frame);
     let simple = closest_hit_suffices(frame);
+    let per_pixel = options.per_pixel_lighting;
     let v = camera.viewport;
     let x0 = v.x.max(0) as usize;
     let x1 = ((v.x as i64 + v.width as i64).max(0) as usize).min(w);
@@ -74,9 +82,10 @@ pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered
             let (color, d) = if simple {
                 match scene.closest(ray) {
                     Some(hit)
-                        if frame.cleared || shade(frame, &camera, hit.triangle, at(&hit)).depth < drow[x] as f64 =>
+                        if frame.cleared
+                            || shade(frame, &camera, hit.triangle, at(&hit), per_pixel).depth < drow[x] as f64 =>
                     {
-                        let f = shade(frame, &camera, hit.triangle, at(&hit));
+                        let f = shade(frame, &camera, hit.triangle, at(&hit), per_pixel);
                         (opaque(&f), f.depth)
                     }
                     _ => continue,
@@ -97,7 +106,7 @@ pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered
                         && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1e-3)
                 });
                 frags.clear();
-                frags.extend(hits.iter().map(|hit| (*hit, shade(frame, &camera, hit.triangle, at(hit)))));
+                frags.extend(hits.iter().map(|hit| (*hit, shade(frame, &camera, hit.triangle, at(hit), per_pixel))));
                 let under = &row[4 * x..4 * x + 4];
                 let under = Vec4::from_array(std::array::from_fn(|i| under[i] as f32 / 255.0));
                 in_drawing_order(frame, &mut frags, under, drow[x] as f64)
@@ -140,6 +149,10 @@ mod tests {
             sequence,
             camera: 0,
             clip_w: [1.0; 3],
+            normals: [Vec3::Z; 3],
+            base_colors: [color; 3],
+            lighting: glray_capture::frame::NO_LIGHTING,
+            back: false,
         };
         [tri(0, 1, 2), tri(0, 2, 3)]
     }
@@ -177,11 +190,11 @@ mod tests {
         let red = quad(-5.0, Vec4::new(1.0, 0.0, 0.0, 1.0), 0, 0);
         let green = quad(-3.0, Vec4::new(0.0, 1.0, 0.0, 1.0), 0, 1);
         let f = frame([red, green].concat(), vec![surface()]);
-        let r = render(&f, 8, 8, None);
+        let r = render(&f, 8, 8, None, &Options::default());
         assert_eq!(pixel(&r, 4, 4), [0, 255, 0, 255]);
         // Window depth of eye z = -3 between near 1 and far 10 (orthographic: linear).
         assert!((r.depth[4 * 8 + 4] - 2.0 / 9.0).abs() < 1e-5, "{}", r.depth[36]);
-        let empty = render(&frame(vec![], vec![surface()]), 8, 8, None);
+        let empty = render(&frame(vec![], vec![surface()]), 8, 8, None, &Options::default());
         assert_eq!(pixel(&empty, 0, 0), [0, 0, 255, 255], "the clear colour");
     }
 
@@ -193,7 +206,7 @@ mod tests {
         over.blend = Some((0x0302, 0x0303));
         let red = quad(-3.0, Vec4::new(1.0, 0.0, 0.0, 1.0), 0, 0);
         let white = quad(-5.0, Vec4::new(1.0, 1.0, 1.0, 0.5), 1, 1);
-        let r = render(&frame([red, white].concat(), vec![surface(), over]), 8, 8, None);
+        let r = render(&frame([red, white].concat(), vec![surface(), over]), 8, 8, None, &Options::default());
         // Alpha blends too: 0.5 * 0.5 + 1 * 0.5.
         assert_eq!(pixel(&r, 4, 4), [255, 128, 128, 191]);
     }
@@ -203,9 +216,43 @@ mod tests {
         let mut fogged = surface();
         fogged.fog = Some(Fog { mode: 0x2601, density: 1.0, start: 2.0, end: 6.0, color: Vec4::ONE });
         let black = quad(-4.0, Vec4::new(0.0, 0.0, 0.0, 1.0), 0, 0);
-        let r = render(&frame(black.to_vec(), vec![fogged]), 8, 8, None);
+        let r = render(&frame(black.to_vec(), vec![fogged]), 8, 8, None, &Options::default());
         // Linear fog at distance 4 between 2 and 6: half fog colour.
         assert_eq!(pixel(&r, 4, 4)[..3], [128, 128, 128]);
+    }
+
+    #[test]
+    fn lighting_per_pixel_catches_a_highlight_between_vertices() {
+        use glray_capture::frame::Lighting;
+        use glray_capture::lighting::{Light, LightModel, Material};
+        // A big quad and a close positional light over its centre: at the corners the light
+        // grazes, so per-vertex lighting leaves the centre dark; per pixel it is bright.
+        let light = Light { enabled: true, position: glam::DVec4::new(0.0, 0.0, -4.0, 1.0), ..Light::new(0) };
+        let lighting = Lighting {
+            lights: vec![light],
+            model: LightModel { ambient: glam::DVec4::ZERO, ..LightModel::default() },
+            materials: [Material::default(); 2],
+            color_material: None,
+        };
+        let mut q = quad(-5.0, Vec4::new(0.0, 0.0, 0.0, 1.0), 0, 0);
+        for t in &mut q {
+            t.lighting = 0;
+            for p in &mut t.positions {
+                p.x *= 100.0;
+                p.y *= 100.0;
+            }
+        }
+        let mut f = frame(q.to_vec(), vec![surface()]);
+        f.lightings = vec![lighting];
+        // The camera sees only the middle of the quad.
+        let vertex = render(&f, 8, 8, None, &Options::default());
+        let pixel = render(&f, 8, 8, None, &Options { per_pixel_lighting: true });
+        assert_eq!(pixel_of(&vertex, 4, 4)[..3], [0, 0, 0], "the interpolated corner colours");
+        assert!(pixel_of(&pixel, 4, 4)[0] > 180, "{:?}", pixel_of(&pixel, 4, 4));
+    }
+
+    fn pixel_of(r: &Rendered, x: usize, y: usize) -> [u8; 4] {
+        pixel(r, x, y)
     }
 
     #[test]
@@ -224,7 +271,11 @@ mod tests {
         }
         let f = frame(tris, vec![surface()]);
         let run = |threads: usize| {
-            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| render(&f, 8, 8, None))
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| render(&f, 8, 8, None, &Options::default()))
         };
         let one = run(1);
         assert_eq!(one, run(2));

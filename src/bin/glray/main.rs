@@ -181,11 +181,11 @@ fn replay(
     let config = Config::resolve(&process_env(), &[])?;
     match renderer {
         Renderer::Osmesa => replay_osmesa(trace, &data, out, frames, readpixels, &config),
-        Renderer::Glray => replay_glray(trace, &data, out, &frames, readpixels),
+        Renderer::Glray => replay_glray(trace, &data, out, &frames, readpixels, &config),
         Renderer::Both => {
             let (mesa, ours) = (out.join("osmesa"), out.join("glray"));
             replay_osmesa(trace, &data, &mesa, frames.clone(), readpixels, &config)?;
-            replay_glray(trace, &data, &ours, &frames, readpixels)?;
+            replay_glray(trace, &data, &ours, &frames, readpixels, &config)?;
             compare_dirs(&mesa, &ours, out)
         }
     }
@@ -197,8 +197,10 @@ fn replay_glray(
     out: &Path,
     frames: &replay::FrameSet,
     readpixels: bool,
+    config: &Config,
 ) -> Result<(), String> {
-    let s = raytrace::run(data, out, frames, readpixels).map_err(|e| format!("{}: {e}", trace.display()))?;
+    let options = glray_render::Options { per_pixel_lighting: config.per_pixel_lighting() };
+    let s = raytrace::run(data, out, frames, readpixels, &options).map_err(|e| format!("{}: {e}", trace.display()))?;
     println!(
         "ray traced {} calls: {} frames ({} triangles) written to {}{}",
         s.calls,

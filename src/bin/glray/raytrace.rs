@@ -9,7 +9,7 @@ use glray_capture::events::Capture;
 use glray_capture::frame::Frame;
 use glray_core::image::Image;
 use glray_core::trace::{Event, Reader};
-use glray_render::Rendered;
+use glray_render::{Options, Rendered};
 
 use crate::replay::FrameSet;
 
@@ -30,12 +30,12 @@ fn size_of(frame: &Frame) -> (u32, u32) {
 }
 
 /// The frame rendered (over `previous` if it did not clear), and as a top-down RGB image.
-pub fn picture(frame: &Frame, previous: Option<&Rendered>) -> Option<(Rendered, Image)> {
+pub fn picture(frame: &Frame, previous: Option<&Rendered>, options: &Options) -> Option<(Rendered, Image)> {
     let (w, h) = size_of(frame);
     if w == 0 || h == 0 {
         return None;
     }
-    let r = glray_render::render(frame, w, h, previous);
+    let r = glray_render::render(frame, w, h, previous, options);
     let image = Image::from_bottom_up(w, h, &r.rgba, 4);
     Some((r, image))
 }
@@ -55,7 +55,7 @@ fn crop(image: &Image, x: i64, y: i64, w: i64, h: i64) -> Option<Image> {
     Some(Image { width: w as u32, height: h as u32, rgb })
 }
 
-pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool) -> Result<Summary, String> {
+pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options: &Options) -> Result<Summary, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("--out {}: {e}", out.display()))?;
     let mut reader = Reader::new(data).map_err(|e| e.to_string())?;
     let mut capture = Capture::default();
@@ -78,7 +78,8 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool) -> Resu
                 && a[5] == 0x1401
             {
                 let frame = capture.context(*thread).frame().clone();
-                let image = picture(&frame, last.get(thread)).and_then(|(_, i)| crop(&i, a[0], a[1], a[2], a[3]));
+                let image =
+                    picture(&frame, last.get(thread), options).and_then(|(_, i)| crop(&i, a[0], a[1], a[2], a[3]));
                 if let Some(image) = image {
                     let path: PathBuf = out.join(format!("readpixels-{:04}.png", summary.readpixels_written));
                     image.write_png(&path)?;
@@ -91,7 +92,7 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool) -> Resu
         if let Some((thread, frame)) = capture.event(&event, |n| names[n]) {
             let number = number.unwrap_or_default();
             // Every frame is rendered (a later one may draw over it); the chosen ones written.
-            if let Some((rendered, image)) = picture(&frame, last.get(&thread)) {
+            if let Some((rendered, image)) = picture(&frame, last.get(&thread), options) {
                 if frames.contains(number) {
                     summary.triangles += frame.triangles.len() as u64;
                     image.write_png(&out.join(format!("frame-{number:04}.png")))?;
