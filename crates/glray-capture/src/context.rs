@@ -7,325 +7,49 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
+use glam::{DMat3, DMat4, DVec3, DVec4, Vec4};
 use glray_core::trace::{ArrayData, Value};
 
-use crate::args::{self, GL_INT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT};
+use crate::args::{self, GL_INT, GL_UNSIGNED_INT};
+use crate::arrays::Client;
 use crate::camera::Viewport;
 use crate::error::{ErrorFlag, GlError, GlResult};
-use crate::frame::{Fog, Frame, Lighting, Surface, Texturing, Triangle, View, NO_LIGHTING};
+use crate::frame::Frame;
+use crate::gl::*;
 use crate::immediate::{Immediate, TEXCOORD_UNITS};
-use crate::lighting::{light_vertex, Light, LightModel, Material};
 use crate::lists::{DisplayLists, MAX_NESTING};
 use crate::matrix::{from_gl, Matrices};
-use crate::ops::{Attr, AttrForm, Op};
-use crate::primitive::{assemble, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
+use crate::ops::Op;
+use crate::primitive::GL_POLYGON;
+use crate::state::State;
 use crate::texture::{self, Level, Texture, Unpack};
-
-// Enable caps.
-const GL_LIGHTING: u32 = 0x0B50;
-const GL_LIGHT0: u32 = 0x4000;
-const GL_COLOR_MATERIAL: u32 = 0x0B57;
-const GL_NORMALIZE: u32 = 0x0BA1;
-const GL_RESCALE_NORMAL: u32 = 0x803A;
-const GL_CULL_FACE: u32 = 0x0B44;
-const GL_DEPTH_TEST: u32 = 0x0B71;
-const GL_TEXTURE_2D: u32 = 0x0DE1;
-const GL_FOG: u32 = 0x0B60;
-const GL_BLEND: u32 = 0x0BE2;
-const GL_ALPHA_TEST: u32 = 0x0BC0;
-const GL_TEXTURE_GEN_S: u32 = 0x0C60;
-const GL_TEXTURE_GEN_T: u32 = 0x0C61;
-const GL_CLIP_PLANE0: u32 = 0x3000;
-// Faces and modes.
-const GL_FRONT: u32 = 0x0404;
-const GL_BACK: u32 = 0x0405;
-const GL_FRONT_AND_BACK: u32 = 0x0408;
-const GL_CW: u32 = 0x0900;
-const GL_CCW: u32 = 0x0901;
-const GL_FLAT: u32 = 0x1D00;
-const GL_SMOOTH: u32 = 0x1D01;
-const GL_POINT: u32 = 0x1B00;
-const GL_LINE: u32 = 0x1B01;
-const GL_FILL: u32 = 0x1B02;
-const GL_LESS: u32 = 0x0201;
-const GL_ALWAYS: u32 = 0x0207;
-// Material and light parameters.
-const GL_AMBIENT: u32 = 0x1200;
-const GL_DIFFUSE: u32 = 0x1201;
-const GL_SPECULAR: u32 = 0x1202;
-const GL_POSITION: u32 = 0x1203;
-const GL_SPOT_DIRECTION: u32 = 0x1204;
-const GL_SPOT_EXPONENT: u32 = 0x1205;
-const GL_SPOT_CUTOFF: u32 = 0x1206;
-const GL_CONSTANT_ATTENUATION: u32 = 0x1207;
-const GL_LINEAR_ATTENUATION: u32 = 0x1208;
-const GL_QUADRATIC_ATTENUATION: u32 = 0x1209;
-const GL_EMISSION: u32 = 0x1600;
-const GL_SHININESS: u32 = 0x1601;
-const GL_AMBIENT_AND_DIFFUSE: u32 = 0x1602;
-const GL_LIGHT_MODEL_LOCAL_VIEWER: u32 = 0x0B51;
-const GL_LIGHT_MODEL_TWO_SIDE: u32 = 0x0B52;
-const GL_LIGHT_MODEL_AMBIENT: u32 = 0x0B53;
-const GL_LIGHT_MODEL_COLOR_CONTROL: u32 = 0x81F8;
-const GL_SEPARATE_SPECULAR_COLOR: u32 = 0x81FA;
-// Client arrays.
-const GL_VERTEX_ARRAY: u32 = 0x8074;
-const GL_NORMAL_ARRAY: u32 = 0x8075;
-const GL_COLOR_ARRAY: u32 = 0x8076;
-const GL_TEXTURE_COORD_ARRAY: u32 = 0x8078;
-const GL_ARRAY_BUFFER: u32 = 0x8892;
-const GL_ELEMENT_ARRAY_BUFFER: u32 = 0x8893;
-// Textures, fog, pixel store.
-const GL_TEXTURE_MIN_FILTER: u32 = 0x2801;
-const GL_TEXTURE_MAG_FILTER: u32 = 0x2800;
-const GL_TEXTURE_WRAP_S: u32 = 0x2802;
-const GL_TEXTURE_WRAP_T: u32 = 0x2803;
-const GL_TEXTURE_ENV_MODE: u32 = 0x2200;
-const GL_TEXTURE_ENV_COLOR: u32 = 0x2201;
-const GL_MODULATE: u32 = 0x2100;
-const GL_TEXTURE_GEN_MODE: u32 = 0x2500;
-const GL_OBJECT_PLANE: u32 = 0x2501;
-const GL_EYE_PLANE: u32 = 0x2502;
-const GL_OBJECT_LINEAR: u32 = 0x2401;
-const GL_EYE_LINEAR: u32 = 0x2400;
-const GL_SPHERE_MAP: u32 = 0x2402;
-const GL_S: u32 = 0x2000;
-const GL_T: u32 = 0x2001;
-const GL_FOG_MODE: u32 = 0x0B65;
-const GL_FOG_DENSITY: u32 = 0x0B62;
-const GL_FOG_START: u32 = 0x0B63;
-const GL_FOG_END: u32 = 0x0B64;
-const GL_FOG_COLOR: u32 = 0x0B66;
-const GL_EXP: u32 = 0x0800;
-const GL_UNPACK_ROW_LENGTH: u32 = 0x0CF2;
-const GL_UNPACK_SKIP_ROWS: u32 = 0x0CF3;
-const GL_UNPACK_SKIP_PIXELS: u32 = 0x0CF4;
-const GL_UNPACK_ALIGNMENT: u32 = 0x0CF5;
-const GL_TEXTURE0: u32 = 0x84C0;
-// glClear and glPushAttrib bits.
-const GL_COLOR_BUFFER_BIT: u32 = 0x4000;
-const GL_CURRENT_BIT: u32 = 0x0001;
-const GL_POINT_BIT: u32 = 0x0002;
-const GL_LINE_BIT: u32 = 0x0004;
-const GL_POLYGON_BIT: u32 = 0x0008;
-const GL_LIGHTING_BIT: u32 = 0x0040;
-const GL_FOG_BIT: u32 = 0x0080;
-const GL_DEPTH_BUFFER_BIT: u32 = 0x0100;
-const GL_VIEWPORT_BIT: u32 = 0x0800;
-const GL_TRANSFORM_BIT: u32 = 0x1000;
-const GL_ENABLE_BIT: u32 = 0x2000;
-const GL_TEXTURE_BIT: u32 = 0x40000;
-const MAX_ATTRIB_DEPTH: usize = 16;
-
-/// Texture coordinate generation of one coordinate (s or t).
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct TexGen {
-    enabled: bool,
-    mode: u32,
-    object_plane: DVec4,
-    eye_plane: DVec4,
-}
-
-/// The server state glPushAttrib saves, grouped by the attribute bit that saves it.
-#[derive(Debug, Clone)]
-struct State {
-    // GL_LIGHTING_BIT
-    lighting: bool,
-    lights: [Light; 8],
-    model: LightModel,
-    materials: [Material; 2],
-    color_material: bool,
-    color_material_face: u32,
-    color_material_mode: u32,
-    flat: bool,
-    // GL_TRANSFORM_BIT
-    normalize: bool,
-    rescale_normal: bool,
-    clip_planes: [(bool, DVec4); 6],
-    // GL_POLYGON_BIT
-    cull: bool,
-    cull_face: u32,
-    front_ccw: bool,
-    polygon_mode: [u32; 2],
-    // GL_DEPTH_BUFFER_BIT
-    depth_test: bool,
-    depth_func: u32,
-    depth_mask: bool,
-    // GL_VIEWPORT_BIT
-    viewport: Viewport,
-    depth_range: (f64, f64),
-    // GL_COLOR_BUFFER_BIT
-    clear_color: Vec4,
-    blend: bool,
-    blend_func: (u32, u32),
-    alpha_test: bool,
-    alpha_func: (u32, f32),
-    // GL_TEXTURE_BIT
-    texture_2d: bool,
-    bound_texture: u32,
-    env_mode: u32,
-    env_color: Vec4,
-    texgen: [TexGen; 2],
-    // GL_FOG_BIT
-    fog_enabled: bool,
-    fog: Fog,
-    // GL_LINE_BIT, GL_POINT_BIT
-    line_width: f64,
-    point_size: f64,
-}
-
-impl Default for State {
-    fn default() -> Self {
-        let texgen = TexGen { enabled: false, mode: GL_EYE_LINEAR, object_plane: DVec4::X, eye_plane: DVec4::X };
-        State {
-            lighting: false,
-            lights: std::array::from_fn(Light::new),
-            model: LightModel::default(),
-            materials: [Material::default(); 2],
-            color_material: false,
-            color_material_face: GL_FRONT_AND_BACK,
-            color_material_mode: GL_AMBIENT_AND_DIFFUSE,
-            flat: false,
-            normalize: false,
-            rescale_normal: false,
-            clip_planes: [(false, DVec4::ZERO); 6],
-            cull: false,
-            cull_face: GL_BACK,
-            front_ccw: true,
-            polygon_mode: [GL_FILL; 2],
-            depth_test: false,
-            depth_func: GL_LESS,
-            depth_mask: true,
-            viewport: Viewport { x: 0, y: 0, width: 0, height: 0 },
-            depth_range: (0.0, 1.0),
-            clear_color: Vec4::ZERO,
-            blend: false,
-            blend_func: (1, 0),
-            alpha_test: false,
-            alpha_func: (GL_ALWAYS, 0.0),
-            texture_2d: false,
-            bound_texture: 0,
-            env_mode: GL_MODULATE,
-            env_color: Vec4::ZERO,
-            texgen: [texgen, TexGen { object_plane: DVec4::Y, eye_plane: DVec4::Y, ..texgen }],
-            fog_enabled: false,
-            fog: Fog { mode: GL_EXP, density: 1.0, start: 0.0, end: 1.0, color: Vec4::ZERO },
-            line_width: 1.0,
-            point_size: 1.0,
-        }
-    }
-}
-
-impl State {
-    /// glPopAttrib: takes back the groups `mask` saved.
-    fn restore(&mut self, mask: u32, saved: State) {
-        let s = saved;
-        if mask & (GL_LIGHTING_BIT | GL_ENABLE_BIT) != 0 {
-            self.lighting = s.lighting;
-            self.color_material = s.color_material;
-            for (l, o) in self.lights.iter_mut().zip(&s.lights) {
-                l.enabled = o.enabled;
-            }
-        }
-        if mask & GL_LIGHTING_BIT != 0 {
-            self.lights = s.lights;
-            self.model = s.model;
-            self.materials = s.materials;
-            self.color_material_face = s.color_material_face;
-            self.color_material_mode = s.color_material_mode;
-            self.flat = s.flat;
-        }
-        if mask & (GL_TRANSFORM_BIT | GL_ENABLE_BIT) != 0 {
-            self.normalize = s.normalize;
-            self.rescale_normal = s.rescale_normal;
-            for (p, o) in self.clip_planes.iter_mut().zip(&s.clip_planes) {
-                p.0 = o.0;
-            }
-        }
-        if mask & GL_TRANSFORM_BIT != 0 {
-            self.clip_planes = s.clip_planes;
-        }
-        if mask & (GL_POLYGON_BIT | GL_ENABLE_BIT) != 0 {
-            self.cull = s.cull;
-        }
-        if mask & GL_POLYGON_BIT != 0 {
-            self.cull_face = s.cull_face;
-            self.front_ccw = s.front_ccw;
-            self.polygon_mode = s.polygon_mode;
-        }
-        if mask & (GL_DEPTH_BUFFER_BIT | GL_ENABLE_BIT) != 0 {
-            self.depth_test = s.depth_test;
-        }
-        if mask & GL_DEPTH_BUFFER_BIT != 0 {
-            self.depth_func = s.depth_func;
-            self.depth_mask = s.depth_mask;
-        }
-        if mask & GL_VIEWPORT_BIT != 0 {
-            self.viewport = s.viewport;
-            self.depth_range = s.depth_range;
-        }
-        if mask & (GL_COLOR_BUFFER_BIT | GL_ENABLE_BIT) != 0 {
-            self.blend = s.blend;
-            self.alpha_test = s.alpha_test;
-        }
-        if mask & GL_COLOR_BUFFER_BIT != 0 {
-            self.clear_color = s.clear_color;
-            self.blend_func = s.blend_func;
-            self.alpha_func = s.alpha_func;
-        }
-        if mask & (GL_TEXTURE_BIT | GL_ENABLE_BIT) != 0 {
-            self.texture_2d = s.texture_2d;
-            self.texgen[0].enabled = s.texgen[0].enabled;
-            self.texgen[1].enabled = s.texgen[1].enabled;
-        }
-        if mask & GL_TEXTURE_BIT != 0 {
-            self.bound_texture = s.bound_texture;
-            self.env_mode = s.env_mode;
-            self.env_color = s.env_color;
-            self.texgen = s.texgen;
-        }
-        if mask & (GL_FOG_BIT | GL_ENABLE_BIT) != 0 {
-            self.fog_enabled = s.fog_enabled;
-        }
-        if mask & GL_FOG_BIT != 0 {
-            self.fog = s.fog;
-        }
-        if mask & GL_LINE_BIT != 0 {
-            self.line_width = s.line_width;
-        }
-        if mask & GL_POINT_BIT != 0 {
-            self.point_size = s.point_size;
-        }
-    }
-}
 
 /// A vertex after the vertex stage: eye position, lit colours of both faces, texture
 /// coordinates.
 #[derive(Debug, Clone, Copy)]
-struct Out {
-    eye: DVec4,
-    colors: [DVec4; 2],
-    secondary: [DVec4; 2],
-    tex: DVec4,
+pub(crate) struct Out {
+    pub(crate) eye: DVec4,
+    pub(crate) colors: [DVec4; 2],
+    pub(crate) secondary: [DVec4; 2],
+    pub(crate) tex: DVec4,
     /// Eye-space normal as lighting used it, and the current colour.
-    normal: DVec3,
-    base: DVec4,
+    pub(crate) normal: DVec3,
+    pub(crate) base: DVec4,
 }
 
 /// A vertex as an array draw fetched it, before the vertex stage (what a list keeps of a
 /// draw, so that buffers and client memory changed later do not change the list).
 #[derive(Debug, Clone, Copy)]
-struct Fetched {
-    position: Option<DVec4>,
-    normal: Option<DVec3>,
-    color: Option<DVec4>,
-    tex: Option<DVec4>,
+pub(crate) struct Fetched {
+    pub(crate) position: Option<DVec4>,
+    pub(crate) normal: Option<DVec3>,
+    pub(crate) color: Option<DVec4>,
+    pub(crate) tex: Option<DVec4>,
 }
 
 /// An argument kept by a display list.
 #[derive(Debug, Clone)]
-enum Kept {
+pub(crate) enum Kept {
     Int(i64),
     Float(f64),
     Bytes(Vec<u8>),
@@ -334,85 +58,38 @@ enum Kept {
 
 /// What a display list holds.
 #[derive(Debug, Clone)]
-enum Item {
+pub(crate) enum Item {
     Call(Op, u32, Vec<Kept>),
     /// An array draw, resolved to its vertices at compile time.
     Draw(u32, Vec<Fetched>),
-}
-
-/// One array's pointer state, for arrays in buffer objects (client memory arrives with the
-/// draw, in the trace's arrays event).
-#[derive(Debug, Clone, Copy, Default)]
-struct ArrayPointer {
-    enabled: bool,
-    size: i32,
-    ty: u32,
-    stride: i32,
-    offset: u64,
-    buffer: u32,
-}
-
-/// An array a draw reads: its memory and layout, from element `first` on.
-struct Source<'a> {
-    size: usize,
-    ty: u32,
-    stride: usize,
-    first: u64,
-    bytes: &'a [u8],
-}
-
-impl Source<'_> {
-    fn fetch(&self, i: u64, normalized: bool) -> Option<DVec4> {
-        let at = usize::try_from(i.checked_sub(self.first)?).ok()?.checked_mul(self.stride)?;
-        let b = self.bytes.get(at..)?;
-        let mut v = DVec4::new(0.0, 0.0, 0.0, 1.0);
-        for c in 0..self.size.min(4) {
-            let x = args::element(b, self.ty, c)?;
-            v[c] = if normalized { args::normalize(x, self.ty) } else { x };
-        }
-        Some(v)
-    }
-}
-
-/// Client state: array pointers, buffer bindings, pixel unpacking.
-#[derive(Debug, Clone, Default)]
-struct Client {
-    vertex: ArrayPointer,
-    normal: ArrayPointer,
-    color: ArrayPointer,
-    texcoord: [ArrayPointer; TEXCOORD_UNITS],
-    active_texcoord: usize,
-    array_buffer: u32,
-    element_buffer: u32,
-    unpack: Unpack,
 }
 
 /// One GL context's state, and the frame it is drawing.
 pub struct Context {
     pub errors: ErrorFlag,
     pub matrices: Matrices,
-    imm: Immediate,
+    pub(crate) imm: Immediate,
     /// Vertices of the open glBegin, after the vertex stage.
-    open: Vec<Out>,
-    lists: DisplayLists<Item>,
-    nesting: usize,
-    s: State,
-    attrib_stack: Vec<(u32, State, crate::immediate::Current)>,
-    client: Client,
-    buffers: HashMap<u32, Vec<u8>>,
-    textures: HashMap<u32, Arc<Texture>>,
+    pub(crate) open: Vec<Out>,
+    pub(crate) lists: DisplayLists<Item>,
+    pub(crate) nesting: usize,
+    pub(crate) s: State,
+    pub(crate) attrib_stack: Vec<(u32, State, crate::immediate::Current)>,
+    pub(crate) client: Client,
+    pub(crate) buffers: HashMap<u32, Vec<u8>>,
+    pub(crate) textures: HashMap<u32, Arc<Texture>>,
     /// Client arrays of the next draw (the trace's arrays event that precedes it).
-    arrays: Vec<ArrayData<'static>>,
-    array_bytes: Vec<Vec<u8>>,
-    frame: Frame,
-    sequence: u32,
-    normal_matrix: Option<(DMat4, DMat3)>,
+    pub(crate) arrays: Vec<ArrayData<'static>>,
+    pub(crate) array_bytes: Vec<Vec<u8>>,
+    pub(crate) frame: Frame,
+    pub(crate) sequence: u32,
+    pub(crate) normal_matrix: Option<(DMat4, DMat3)>,
     /// A shader program is in use: draws go through shaders capture cannot follow.
-    programmable: bool,
+    pub(crate) programmable: bool,
     /// Counts changes to the frame (draws, clears), so that a frame is presented once.
-    revision: u64,
+    pub(crate) revision: u64,
     /// The framebuffer object draws go to (0: the window's or OSMesa's buffer).
-    framebuffer: u32,
+    pub(crate) framebuffer: u32,
 }
 
 impl Default for Context {
@@ -441,7 +118,7 @@ impl Default for Context {
     }
 }
 
-fn vec4(v: DVec4) -> Vec4 {
+pub(crate) fn vec4(v: DVec4) -> Vec4 {
     v.as_vec4()
 }
 
@@ -615,28 +292,6 @@ impl Context {
                 s.clip_planes[(c - GL_CLIP_PLANE0) as usize].0 = on
             }
             _ => {}
-        }
-    }
-
-    fn client_array(&mut self, cap: u32) -> Option<&mut ArrayPointer> {
-        let c = &mut self.client;
-        Some(match cap {
-            GL_VERTEX_ARRAY => &mut c.vertex,
-            GL_NORMAL_ARRAY => &mut c.normal,
-            GL_COLOR_ARRAY => &mut c.color,
-            GL_TEXTURE_COORD_ARRAY => &mut c.texcoord[c.active_texcoord],
-            _ => return None,
-        })
-    }
-
-    fn set_pointer(&mut self, cap: u32, size: i32, ty: u32, stride: i32, a: &Value) {
-        let buffer = self.client.array_buffer;
-        let offset = match a {
-            Value::Offset(o) => *o,
-            _ => 0,
-        };
-        if let Some(p) = self.client_array(cap) {
-            *p = ArrayPointer { enabled: p.enabled, size, ty, stride, offset, buffer };
         }
     }
 
@@ -1026,15 +681,6 @@ impl Context {
         Ok(())
     }
 
-    fn bound_buffer(&self, target: u32) -> Option<u32> {
-        match target {
-            GL_ARRAY_BUFFER => Some(self.client.array_buffer),
-            GL_ELEMENT_ARRAY_BUFFER => Some(self.client.element_buffer),
-            _ => None,
-        }
-        .filter(|n| *n != 0)
-    }
-
     fn texture_mut(&mut self) -> &mut Texture {
         let t = self.textures.entry(self.s.bound_texture).or_default();
         Arc::make_mut(t)
@@ -1169,537 +815,29 @@ impl Context {
         }
         Ok(())
     }
-
-    fn attribute(&mut self, f: AttrForm, a: &[Value]) -> GlResult {
-        let (first, unit) = match f.attr {
-            Attr::MultiTexCoord => {
-                let unit = args::uint(a, 0).wrapping_sub(GL_TEXTURE0) as usize;
-                if unit >= TEXCOORD_UNITS {
-                    return Err(GlError::InvalidEnum);
-                }
-                (1, unit)
-            }
-            _ => (0, 0),
-        };
-        let raw: Vec<f64> = if f.vector {
-            args::array(args::bytes(a, first), f.ty, f.n)
-        } else {
-            (first..first + f.n).map(|i| args::float(a, i)).collect()
-        };
-        let get = |k: usize, default: f64| raw.get(k).copied().unwrap_or(default);
-        let norm = |k: usize, default: f64| raw.get(k).map_or(default, |x| args::normalize(*x, f.ty));
-        match f.attr {
-            Attr::Vertex => {
-                let p = DVec4::new(
-                    get(0, 0.0),
-                    get(1, 0.0),
-                    if f.n > 2 { get(2, 0.0) } else { 0.0 },
-                    if f.n > 3 { get(3, 1.0) } else { 1.0 },
-                );
-                if self.imm.inside() {
-                    let out = self.vertex_stage(p);
-                    self.open.push(out);
-                    self.imm.vertex(p);
-                }
-            }
-            Attr::Normal => self.imm.normal(DVec3::new(norm(0, 0.0), norm(1, 0.0), norm(2, 1.0))),
-            Attr::Color => {
-                let alpha = if f.n > 3 { norm(3, 1.0) } else { 1.0 };
-                self.imm.color(DVec4::new(norm(0, 0.0), norm(1, 0.0), norm(2, 0.0), alpha));
-            }
-            Attr::TexCoord | Attr::MultiTexCoord => {
-                let t = DVec4::new(
-                    get(0, 0.0),
-                    if f.n > 1 { get(1, 0.0) } else { 0.0 },
-                    if f.n > 2 { get(2, 0.0) } else { 0.0 },
-                    if f.n > 3 { get(3, 1.0) } else { 1.0 },
-                );
-                self.imm.tex_coord(unit, t)?;
-            }
-            Attr::SecondaryColor => {}
-            Attr::EdgeFlag => self.imm.edge_flag(get(0, 1.0) != 0.0),
-        }
-        Ok(())
-    }
-
-    /// The inverse transpose of the modelview's upper 3x3, cached per modelview.
-    fn normal_matrix(&mut self, mv: &DMat4) -> DMat3 {
-        if let Some((m, n)) = &self.normal_matrix {
-            if m == mv {
-                return *n;
-            }
-        }
-        let n = DMat3::from_mat4(*mv).inverse().transpose();
-        self.normal_matrix = Some((*mv, n));
-        n
-    }
-
-    /// The lighting state of the moment, as a frame keeps it.
-    fn lighting_state(&self) -> Lighting {
-        let s = &self.s;
-        Lighting {
-            lights: s.lights.iter().filter(|l| l.enabled).copied().collect(),
-            model: s.model,
-            materials: s.materials,
-            color_material: s.color_material.then_some((s.color_material_face, s.color_material_mode)),
-        }
-    }
-
-    /// The fixed-function vertex stage: eye position, lighting of both faces, texture
-    /// coordinates (texgen, texture matrix).
-    fn vertex_stage(&mut self, object: DVec4) -> Out {
-        let mv = *self.matrices.modelview.top();
-        let eye = mv * object;
-        let cur = self.imm.current;
-        let s = &self.s;
-        let mut normal = DVec3::Z;
-        let (colors, secondary) = if s.lighting {
-            let nm = self.normal_matrix(&mv);
-            let s = &self.s;
-            let mut n = nm * cur.normal;
-            if s.normalize {
-                n = n.normalize_or_zero();
-            } else if s.rescale_normal {
-                let len = DMat3::from_mat4(mv).inverse().row(2).length();
-                if len > 0.0 {
-                    n /= len;
-                }
-            }
-            normal = n;
-            let mats = self.lighting_state().materials(cur.color);
-            let s = &self.s;
-            let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
-            let (f0, f1) = light_vertex(p, n, &mats[0], &s.lights, &s.model);
-            let (b0, b1) = if s.model.two_side { light_vertex(p, -n, &mats[1], &s.lights, &s.model) } else { (f0, f1) };
-            ([f0, b0], [f1, b1])
-        } else {
-            let c = cur.color.clamp(DVec4::ZERO, DVec4::ONE);
-            ([c, c], [DVec4::ZERO; 2])
-        };
-        let s = &self.s;
-        let mut tex = cur.texcoords[0];
-        for (k, g) in s.texgen.iter().enumerate() {
-            if g.enabled {
-                tex[k] = match g.mode {
-                    GL_OBJECT_LINEAR => g.object_plane.dot(object),
-                    GL_EYE_LINEAR => g.eye_plane.dot(eye),
-                    GL_SPHERE_MAP => {
-                        let nm = DMat3::from_mat4(mv).inverse().transpose();
-                        let n = (nm * cur.normal).normalize_or_zero();
-                        let u = (eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 }).normalize_or_zero();
-                        let r = u - 2.0 * n.dot(u) * n;
-                        let m = 2.0 * (r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0)).sqrt();
-                        if m == 0.0 {
-                            0.5
-                        } else {
-                            r[k] / m + 0.5
-                        }
-                    }
-                    _ => tex[k],
-                };
-            }
-        }
-        let tex = *self.matrices.texture[0].top() * tex;
-        Out { eye, colors, secondary, tex, normal, base: cur.color }
-    }
-
-    /// The vertices an array draw fetches, one list per primitive run.
-    fn fetch_draw(&mut self, op: Op, a: &[Value]) -> GlResult<Vec<(u32, Vec<Fetched>)>> {
-        let mode = args::uint(a, 0);
-        if mode > GL_POLYGON {
-            return Err(GlError::InvalidEnum);
-        }
-        let runs: Vec<Vec<u64>> = match op {
-            Op::DrawArrays => {
-                let (first, count) = (args::int(a, 1), args::int(a, 2));
-                if first < 0 || count < 0 {
-                    return Err(GlError::InvalidValue);
-                }
-                vec![(first as u64..(first + count) as u64).collect()]
-            }
-            Op::MultiDrawArrays => {
-                let n = args::int(a, 3).max(0) as usize;
-                let firsts = args::array(args::bytes(a, 1), GL_INT, n);
-                let counts = args::array(args::bytes(a, 2), GL_INT, n);
-                firsts.iter().zip(&counts).map(|(f, c)| (*f as u64..(*f + c.max(0.0)) as u64).collect()).collect()
-            }
-            Op::DrawElements | Op::DrawRangeElements => {
-                let (count, ty, idx) = if op == Op::DrawElements { (1, 2, 3) } else { (3, 4, 5) };
-                let count = args::int(a, count);
-                if count < 0 {
-                    return Err(GlError::InvalidValue);
-                }
-                let ty = args::uint(a, ty);
-                if !matches!(ty, GL_UNSIGNED_BYTE | GL_UNSIGNED_SHORT | GL_UNSIGNED_INT) {
-                    return Err(GlError::InvalidEnum);
-                }
-                vec![self.indices(a.get(idx).unwrap_or(&Value::Null), ty, count as usize)]
-            }
-            Op::MultiDrawElements => {
-                // The per-draw index pointers are not recorded as memory: not captured yet.
-                Vec::new()
-            }
-            _ => Vec::new(),
-        };
-        let sources = self.sources();
-        let out = runs
-            .into_iter()
-            .map(|run| {
-                let verts = run
-                    .iter()
-                    .map(|&i| Fetched {
-                        position: sources[0].as_ref().and_then(|s| s.fetch(i, false)),
-                        normal: sources[1].as_ref().and_then(|s| s.fetch(i, true)).map(|n| n.truncate()),
-                        color: sources[2].as_ref().and_then(|s| s.fetch(i, true)),
-                        tex: sources[3].as_ref().and_then(|s| s.fetch(i, false)),
-                    })
-                    .collect();
-                (mode, verts)
-            })
-            .collect();
-        Ok(out)
-    }
-
-    fn indices(&self, v: &Value, ty: u32, count: usize) -> Vec<u64> {
-        let (bytes, start): (&[u8], usize) = match v {
-            Value::Offset(o) | Value::Opaque(o) if self.client.element_buffer != 0 => {
-                (self.buffers.get(&self.client.element_buffer).map_or(&[][..], |b| &b[..]), *o as usize)
-            }
-            Value::Blob(b) => (b, 0),
-            _ => (&[], 0),
-        };
-        let size = args::type_size(ty).unwrap_or(4);
-        let bytes = bytes.get(start..).unwrap_or(&[]);
-        (0..count)
-            .map_while(|i| args::element(bytes, ty, i))
-            .map(|x| x as u64)
-            .take(count)
-            .take_while(|_| size > 0)
-            .collect()
-    }
-
-    /// Where each array (vertex, normal, color, texcoord 0) of the next draw comes from.
-    fn sources(&self) -> [Option<Source<'_>>; 4] {
-        let kinds = [
-            (glray_core::trace::array_kind::VERTEX, &self.client.vertex),
-            (glray_core::trace::array_kind::NORMAL, &self.client.normal),
-            (glray_core::trace::array_kind::COLOR, &self.client.color),
-            (glray_core::trace::array_kind::TEXCOORD, &self.client.texcoord[0]),
-        ];
-        kinds.map(|(kind, p)| {
-            // Client memory recorded with the draw.
-            if let Some((i, d)) =
-                self.arrays.iter().enumerate().find(|(_, d)| d.kind == kind && (kind != 3 || d.index == 0))
-            {
-                let elem = args::type_size(d.gl_type)? * d.size.max(0) as usize;
-                let stride = if d.stride > 0 { d.stride as usize } else { elem };
-                return Some(Source {
-                    size: d.size.max(0) as usize,
-                    ty: d.gl_type,
-                    stride,
-                    first: d.first,
-                    bytes: &self.array_bytes[i],
-                });
-            }
-            // A buffer object.
-            if p.enabled && p.buffer != 0 {
-                let buf = self.buffers.get(&p.buffer)?;
-                let elem = args::type_size(p.ty)? * p.size.max(0) as usize;
-                let stride = if p.stride > 0 { p.stride as usize } else { elem };
-                return Some(Source {
-                    size: p.size.max(0) as usize,
-                    ty: p.ty,
-                    stride,
-                    first: 0,
-                    bytes: buf.get(p.offset as usize..).unwrap_or(&[]),
-                });
-            }
-            None
-        })
-    }
-
-    /// Runs fetched vertices through the vertex stage as one draw.
-    fn draw_fetched(&mut self, mode: u32, verts: &[Fetched]) {
-        let saved = self.imm.current;
-        let mut outs = Vec::with_capacity(verts.len());
-        for v in verts {
-            if let Some(n) = v.normal {
-                self.imm.current.normal = n;
-            }
-            if let Some(c) = v.color {
-                self.imm.current.color = c;
-            }
-            if let Some(t) = v.tex {
-                self.imm.current.texcoords[0] = t;
-            }
-            if let Some(p) = v.position {
-                outs.push(self.vertex_stage(p));
-            }
-        }
-        // GL leaves the current values of enabled arrays undefined after a draw; Mesa keeps
-        // the last one.
-        if verts.iter().all(|v| v.color.is_none()) {
-            self.imm.current = saved;
-        }
-        self.arrays.clear();
-        self.draw(mode, &outs);
-    }
-
-    fn surface(&mut self) -> u32 {
-        let s = &self.s;
-        let texturing = if s.texture_2d {
-            self.textures.get(&s.bound_texture).filter(|t| t.complete()).map(|t| Texturing {
-                texture: t.clone(),
-                env_mode: s.env_mode,
-                env_color: s.env_color,
-            })
-        } else {
-            None
-        };
-        let surface = Surface {
-            texturing,
-            fog: s.fog_enabled.then_some(s.fog),
-            depth_test: s.depth_test,
-            depth_func: s.depth_func,
-            depth_mask: s.depth_mask,
-            blend: s.blend.then_some(s.blend_func),
-            alpha_test: s.alpha_test.then_some(s.alpha_func),
-        };
-        let same = |a: &Surface, b: &Surface| {
-            a.fog == b.fog
-                && a.depth_test == b.depth_test
-                && a.depth_func == b.depth_func
-                && a.depth_mask == b.depth_mask
-                && a.blend == b.blend
-                && a.alpha_test == b.alpha_test
-                && match (&a.texturing, &b.texturing) {
-                    (None, None) => true,
-                    (Some(x), Some(y)) => {
-                        Arc::ptr_eq(&x.texture, &y.texture) && x.env_mode == y.env_mode && x.env_color == y.env_color
-                    }
-                    _ => false,
-                }
-        };
-        if let Some(last) = self.frame.surfaces.last() {
-            if same(last, &surface) {
-                return (self.frame.surfaces.len() - 1) as u32;
-            }
-        }
-        self.frame.surfaces.push(surface);
-        (self.frame.surfaces.len() - 1) as u32
-    }
-
-    /// Assembles one draw's vertices into the frame's triangles.
-    fn draw(&mut self, mode: u32, verts: &[Out]) {
-        self.revision += 1;
-        if self.programmable {
-            self.frame.unsupported_draws += 1;
-            return;
-        }
-        let Ok(asm) = assemble(mode, verts.len()) else { return };
-        if verts.is_empty() || (asm.triangles.is_empty() && asm.lines.is_empty() && asm.points.is_empty()) {
-            return;
-        }
-        let projection = *self.matrices.projection.top();
-        let viewport = self.s.viewport;
-        if self.frame.projection.is_none() {
-            self.frame.projection = Some(projection);
-            self.frame.viewport = Some(viewport);
-            self.frame.depth_range = self.s.depth_range;
-        }
-        let view = View { projection, viewport };
-        let camera = match self.frame.cameras.iter().rposition(|c| *c == view) {
-            Some(i) => i as u32,
-            None => {
-                self.frame.cameras.push(view);
-                (self.frame.cameras.len() - 1) as u32
-            }
-        };
-        let surface = self.surface();
-        let lighting = if self.s.lighting {
-            let l = self.lighting_state();
-            if self.frame.lightings.last() != Some(&l) {
-                self.frame.lightings.push(l);
-            }
-            (self.frame.lightings.len() - 1) as u32
-        } else {
-            NO_LIGHTING
-        };
-        let sequence = self.sequence;
-        self.sequence += 1;
-        let clip: Vec<DVec4> = verts.iter().map(|v| projection * v.eye).collect();
-        let flat = self.s.flat;
-        let color = |v: &Out, face: usize| vec4(v.colors[face]);
-        let secondary = |v: &Out, face: usize| v.secondary[face].truncate().as_vec3();
-        let tex = |v: &Out| {
-            let q = if v.tex.w != 0.0 { v.tex.w } else { 1.0 };
-            Vec2::new((v.tex.x / q) as f32, (v.tex.y / q) as f32)
-        };
-        let eye3 = |v: &Out| (v.eye.truncate() / if v.eye.w != 0.0 { v.eye.w } else { 1.0 }).as_vec3();
-        let mut tris = Vec::new();
-        let mut lines: Vec<([u32; 2], u32)> = asm.lines.clone();
-        let mut points: Vec<u32> = asm.points.clone();
-        let polygon_of = |mode: u32, triangle: usize| match mode {
-            GL_QUADS | GL_QUAD_STRIP => triangle / 2,
-            GL_POLYGON => 0,
-            _ => triangle,
-        };
-        // Edges two triangles of one polygon share: the diagonals of the split.
-        let mut diagonals = std::collections::HashSet::new();
-        if self.s.polygon_mode.contains(&GL_LINE) && matches!(mode, GL_QUADS | GL_QUAD_STRIP | GL_POLYGON) {
-            let mut seen = std::collections::HashSet::new();
-            for (index, (t, _)) in asm.triangles.iter().enumerate() {
-                let polygon = polygon_of(mode, index);
-                for (x, y) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                    let key = (polygon, x.min(y), x.max(y));
-                    if !seen.insert(key) {
-                        diagonals.insert(key);
-                    }
-                }
-            }
-        }
-        for (index, &(t, provoking)) in asm.triangles.iter().enumerate() {
-            let [a, b, c] = t.map(|i| clip[i as usize]);
-            // The window-space winding, from clip coordinates (exact even for triangles that
-            // cross the near plane, which clipping keeps on the same plane).
-            let det = DMat3::from_cols(DVec3::new(a.x, a.y, a.w), DVec3::new(b.x, b.y, b.w), DVec3::new(c.x, c.y, c.w))
-                .determinant();
-            if det == 0.0 {
-                continue;
-            }
-            let front = (det > 0.0) == self.s.front_ccw;
-            if self.s.cull && (self.s.cull_face == GL_FRONT_AND_BACK || (self.s.cull_face == GL_FRONT) == front) {
-                continue;
-            }
-            let face = if front { 0 } else { 1 };
-            match self.s.polygon_mode[face] {
-                GL_LINE => {
-                    // The edges of the polygon the program drew: a quad or polygon split into
-                    // triangles keeps its diagonals hidden (GL's edge flags for the split).
-                    let polygon = polygon_of(mode, index);
-                    for (x, y) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                        if !diagonals.contains(&(polygon, x.min(y), x.max(y))) {
-                            lines.push(([x, y], provoking));
-                        }
-                    }
-                    continue;
-                }
-                GL_POINT => {
-                    points.extend(t);
-                    continue;
-                }
-                _ => {}
-            }
-            let vs = t.map(|i| &verts[i as usize]);
-            let pv = &verts[provoking as usize];
-            tris.push(Triangle {
-                positions: vs.map(eye3),
-                colors: if flat { [color(pv, face); 3] } else { vs.map(|v| color(v, face)) },
-                secondary: if flat { [secondary(pv, face); 3] } else { vs.map(|v| secondary(v, face)) },
-                texcoords: vs.map(tex),
-                surface,
-                sequence,
-                camera,
-                clip_w: t.map(|i| clip[i as usize].w as f32),
-                normals: vs.map(|v| (if front { v.normal } else { -v.normal }).as_vec3()),
-                base_colors: if flat { [vec4(pv.base); 3] } else { vs.map(|v| vec4(v.base)) },
-                lighting,
-                back: !front,
-            });
-        }
-        let inverse = projection.inverse();
-        let (hw, hh) = (viewport.width.max(1) as f64 / 2.0, viewport.height.max(1) as f64 / 2.0);
-        // A quad around window-space offsets of clip positions, back in eye space.
-        let quad = |corners: [(DVec4, DVec2); 4]| -> Option<[Vec3; 4]> {
-            let mut out = [Vec3::ZERO; 4];
-            for (o, (c, off)) in out.iter_mut().zip(corners) {
-                if c.w <= 0.0 {
-                    return None;
-                }
-                let moved = DVec4::new(c.x + off.x / hw * c.w, c.y + off.y / hh * c.w, c.z, c.w);
-                let e = inverse * moved;
-                *o = (e.truncate() / e.w).as_vec3();
-            }
-            Some(out)
-        };
-        let line_half = self.s.line_width / 2.0;
-        for &([i, j], provoking) in &lines {
-            let (ca, cb) = (clip[i as usize], clip[j as usize]);
-            if ca.w <= 0.0 || cb.w <= 0.0 {
-                continue;
-            }
-            let d = DVec2::new((cb.x / cb.w - ca.x / ca.w) * hw, (cb.y / cb.w - ca.y / ca.w) * hh);
-            let perp = DVec2::new(-d.y, d.x).normalize_or_zero() * line_half;
-            let Some(q) = quad([(ca, -perp), (ca, perp), (cb, perp), (cb, -perp)]) else { continue };
-            let (va, vb, pv) = (&verts[i as usize], &verts[j as usize], &verts[provoking as usize]);
-            let (c0, c1) = if flat { (color(pv, 0), color(pv, 0)) } else { (color(va, 0), color(vb, 0)) };
-            let (t0, t1) = (tex(va), tex(vb));
-            for tri in [[0, 1, 2], [0, 2, 3]] {
-                let pick = |k: usize| if k < 2 { (c0, t0) } else { (c1, t1) };
-                tris.push(Triangle {
-                    positions: tri.map(|k| q[k]),
-                    colors: tri.map(|k| pick(k).0),
-                    secondary: [Vec3::ZERO; 3],
-                    texcoords: tri.map(|k| pick(k).1),
-                    surface,
-                    sequence,
-                    camera,
-                    clip_w: tri.map(|k| if k < 2 { ca.w } else { cb.w } as f32),
-                    normals: [Vec3::Z; 3],
-                    base_colors: [Vec4::ONE; 3],
-                    lighting: NO_LIGHTING,
-                    back: false,
-                });
-            }
-        }
-        let point_half = self.s.point_size / 2.0;
-        for &i in &points {
-            let c = clip[i as usize];
-            let h = point_half;
-            let corners = [(-h, -h), (h, -h), (h, h), (-h, h)].map(|(x, y)| (c, DVec2::new(x, y)));
-            let Some(q) = quad(corners) else { continue };
-            let v = &verts[i as usize];
-            for tri in [[0, 1, 2], [0, 2, 3]] {
-                tris.push(Triangle {
-                    positions: tri.map(|k| q[k]),
-                    colors: [color(v, 0); 3],
-                    secondary: [Vec3::ZERO; 3],
-                    texcoords: [tex(v); 3],
-                    surface,
-                    sequence,
-                    camera,
-                    clip_w: [c.w as f32; 3],
-                    normals: [Vec3::Z; 3],
-                    base_colors: [Vec4::ONE; 3],
-                    lighting: NO_LIGHTING,
-                    back: false,
-                });
-            }
-        }
-        self.frame.triangles.extend(tris);
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::ops::op_for;
+    use glam::Vec3;
 
     /// Calls a command by name with scalar arguments (floats as F64, the rest as Int).
-    fn call(c: &mut Context, name: &str, args: &[Value]) {
+    pub(crate) fn call(c: &mut Context, name: &str, args: &[Value]) {
         let (op, ty) = op_for(name).unwrap_or_else(|| panic!("{name} is not followed"));
         c.call(op, ty, args);
     }
 
-    fn i(v: i64) -> Value<'static> {
+    pub(crate) fn i(v: i64) -> Value<'static> {
         Value::Int(v)
     }
 
-    fn f(v: f64) -> Value<'static> {
+    pub(crate) fn f(v: f64) -> Value<'static> {
         Value::F64(v)
     }
 
-    fn context() -> Context {
+    pub(crate) fn context() -> Context {
         let mut c = Context::default();
         c.set_drawable(100, 100);
         call(&mut c, "glMatrixMode", &[i(0x1701)]);
@@ -1708,7 +846,7 @@ mod tests {
         c
     }
 
-    fn triangle(c: &mut Context, ccw: bool) {
+    pub(crate) fn triangle(c: &mut Context, ccw: bool) {
         call(c, "glBegin", &[i(4)]);
         let pts = if ccw { [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)] } else { [(0.0, 0.0), (0.0, 1.0), (1.0, 0.0)] };
         for (x, y) in pts {
@@ -1718,7 +856,7 @@ mod tests {
     }
 
     #[test]
-    fn commands_inside_begin_end_raise_invalid_operation() {
+    pub(crate) fn commands_inside_begin_end_raise_invalid_operation() {
         let mut c = context();
         call(&mut c, "glBegin", &[i(4)]);
         call(&mut c, "glMatrixMode", &[i(0x1700)]);
@@ -1736,7 +874,7 @@ mod tests {
     }
 
     #[test]
-    fn attribute_stack_overflows_and_restores_by_mask() {
+    pub(crate) fn attribute_stack_overflows_and_restores_by_mask() {
         let mut c = context();
         call(&mut c, "glPopAttrib", &[]);
         assert_eq!(c.errors.take(), 0x0504);
@@ -1755,7 +893,7 @@ mod tests {
     }
 
     #[test]
-    fn culling_facing_and_flat_shading() {
+    pub(crate) fn culling_facing_and_flat_shading() {
         let mut c = context();
         call(&mut c, "glEnable", &[i(GL_CULL_FACE as i64)]);
         triangle(&mut c, true);
@@ -1777,7 +915,7 @@ mod tests {
     }
 
     #[test]
-    fn lists_compile_execute_and_nest() {
+    pub(crate) fn lists_compile_execute_and_nest() {
         let mut c = context();
         call(&mut c, "glNewList", &[i(1), i(0x1300)]); // GL_COMPILE
         triangle(&mut c, true);
@@ -1801,7 +939,7 @@ mod tests {
     }
 
     #[test]
-    fn polygon_mode_line_keeps_quad_diagonals_hidden() {
+    pub(crate) fn polygon_mode_line_keeps_quad_diagonals_hidden() {
         let mut c = context();
         call(&mut c, "glPolygonMode", &[i(GL_FRONT_AND_BACK as i64), i(GL_LINE as i64)]);
         call(&mut c, "glBegin", &[i(7)]); // GL_QUADS
@@ -1813,7 +951,7 @@ mod tests {
     }
 
     #[test]
-    fn arrays_from_buffers_and_client_memory() {
+    pub(crate) fn arrays_from_buffers_and_client_memory() {
         let mut c = context();
         let floats: Vec<u8> = [0f32, 0.0, 1.0, 0.0, 0.0, 1.0].iter().flat_map(|v| v.to_ne_bytes()).collect();
         // A buffer object.
@@ -1844,7 +982,7 @@ mod tests {
     }
 
     #[test]
-    fn lighting_uses_color_material_and_two_sides() {
+    pub(crate) fn lighting_uses_color_material_and_two_sides() {
         let mut c = context();
         call(&mut c, "glEnable", &[i(GL_LIGHTING as i64)]);
         call(&mut c, "glEnable", &[i(GL_LIGHT0 as i64)]);
@@ -1861,7 +999,7 @@ mod tests {
     }
 
     #[test]
-    fn a_color_clear_starts_the_frame_again() {
+    pub(crate) fn a_color_clear_starts_the_frame_again() {
         let mut c = context();
         triangle(&mut c, true);
         call(&mut c, "glClearColor", &[f(0.5), f(0.25), f(0.0), f(1.0)]);

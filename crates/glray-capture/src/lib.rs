@@ -1,28 +1,43 @@
 //! glray's GL state machine, in pure Rust: what the capture layer (DESIGN.md: "capture") keeps
-//! of a context, with GL's error rules, so that it can be tested without any GL.
+//! of a context, with GL's error rules, so that it can be tested without any GL. The live
+//! library and `glray replay --renderer glray` both feed it recorded calls (`events`).
 //!
+//! - `events`: recorded events (a trace's or the live recorder's) into per-thread contexts;
+//! - `ops`: which commands capture follows, by name, and the type their pointers point to;
+//! - `args`: reading a recorded call's arguments as GL numbers and arrays;
+//! - `context`: one context's state machine and the commands it follows;
+//! - `state`: the state glPushAttrib saves, by attribute bit;
+//! - `vertex`: the vertex stage (transform, lighting of both faces, texture coordinates);
+//! - `arrays`: client arrays and buffer objects, array draws resolved to vertices;
+//! - `draw`: a draw's vertices into the frame's triangles (facing, culling, polygon modes, flat
+//!   shading, lines and points as quads);
+//! - `frame`: what a frame hands the tracer, and bringing every draw into one camera;
+//! - `texture`: texture objects and GL's sampling;
 //! - `camera`: rays through pixel centres from the projection and viewport, window depth of hits;
 //! - `error`: GL error codes and the error flag glGetError reads;
-//! - `matrix`: the matrix stacks (modelview, projection, texture, color) and every operation on
-//!   them, as Mesa implements them;
+//! - `matrix`: the matrix stacks and every operation on them, as Mesa implements them;
 //! - `immediate`: the current vertex attributes and glBegin/glEnd;
 //! - `lighting`: the fixed-function lighting equation, per vertex, as a rasterizer evaluates it;
 //! - `lists`: display lists with Mesa's rules (generic over what a list holds);
-//! - `primitive`: assembling glBegin/glEnd and glDrawArrays vertex streams into points, lines and
-//!   triangles, with the provoking vertex flat shading uses.
-//!
-//! Nothing here is wired into libglray.so yet: the capture of issue 4 builds on it.
+//! - `primitive`: assembling vertex streams into points, lines and triangles, with the provoking
+//!   vertex flat shading uses;
+//! - `gl`: the GL enums capture reads.
 
 pub mod args;
+mod arrays;
 pub mod camera;
 pub mod context;
+mod draw;
 pub mod error;
 pub mod events;
 pub mod frame;
+mod gl;
 pub mod immediate;
 pub mod lighting;
 pub mod lists;
 pub mod matrix;
 pub mod ops;
 pub mod primitive;
+mod state;
 pub mod texture;
+mod vertex;

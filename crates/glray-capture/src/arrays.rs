@@ -1,0 +1,237 @@
+//! Client arrays and buffer objects: the pointer state, where a draw's vertices come from
+//! (client memory recorded with the draw, or a buffer object), and array draws resolved to
+//! vertices for the vertex stage.
+
+use glam::DVec4;
+use glray_core::trace::Value;
+
+use crate::args::{self, GL_INT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT};
+use crate::context::{Context, Fetched};
+use crate::error::{GlError, GlResult};
+use crate::gl::*;
+use crate::immediate::TEXCOORD_UNITS;
+use crate::ops::Op;
+use crate::primitive::GL_POLYGON;
+use crate::texture::Unpack;
+
+/// One array's pointer state, for arrays in buffer objects (client memory arrives with the
+/// draw, in the trace's arrays event).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct ArrayPointer {
+    pub(crate) enabled: bool,
+    pub(crate) size: i32,
+    pub(crate) ty: u32,
+    pub(crate) stride: i32,
+    pub(crate) offset: u64,
+    pub(crate) buffer: u32,
+}
+
+/// An array a draw reads: its memory and layout, from element `first` on.
+pub(crate) struct Source<'a> {
+    pub(crate) size: usize,
+    pub(crate) ty: u32,
+    pub(crate) stride: usize,
+    pub(crate) first: u64,
+    pub(crate) bytes: &'a [u8],
+}
+
+impl Source<'_> {
+    pub(crate) fn fetch(&self, i: u64, normalized: bool) -> Option<DVec4> {
+        let at = usize::try_from(i.checked_sub(self.first)?).ok()?.checked_mul(self.stride)?;
+        let b = self.bytes.get(at..)?;
+        let mut v = DVec4::new(0.0, 0.0, 0.0, 1.0);
+        for c in 0..self.size.min(4) {
+            let x = args::element(b, self.ty, c)?;
+            v[c] = if normalized { args::normalize(x, self.ty) } else { x };
+        }
+        Some(v)
+    }
+}
+
+/// Client state: array pointers, buffer bindings, pixel unpacking.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Client {
+    pub(crate) vertex: ArrayPointer,
+    pub(crate) normal: ArrayPointer,
+    pub(crate) color: ArrayPointer,
+    pub(crate) texcoord: [ArrayPointer; TEXCOORD_UNITS],
+    pub(crate) active_texcoord: usize,
+    pub(crate) array_buffer: u32,
+    pub(crate) element_buffer: u32,
+    pub(crate) unpack: Unpack,
+}
+
+impl Context {
+    pub(crate) fn client_array(&mut self, cap: u32) -> Option<&mut ArrayPointer> {
+        let c = &mut self.client;
+        Some(match cap {
+            GL_VERTEX_ARRAY => &mut c.vertex,
+            GL_NORMAL_ARRAY => &mut c.normal,
+            GL_COLOR_ARRAY => &mut c.color,
+            GL_TEXTURE_COORD_ARRAY => &mut c.texcoord[c.active_texcoord],
+            _ => return None,
+        })
+    }
+
+    pub(crate) fn set_pointer(&mut self, cap: u32, size: i32, ty: u32, stride: i32, a: &Value) {
+        let buffer = self.client.array_buffer;
+        let offset = match a {
+            Value::Offset(o) => *o,
+            _ => 0,
+        };
+        if let Some(p) = self.client_array(cap) {
+            *p = ArrayPointer { enabled: p.enabled, size, ty, stride, offset, buffer };
+        }
+    }
+
+    pub(crate) fn bound_buffer(&self, target: u32) -> Option<u32> {
+        match target {
+            GL_ARRAY_BUFFER => Some(self.client.array_buffer),
+            GL_ELEMENT_ARRAY_BUFFER => Some(self.client.element_buffer),
+            _ => None,
+        }
+        .filter(|n| *n != 0)
+    }
+
+    /// The vertices an array draw fetches, one list per primitive run.
+    pub(crate) fn fetch_draw(&mut self, op: Op, a: &[Value]) -> GlResult<Vec<(u32, Vec<Fetched>)>> {
+        let mode = args::uint(a, 0);
+        if mode > GL_POLYGON {
+            return Err(GlError::InvalidEnum);
+        }
+        let runs: Vec<Vec<u64>> = match op {
+            Op::DrawArrays => {
+                let (first, count) = (args::int(a, 1), args::int(a, 2));
+                if first < 0 || count < 0 {
+                    return Err(GlError::InvalidValue);
+                }
+                vec![(first as u64..(first + count) as u64).collect()]
+            }
+            Op::MultiDrawArrays => {
+                let n = args::int(a, 3).max(0) as usize;
+                let firsts = args::array(args::bytes(a, 1), GL_INT, n);
+                let counts = args::array(args::bytes(a, 2), GL_INT, n);
+                firsts.iter().zip(&counts).map(|(f, c)| (*f as u64..(*f + c.max(0.0)) as u64).collect()).collect()
+            }
+            Op::DrawElements | Op::DrawRangeElements => {
+                let (count, ty, idx) = if op == Op::DrawElements { (1, 2, 3) } else { (3, 4, 5) };
+                let count = args::int(a, count);
+                if count < 0 {
+                    return Err(GlError::InvalidValue);
+                }
+                let ty = args::uint(a, ty);
+                if !matches!(ty, GL_UNSIGNED_BYTE | GL_UNSIGNED_SHORT | GL_UNSIGNED_INT) {
+                    return Err(GlError::InvalidEnum);
+                }
+                vec![self.indices(a.get(idx).unwrap_or(&Value::Null), ty, count as usize)]
+            }
+            Op::MultiDrawElements => {
+                // The per-draw index pointers are not recorded as memory: not captured yet.
+                Vec::new()
+            }
+            _ => Vec::new(),
+        };
+        let sources = self.sources();
+        let out = runs
+            .into_iter()
+            .map(|run| {
+                let verts = run
+                    .iter()
+                    .map(|&i| Fetched {
+                        position: sources[0].as_ref().and_then(|s| s.fetch(i, false)),
+                        normal: sources[1].as_ref().and_then(|s| s.fetch(i, true)).map(|n| n.truncate()),
+                        color: sources[2].as_ref().and_then(|s| s.fetch(i, true)),
+                        tex: sources[3].as_ref().and_then(|s| s.fetch(i, false)),
+                    })
+                    .collect();
+                (mode, verts)
+            })
+            .collect();
+        Ok(out)
+    }
+
+    pub(crate) fn indices(&self, v: &Value, ty: u32, count: usize) -> Vec<u64> {
+        let (bytes, start): (&[u8], usize) = match v {
+            Value::Offset(o) | Value::Opaque(o) if self.client.element_buffer != 0 => {
+                (self.buffers.get(&self.client.element_buffer).map_or(&[][..], |b| &b[..]), *o as usize)
+            }
+            Value::Blob(b) => (b, 0),
+            _ => (&[], 0),
+        };
+        let size = args::type_size(ty).unwrap_or(4);
+        let bytes = bytes.get(start..).unwrap_or(&[]);
+        (0..count)
+            .map_while(|i| args::element(bytes, ty, i))
+            .map(|x| x as u64)
+            .take(count)
+            .take_while(|_| size > 0)
+            .collect()
+    }
+
+    /// Where each array (vertex, normal, color, texcoord 0) of the next draw comes from.
+    pub(crate) fn sources(&self) -> [Option<Source<'_>>; 4] {
+        let kinds = [
+            (glray_core::trace::array_kind::VERTEX, &self.client.vertex),
+            (glray_core::trace::array_kind::NORMAL, &self.client.normal),
+            (glray_core::trace::array_kind::COLOR, &self.client.color),
+            (glray_core::trace::array_kind::TEXCOORD, &self.client.texcoord[0]),
+        ];
+        kinds.map(|(kind, p)| {
+            // Client memory recorded with the draw.
+            if let Some((i, d)) =
+                self.arrays.iter().enumerate().find(|(_, d)| d.kind == kind && (kind != 3 || d.index == 0))
+            {
+                let elem = args::type_size(d.gl_type)? * d.size.max(0) as usize;
+                let stride = if d.stride > 0 { d.stride as usize } else { elem };
+                return Some(Source {
+                    size: d.size.max(0) as usize,
+                    ty: d.gl_type,
+                    stride,
+                    first: d.first,
+                    bytes: &self.array_bytes[i],
+                });
+            }
+            // A buffer object.
+            if p.enabled && p.buffer != 0 {
+                let buf = self.buffers.get(&p.buffer)?;
+                let elem = args::type_size(p.ty)? * p.size.max(0) as usize;
+                let stride = if p.stride > 0 { p.stride as usize } else { elem };
+                return Some(Source {
+                    size: p.size.max(0) as usize,
+                    ty: p.ty,
+                    stride,
+                    first: 0,
+                    bytes: buf.get(p.offset as usize..).unwrap_or(&[]),
+                });
+            }
+            None
+        })
+    }
+
+    /// Runs fetched vertices through the vertex stage as one draw.
+    pub(crate) fn draw_fetched(&mut self, mode: u32, verts: &[Fetched]) {
+        let saved = self.imm.current;
+        let mut outs = Vec::with_capacity(verts.len());
+        for v in verts {
+            if let Some(n) = v.normal {
+                self.imm.current.normal = n;
+            }
+            if let Some(c) = v.color {
+                self.imm.current.color = c;
+            }
+            if let Some(t) = v.tex {
+                self.imm.current.texcoords[0] = t;
+            }
+            if let Some(p) = v.position {
+                outs.push(self.vertex_stage(p));
+            }
+        }
+        // GL leaves the current values of enabled arrays undefined after a draw; Mesa keeps
+        // the last one.
+        if verts.iter().all(|v| v.color.is_none()) {
+            self.imm.current = saved;
+        }
+        self.arrays.clear();
+        self.draw(mode, &outs);
+    }
+}

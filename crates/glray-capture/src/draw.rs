@@ -1,0 +1,248 @@
+//! From a draw's vertices to the frame's triangles: the draw's surface and camera, primitive
+//! assembly, facing from the clip-space winding, culling, polygon modes, flat shading, and
+//! lines and points as the screen-aligned quads a rasterizer fills.
+
+use std::sync::Arc;
+
+use glam::{DMat3, DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
+
+use crate::context::{vec4, Context, Out};
+use crate::frame::{Surface, Texturing, Triangle, View, NO_LIGHTING};
+use crate::gl::*;
+use crate::primitive::{assemble, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
+
+impl Context {
+    pub(crate) fn surface(&mut self) -> u32 {
+        let s = &self.s;
+        let texturing = if s.texture_2d {
+            self.textures.get(&s.bound_texture).filter(|t| t.complete()).map(|t| Texturing {
+                texture: t.clone(),
+                env_mode: s.env_mode,
+                env_color: s.env_color,
+            })
+        } else {
+            None
+        };
+        let surface = Surface {
+            texturing,
+            fog: s.fog_enabled.then_some(s.fog),
+            depth_test: s.depth_test,
+            depth_func: s.depth_func,
+            depth_mask: s.depth_mask,
+            blend: s.blend.then_some(s.blend_func),
+            alpha_test: s.alpha_test.then_some(s.alpha_func),
+        };
+        let same = |a: &Surface, b: &Surface| {
+            a.fog == b.fog
+                && a.depth_test == b.depth_test
+                && a.depth_func == b.depth_func
+                && a.depth_mask == b.depth_mask
+                && a.blend == b.blend
+                && a.alpha_test == b.alpha_test
+                && match (&a.texturing, &b.texturing) {
+                    (None, None) => true,
+                    (Some(x), Some(y)) => {
+                        Arc::ptr_eq(&x.texture, &y.texture) && x.env_mode == y.env_mode && x.env_color == y.env_color
+                    }
+                    _ => false,
+                }
+        };
+        if let Some(last) = self.frame.surfaces.last() {
+            if same(last, &surface) {
+                return (self.frame.surfaces.len() - 1) as u32;
+            }
+        }
+        self.frame.surfaces.push(surface);
+        (self.frame.surfaces.len() - 1) as u32
+    }
+
+    /// Assembles one draw's vertices into the frame's triangles.
+    pub(crate) fn draw(&mut self, mode: u32, verts: &[Out]) {
+        self.revision += 1;
+        if self.programmable {
+            self.frame.unsupported_draws += 1;
+            return;
+        }
+        let Ok(asm) = assemble(mode, verts.len()) else { return };
+        if verts.is_empty() || (asm.triangles.is_empty() && asm.lines.is_empty() && asm.points.is_empty()) {
+            return;
+        }
+        let projection = *self.matrices.projection.top();
+        let viewport = self.s.viewport;
+        if self.frame.projection.is_none() {
+            self.frame.projection = Some(projection);
+            self.frame.viewport = Some(viewport);
+            self.frame.depth_range = self.s.depth_range;
+        }
+        let view = View { projection, viewport };
+        let camera = match self.frame.cameras.iter().rposition(|c| *c == view) {
+            Some(i) => i as u32,
+            None => {
+                self.frame.cameras.push(view);
+                (self.frame.cameras.len() - 1) as u32
+            }
+        };
+        let surface = self.surface();
+        let lighting = if self.s.lighting {
+            let l = self.lighting_state();
+            if self.frame.lightings.last() != Some(&l) {
+                self.frame.lightings.push(l);
+            }
+            (self.frame.lightings.len() - 1) as u32
+        } else {
+            NO_LIGHTING
+        };
+        let sequence = self.sequence;
+        self.sequence += 1;
+        let clip: Vec<DVec4> = verts.iter().map(|v| projection * v.eye).collect();
+        let flat = self.s.flat;
+        let color = |v: &Out, face: usize| vec4(v.colors[face]);
+        let secondary = |v: &Out, face: usize| v.secondary[face].truncate().as_vec3();
+        let tex = |v: &Out| {
+            let q = if v.tex.w != 0.0 { v.tex.w } else { 1.0 };
+            Vec2::new((v.tex.x / q) as f32, (v.tex.y / q) as f32)
+        };
+        let eye3 = |v: &Out| (v.eye.truncate() / if v.eye.w != 0.0 { v.eye.w } else { 1.0 }).as_vec3();
+        let mut tris = Vec::new();
+        let mut lines: Vec<([u32; 2], u32)> = asm.lines.clone();
+        let mut points: Vec<u32> = asm.points.clone();
+        let polygon_of = |mode: u32, triangle: usize| match mode {
+            GL_QUADS | GL_QUAD_STRIP => triangle / 2,
+            GL_POLYGON => 0,
+            _ => triangle,
+        };
+        // Edges two triangles of one polygon share: the diagonals of the split.
+        let mut diagonals = std::collections::HashSet::new();
+        if self.s.polygon_mode.contains(&GL_LINE) && matches!(mode, GL_QUADS | GL_QUAD_STRIP | GL_POLYGON) {
+            let mut seen = std::collections::HashSet::new();
+            for (index, (t, _)) in asm.triangles.iter().enumerate() {
+                let polygon = polygon_of(mode, index);
+                for (x, y) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                    let key = (polygon, x.min(y), x.max(y));
+                    if !seen.insert(key) {
+                        diagonals.insert(key);
+                    }
+                }
+            }
+        }
+        for (index, &(t, provoking)) in asm.triangles.iter().enumerate() {
+            let [a, b, c] = t.map(|i| clip[i as usize]);
+            // The window-space winding, from clip coordinates (exact even for triangles that
+            // cross the near plane, which clipping keeps on the same plane).
+            let det = DMat3::from_cols(DVec3::new(a.x, a.y, a.w), DVec3::new(b.x, b.y, b.w), DVec3::new(c.x, c.y, c.w))
+                .determinant();
+            if det == 0.0 {
+                continue;
+            }
+            let front = (det > 0.0) == self.s.front_ccw;
+            if self.s.cull && (self.s.cull_face == GL_FRONT_AND_BACK || (self.s.cull_face == GL_FRONT) == front) {
+                continue;
+            }
+            let face = if front { 0 } else { 1 };
+            match self.s.polygon_mode[face] {
+                GL_LINE => {
+                    // The edges of the polygon the program drew: a quad or polygon split into
+                    // triangles keeps its diagonals hidden (GL's edge flags for the split).
+                    let polygon = polygon_of(mode, index);
+                    for (x, y) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                        if !diagonals.contains(&(polygon, x.min(y), x.max(y))) {
+                            lines.push(([x, y], provoking));
+                        }
+                    }
+                    continue;
+                }
+                GL_POINT => {
+                    points.extend(t);
+                    continue;
+                }
+                _ => {}
+            }
+            let vs = t.map(|i| &verts[i as usize]);
+            let pv = &verts[provoking as usize];
+            tris.push(Triangle {
+                positions: vs.map(eye3),
+                colors: if flat { [color(pv, face); 3] } else { vs.map(|v| color(v, face)) },
+                secondary: if flat { [secondary(pv, face); 3] } else { vs.map(|v| secondary(v, face)) },
+                texcoords: vs.map(tex),
+                surface,
+                sequence,
+                camera,
+                clip_w: t.map(|i| clip[i as usize].w as f32),
+                normals: vs.map(|v| (if front { v.normal } else { -v.normal }).as_vec3()),
+                base_colors: if flat { [vec4(pv.base); 3] } else { vs.map(|v| vec4(v.base)) },
+                lighting,
+                back: !front,
+            });
+        }
+        let inverse = projection.inverse();
+        let (hw, hh) = (viewport.width.max(1) as f64 / 2.0, viewport.height.max(1) as f64 / 2.0);
+        // A quad around window-space offsets of clip positions, back in eye space.
+        let quad = |corners: [(DVec4, DVec2); 4]| -> Option<[Vec3; 4]> {
+            let mut out = [Vec3::ZERO; 4];
+            for (o, (c, off)) in out.iter_mut().zip(corners) {
+                if c.w <= 0.0 {
+                    return None;
+                }
+                let moved = DVec4::new(c.x + off.x / hw * c.w, c.y + off.y / hh * c.w, c.z, c.w);
+                let e = inverse * moved;
+                *o = (e.truncate() / e.w).as_vec3();
+            }
+            Some(out)
+        };
+        let line_half = self.s.line_width / 2.0;
+        for &([i, j], provoking) in &lines {
+            let (ca, cb) = (clip[i as usize], clip[j as usize]);
+            if ca.w <= 0.0 || cb.w <= 0.0 {
+                continue;
+            }
+            let d = DVec2::new((cb.x / cb.w - ca.x / ca.w) * hw, (cb.y / cb.w - ca.y / ca.w) * hh);
+            let perp = DVec2::new(-d.y, d.x).normalize_or_zero() * line_half;
+            let Some(q) = quad([(ca, -perp), (ca, perp), (cb, perp), (cb, -perp)]) else { continue };
+            let (va, vb, pv) = (&verts[i as usize], &verts[j as usize], &verts[provoking as usize]);
+            let (c0, c1) = if flat { (color(pv, 0), color(pv, 0)) } else { (color(va, 0), color(vb, 0)) };
+            let (t0, t1) = (tex(va), tex(vb));
+            for tri in [[0, 1, 2], [0, 2, 3]] {
+                let pick = |k: usize| if k < 2 { (c0, t0) } else { (c1, t1) };
+                tris.push(Triangle {
+                    positions: tri.map(|k| q[k]),
+                    colors: tri.map(|k| pick(k).0),
+                    secondary: [Vec3::ZERO; 3],
+                    texcoords: tri.map(|k| pick(k).1),
+                    surface,
+                    sequence,
+                    camera,
+                    clip_w: tri.map(|k| if k < 2 { ca.w } else { cb.w } as f32),
+                    normals: [Vec3::Z; 3],
+                    base_colors: [Vec4::ONE; 3],
+                    lighting: NO_LIGHTING,
+                    back: false,
+                });
+            }
+        }
+        let point_half = self.s.point_size / 2.0;
+        for &i in &points {
+            let c = clip[i as usize];
+            let h = point_half;
+            let corners = [(-h, -h), (h, -h), (h, h), (-h, h)].map(|(x, y)| (c, DVec2::new(x, y)));
+            let Some(q) = quad(corners) else { continue };
+            let v = &verts[i as usize];
+            for tri in [[0, 1, 2], [0, 2, 3]] {
+                tris.push(Triangle {
+                    positions: tri.map(|k| q[k]),
+                    colors: [color(v, 0); 3],
+                    secondary: [Vec3::ZERO; 3],
+                    texcoords: [tex(v); 3],
+                    surface,
+                    sequence,
+                    camera,
+                    clip_w: [c.w as f32; 3],
+                    normals: [Vec3::Z; 3],
+                    base_colors: [Vec4::ONE; 3],
+                    lighting: NO_LIGHTING,
+                    back: false,
+                });
+            }
+        }
+        self.frame.triangles.extend(tris);
+    }
+}

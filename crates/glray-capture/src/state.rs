@@ -1,0 +1,191 @@
+//! The server state glPushAttrib saves, grouped by the attribute bit that saves it, with GL's
+//! initial values, and glPopAttrib's restore by mask.
+
+use glam::{DVec4, Vec4};
+
+use crate::camera::Viewport;
+use crate::frame::Fog;
+use crate::gl::*;
+use crate::lighting::{Light, LightModel, Material};
+
+/// Texture coordinate generation of one coordinate (s or t).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct TexGen {
+    pub(crate) enabled: bool,
+    pub(crate) mode: u32,
+    pub(crate) object_plane: DVec4,
+    pub(crate) eye_plane: DVec4,
+}
+
+/// The server state glPushAttrib saves, grouped by the attribute bit that saves it.
+#[derive(Debug, Clone)]
+pub(crate) struct State {
+    // GL_LIGHTING_BIT
+    pub(crate) lighting: bool,
+    pub(crate) lights: [Light; 8],
+    pub(crate) model: LightModel,
+    pub(crate) materials: [Material; 2],
+    pub(crate) color_material: bool,
+    pub(crate) color_material_face: u32,
+    pub(crate) color_material_mode: u32,
+    pub(crate) flat: bool,
+    // GL_TRANSFORM_BIT
+    pub(crate) normalize: bool,
+    pub(crate) rescale_normal: bool,
+    pub(crate) clip_planes: [(bool, DVec4); 6],
+    // GL_POLYGON_BIT
+    pub(crate) cull: bool,
+    pub(crate) cull_face: u32,
+    pub(crate) front_ccw: bool,
+    pub(crate) polygon_mode: [u32; 2],
+    // GL_DEPTH_BUFFER_BIT
+    pub(crate) depth_test: bool,
+    pub(crate) depth_func: u32,
+    pub(crate) depth_mask: bool,
+    // GL_VIEWPORT_BIT
+    pub(crate) viewport: Viewport,
+    pub(crate) depth_range: (f64, f64),
+    // GL_COLOR_BUFFER_BIT
+    pub(crate) clear_color: Vec4,
+    pub(crate) blend: bool,
+    pub(crate) blend_func: (u32, u32),
+    pub(crate) alpha_test: bool,
+    pub(crate) alpha_func: (u32, f32),
+    // GL_TEXTURE_BIT
+    pub(crate) texture_2d: bool,
+    pub(crate) bound_texture: u32,
+    pub(crate) env_mode: u32,
+    pub(crate) env_color: Vec4,
+    pub(crate) texgen: [TexGen; 2],
+    // GL_FOG_BIT
+    pub(crate) fog_enabled: bool,
+    pub(crate) fog: Fog,
+    // GL_LINE_BIT, GL_POINT_BIT
+    pub(crate) line_width: f64,
+    pub(crate) point_size: f64,
+}
+
+impl Default for State {
+    fn default() -> Self {
+        let texgen = TexGen { enabled: false, mode: GL_EYE_LINEAR, object_plane: DVec4::X, eye_plane: DVec4::X };
+        State {
+            lighting: false,
+            lights: std::array::from_fn(Light::new),
+            model: LightModel::default(),
+            materials: [Material::default(); 2],
+            color_material: false,
+            color_material_face: GL_FRONT_AND_BACK,
+            color_material_mode: GL_AMBIENT_AND_DIFFUSE,
+            flat: false,
+            normalize: false,
+            rescale_normal: false,
+            clip_planes: [(false, DVec4::ZERO); 6],
+            cull: false,
+            cull_face: GL_BACK,
+            front_ccw: true,
+            polygon_mode: [GL_FILL; 2],
+            depth_test: false,
+            depth_func: GL_LESS,
+            depth_mask: true,
+            viewport: Viewport { x: 0, y: 0, width: 0, height: 0 },
+            depth_range: (0.0, 1.0),
+            clear_color: Vec4::ZERO,
+            blend: false,
+            blend_func: (1, 0),
+            alpha_test: false,
+            alpha_func: (GL_ALWAYS, 0.0),
+            texture_2d: false,
+            bound_texture: 0,
+            env_mode: GL_MODULATE,
+            env_color: Vec4::ZERO,
+            texgen: [texgen, TexGen { object_plane: DVec4::Y, eye_plane: DVec4::Y, ..texgen }],
+            fog_enabled: false,
+            fog: Fog { mode: GL_EXP, density: 1.0, start: 0.0, end: 1.0, color: Vec4::ZERO },
+            line_width: 1.0,
+            point_size: 1.0,
+        }
+    }
+}
+
+impl State {
+    /// glPopAttrib: takes back the groups `mask` saved.
+    pub(crate) fn restore(&mut self, mask: u32, saved: State) {
+        let s = saved;
+        if mask & (GL_LIGHTING_BIT | GL_ENABLE_BIT) != 0 {
+            self.lighting = s.lighting;
+            self.color_material = s.color_material;
+            for (l, o) in self.lights.iter_mut().zip(&s.lights) {
+                l.enabled = o.enabled;
+            }
+        }
+        if mask & GL_LIGHTING_BIT != 0 {
+            self.lights = s.lights;
+            self.model = s.model;
+            self.materials = s.materials;
+            self.color_material_face = s.color_material_face;
+            self.color_material_mode = s.color_material_mode;
+            self.flat = s.flat;
+        }
+        if mask & (GL_TRANSFORM_BIT | GL_ENABLE_BIT) != 0 {
+            self.normalize = s.normalize;
+            self.rescale_normal = s.rescale_normal;
+            for (p, o) in self.clip_planes.iter_mut().zip(&s.clip_planes) {
+                p.0 = o.0;
+            }
+        }
+        if mask & GL_TRANSFORM_BIT != 0 {
+            self.clip_planes = s.clip_planes;
+        }
+        if mask & (GL_POLYGON_BIT | GL_ENABLE_BIT) != 0 {
+            self.cull = s.cull;
+        }
+        if mask & GL_POLYGON_BIT != 0 {
+            self.cull_face = s.cull_face;
+            self.front_ccw = s.front_ccw;
+            self.polygon_mode = s.polygon_mode;
+        }
+        if mask & (GL_DEPTH_BUFFER_BIT | GL_ENABLE_BIT) != 0 {
+            self.depth_test = s.depth_test;
+        }
+        if mask & GL_DEPTH_BUFFER_BIT != 0 {
+            self.depth_func = s.depth_func;
+            self.depth_mask = s.depth_mask;
+        }
+        if mask & GL_VIEWPORT_BIT != 0 {
+            self.viewport = s.viewport;
+            self.depth_range = s.depth_range;
+        }
+        if mask & (GL_COLOR_BUFFER_BIT | GL_ENABLE_BIT) != 0 {
+            self.blend = s.blend;
+            self.alpha_test = s.alpha_test;
+        }
+        if mask & GL_COLOR_BUFFER_BIT != 0 {
+            self.clear_color = s.clear_color;
+            self.blend_func = s.blend_func;
+            self.alpha_func = s.alpha_func;
+        }
+        if mask & (GL_TEXTURE_BIT | GL_ENABLE_BIT) != 0 {
+            self.texture_2d = s.texture_2d;
+            self.texgen[0].enabled = s.texgen[0].enabled;
+            self.texgen[1].enabled = s.texgen[1].enabled;
+        }
+        if mask & GL_TEXTURE_BIT != 0 {
+            self.bound_texture = s.bound_texture;
+            self.env_mode = s.env_mode;
+            self.env_color = s.env_color;
+            self.texgen = s.texgen;
+        }
+        if mask & (GL_FOG_BIT | GL_ENABLE_BIT) != 0 {
+            self.fog_enabled = s.fog_enabled;
+        }
+        if mask & GL_FOG_BIT != 0 {
+            self.fog = s.fog;
+        }
+        if mask & GL_LINE_BIT != 0 {
+            self.line_width = s.line_width;
+        }
+        if mask & GL_POINT_BIT != 0 {
+            self.point_size = s.point_size;
+        }
+    }
+}

@@ -1,0 +1,150 @@
+//! The fixed-function vertex stage: per-vertex attribute commands, and each vertex transformed,
+//! lit (both faces) and given its texture coordinates when it is given, with the state of that
+//! moment, as the pipeline does.
+
+use glam::{DMat3, DMat4, DVec3, DVec4};
+use glray_core::trace::Value;
+
+use crate::args;
+use crate::context::{Context, Out};
+use crate::error::{GlError, GlResult};
+use crate::frame::Lighting;
+use crate::gl::*;
+use crate::immediate::TEXCOORD_UNITS;
+use crate::lighting::light_vertex;
+use crate::ops::{Attr, AttrForm};
+
+impl Context {
+    pub(crate) fn attribute(&mut self, f: AttrForm, a: &[Value]) -> GlResult {
+        let (first, unit) = match f.attr {
+            Attr::MultiTexCoord => {
+                let unit = args::uint(a, 0).wrapping_sub(GL_TEXTURE0) as usize;
+                if unit >= TEXCOORD_UNITS {
+                    return Err(GlError::InvalidEnum);
+                }
+                (1, unit)
+            }
+            _ => (0, 0),
+        };
+        let raw: Vec<f64> = if f.vector {
+            args::array(args::bytes(a, first), f.ty, f.n)
+        } else {
+            (first..first + f.n).map(|i| args::float(a, i)).collect()
+        };
+        let get = |k: usize, default: f64| raw.get(k).copied().unwrap_or(default);
+        let norm = |k: usize, default: f64| raw.get(k).map_or(default, |x| args::normalize(*x, f.ty));
+        match f.attr {
+            Attr::Vertex => {
+                let p = DVec4::new(
+                    get(0, 0.0),
+                    get(1, 0.0),
+                    if f.n > 2 { get(2, 0.0) } else { 0.0 },
+                    if f.n > 3 { get(3, 1.0) } else { 1.0 },
+                );
+                if self.imm.inside() {
+                    let out = self.vertex_stage(p);
+                    self.open.push(out);
+                    self.imm.vertex(p);
+                }
+            }
+            Attr::Normal => self.imm.normal(DVec3::new(norm(0, 0.0), norm(1, 0.0), norm(2, 1.0))),
+            Attr::Color => {
+                let alpha = if f.n > 3 { norm(3, 1.0) } else { 1.0 };
+                self.imm.color(DVec4::new(norm(0, 0.0), norm(1, 0.0), norm(2, 0.0), alpha));
+            }
+            Attr::TexCoord | Attr::MultiTexCoord => {
+                let t = DVec4::new(
+                    get(0, 0.0),
+                    if f.n > 1 { get(1, 0.0) } else { 0.0 },
+                    if f.n > 2 { get(2, 0.0) } else { 0.0 },
+                    if f.n > 3 { get(3, 1.0) } else { 1.0 },
+                );
+                self.imm.tex_coord(unit, t)?;
+            }
+            Attr::SecondaryColor => {}
+            Attr::EdgeFlag => self.imm.edge_flag(get(0, 1.0) != 0.0),
+        }
+        Ok(())
+    }
+
+    /// The inverse transpose of the modelview's upper 3x3, cached per modelview.
+    pub(crate) fn normal_matrix(&mut self, mv: &DMat4) -> DMat3 {
+        if let Some((m, n)) = &self.normal_matrix {
+            if m == mv {
+                return *n;
+            }
+        }
+        let n = DMat3::from_mat4(*mv).inverse().transpose();
+        self.normal_matrix = Some((*mv, n));
+        n
+    }
+
+    /// The lighting state of the moment, as a frame keeps it.
+    pub(crate) fn lighting_state(&self) -> Lighting {
+        let s = &self.s;
+        Lighting {
+            lights: s.lights.iter().filter(|l| l.enabled).copied().collect(),
+            model: s.model,
+            materials: s.materials,
+            color_material: s.color_material.then_some((s.color_material_face, s.color_material_mode)),
+        }
+    }
+
+    /// The fixed-function vertex stage: eye position, lighting of both faces, texture
+    /// coordinates (texgen, texture matrix).
+    pub(crate) fn vertex_stage(&mut self, object: DVec4) -> Out {
+        let mv = *self.matrices.modelview.top();
+        let eye = mv * object;
+        let cur = self.imm.current;
+        let s = &self.s;
+        let mut normal = DVec3::Z;
+        let (colors, secondary) = if s.lighting {
+            let nm = self.normal_matrix(&mv);
+            let s = &self.s;
+            let mut n = nm * cur.normal;
+            if s.normalize {
+                n = n.normalize_or_zero();
+            } else if s.rescale_normal {
+                let len = DMat3::from_mat4(mv).inverse().row(2).length();
+                if len > 0.0 {
+                    n /= len;
+                }
+            }
+            normal = n;
+            let mats = self.lighting_state().materials(cur.color);
+            let s = &self.s;
+            let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
+            let (f0, f1) = light_vertex(p, n, &mats[0], &s.lights, &s.model);
+            let (b0, b1) = if s.model.two_side { light_vertex(p, -n, &mats[1], &s.lights, &s.model) } else { (f0, f1) };
+            ([f0, b0], [f1, b1])
+        } else {
+            let c = cur.color.clamp(DVec4::ZERO, DVec4::ONE);
+            ([c, c], [DVec4::ZERO; 2])
+        };
+        let s = &self.s;
+        let mut tex = cur.texcoords[0];
+        for (k, g) in s.texgen.iter().enumerate() {
+            if g.enabled {
+                tex[k] = match g.mode {
+                    GL_OBJECT_LINEAR => g.object_plane.dot(object),
+                    GL_EYE_LINEAR => g.eye_plane.dot(eye),
+                    GL_SPHERE_MAP => {
+                        let nm = DMat3::from_mat4(mv).inverse().transpose();
+                        let n = (nm * cur.normal).normalize_or_zero();
+                        let u = (eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 }).normalize_or_zero();
+                        let r = u - 2.0 * n.dot(u) * n;
+                        let m = 2.0 * (r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0)).sqrt();
+                        if m == 0.0 {
+                            0.5
+                        } else {
+                            r[k] / m + 0.5
+                        }
+                    }
+                    _ => tex[k],
+                };
+            }
+        }
+        let tex = *self.matrices.texture[0].top() * tex;
+        Out { eye, colors, secondary, tex, normal, base: cur.color }
+    }
+}
