@@ -3,7 +3,9 @@
 //! parameters of its command; the build fails if one is missing.
 
 mod context;
+mod errors;
 mod lookup;
 
 pub use context::*;
+pub use errors::*;
 pub use lookup::*;

@@ -202,6 +202,16 @@ pub fn before(c: usize, args: &[u64]) -> bool {
     })
 }
 
+/// The error GL would have raised inside a glBegin/glEnd of this thread (0: none).
+pub fn take_begin_error() -> u32 {
+    if !ON.load(Ordering::Relaxed) {
+        return 0;
+    }
+    let Some(thread) = crate::record::thread_number() else { return 0 };
+    let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
+    guard.as_mut().map_or(0, |live| live.capture.context(thread).take_begin_error())
+}
+
 impl Live {
     fn present(&mut self, thread: u32) {
         let ctx = self.capture.context(thread);

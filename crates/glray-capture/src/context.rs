@@ -67,6 +67,9 @@ pub(crate) enum Item {
 /// One GL context's state, and the frame it is drawing.
 pub struct Context {
     pub errors: ErrorFlag,
+    /// Errors raised between glBegin and glEnd (what a real GL that did not get the glBegin
+    /// cannot raise).
+    pub(crate) begin_error: ErrorFlag,
     pub matrices: Matrices,
     pub(crate) imm: Immediate,
     /// Vertices of the open glBegin, after the vertex stage.
@@ -96,6 +99,7 @@ impl Default for Context {
     fn default() -> Self {
         Context {
             errors: ErrorFlag::default(),
+            begin_error: ErrorFlag::default(),
             matrices: Matrices::default(),
             imm: Immediate::default(),
             open: Vec::new(),
@@ -170,6 +174,11 @@ impl Context {
         };
         self.sequence = 0;
         std::mem::replace(&mut self.frame, next)
+    }
+
+    /// The first error raised inside glBegin/glEnd since the last call (0: none).
+    pub fn take_begin_error(&mut self) -> u32 {
+        self.begin_error.take()
     }
 
     /// Changes whenever the frame does.
@@ -301,8 +310,9 @@ impl Context {
             op,
             Op::Attr(_) | Op::Material | Op::End | Op::CallList | Op::CallLists | Op::ArrayElement | Op::GetError
         );
-        if !inside_ok {
-            self.imm.outside()?;
+        if !inside_ok && self.imm.inside() {
+            self.begin_error.record::<()>(Err(GlError::InvalidOperation));
+            return Err(GlError::InvalidOperation);
         }
         match op {
             Op::Attr(form) => self.attribute(form, a)?,
@@ -863,6 +873,8 @@ mod tests {
         call(&mut c, "glColor3f", &[f(1.0), f(0.0), f(0.0)]); // allowed
         call(&mut c, "glEnd", &[]);
         assert_eq!(c.errors.take(), 0x0502);
+        assert_eq!(c.take_begin_error(), 0x0502, "kept apart for glGetError");
+        assert_eq!(c.take_begin_error(), 0);
         call(&mut c, "glEnd", &[]);
         assert_eq!(c.errors.take(), 0x0502, "glEnd without glBegin");
         call(&mut c, "glBegin", &[i(10)]);
