@@ -27,7 +27,12 @@ pub struct Ray {
 #[derive(Debug, Clone)]
 pub struct Camera {
     projection: DMat4,
-    inverse: DMat4,
+    /// The inverse projection applied to NDC (0, 0, -1, 1) and (0, 0, 1, 1), and its x and y
+    /// columns: unprojecting a pixel is then two multiply-adds per plane, not a matrix product.
+    near0: DVec4,
+    far0: DVec4,
+    dx: DVec4,
+    dy: DVec4,
     pub viewport: Viewport,
     /// glDepthRange (near, far).
     pub depth_range: (f64, f64),
@@ -39,7 +44,16 @@ impl Camera {
         if viewport.width <= 0 || viewport.height <= 0 || projection.determinant().abs() < 1e-300 {
             return None;
         }
-        Some(Camera { projection, inverse: projection.inverse(), viewport, depth_range })
+        let inverse = projection.inverse();
+        Some(Camera {
+            projection,
+            near0: inverse * DVec4::new(0.0, 0.0, -1.0, 1.0),
+            far0: inverse * DVec4::new(0.0, 0.0, 1.0, 1.0),
+            dx: inverse.col(0),
+            dy: inverse.col(1),
+            viewport,
+            depth_range,
+        })
     }
 
     /// Whether the projection is a perspective one (its last row is not (0, 0, 0, 1)).
@@ -47,10 +61,6 @@ impl Camera {
         self.projection.row(3) != DVec4::new(0.0, 0.0, 0.0, 1.0)
     }
 
-    fn unproject(&self, ndc: DVec3) -> DVec3 {
-        let p = self.inverse * ndc.extend(1.0);
-        p.truncate() / p.w
-    }
 
     /// The ray through window position (x, y): (x + 0.5, y + 0.5) is a pixel's centre, y up as
     /// in GL's window coordinates.
@@ -58,8 +68,9 @@ impl Camera {
         let v = self.viewport;
         let ndc_x = 2.0 * (x - v.x as f64) / v.width as f64 - 1.0;
         let ndc_y = 2.0 * (y - v.y as f64) / v.height as f64 - 1.0;
-        let near = self.unproject(DVec3::new(ndc_x, ndc_y, -1.0));
-        let far = self.unproject(DVec3::new(ndc_x, ndc_y, 1.0));
+        let xy = self.dx * ndc_x + self.dy * ndc_y;
+        let (near, far) = (self.near0 + xy, self.far0 + xy);
+        let (near, far) = (near.truncate() / near.w, far.truncate() / far.w);
         let span = far - near;
         let t_max = span.length();
         Ray { origin: near, direction: span / t_max, t_max }
