@@ -43,6 +43,8 @@ struct Live {
     dump: Option<PathBuf>,
     /// The frame revision each thread presented last.
     presented: HashMap<u32, u64>,
+    /// Threads told that their shader frames are left to the real GL.
+    told_shaders: std::collections::HashSet<u32>,
     /// Threads that have had a frame presented.
     shown: std::collections::HashSet<u32>,
     /// Each thread's last ray-traced frame, for frames drawn without a clear.
@@ -68,6 +70,7 @@ pub fn configure(config: &Config) {
         presented: HashMap::new(),
         last: HashMap::new(),
         shown: Default::default(),
+        told_shaders: Default::default(),
         frames: 0,
     };
     *LIVE.lock().unwrap_or_else(|e| e.into_inner()) = Some(live);
@@ -222,7 +225,13 @@ impl Live {
         self.presented.insert(thread, revision);
         let frame = ctx.frame();
         if frame.unsupported_draws > 0 {
-            glray_core::debug!("frame left to the real GL: {} draws use shaders", frame.unsupported_draws);
+            if self.told_shaders.insert(thread) {
+                glray_core::info!(
+                    "frames with shader draws ({} in this one) are left to the real GL; glray ray traces \
+                     fixed-function frames",
+                    frame.unsupported_draws
+                );
+            }
             // The real GL rasterizes everything again from the next frame on.
             self.shown.remove(&thread);
             return;

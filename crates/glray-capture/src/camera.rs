@@ -61,7 +61,6 @@ impl Camera {
         self.projection.row(3) != DVec4::new(0.0, 0.0, 0.0, 1.0)
     }
 
-
     /// The ray through window position (x, y): (x + 0.5, y + 0.5) is a pixel's centre, y up as
     /// in GL's window coordinates.
     pub fn ray(&self, x: f64, y: f64) -> Ray {
