@@ -153,7 +153,7 @@ impl Context {
     pub(crate) fn indices(&self, v: &Value, ty: u32, count: usize) -> Vec<u64> {
         let (bytes, start): (&[u8], usize) = match v {
             Value::Offset(o) | Value::Opaque(o) if self.client.element_buffer != 0 => {
-                (self.buffers.get(&self.client.element_buffer).map_or(&[][..], |b| &b[..]), *o as usize)
+                (self.shared.buffers.get(&self.client.element_buffer).map_or(&[][..], |b| &b[..]), *o as usize)
             }
             Value::Blob(b) => (b, 0),
             _ => (&[], 0),
@@ -193,7 +193,7 @@ impl Context {
             }
             // A buffer object.
             if p.enabled && p.buffer != 0 {
-                let buf = self.buffers.get(&p.buffer)?;
+                let buf = self.shared.buffers.get(&p.buffer)?;
                 let elem = args::type_size(p.ty)? * p.size.max(0) as usize;
                 let stride = if p.stride > 0 { p.stride as usize } else { elem };
                 return Some(Source {

@@ -64,6 +64,15 @@ pub(crate) enum Item {
     Draw(u32, Vec<Fetched>),
 }
 
+/// What the contexts of a share group share (glXCreateContext's shareList, eglCreateContext's
+/// share_context, OSMesa's sharelist): display lists, textures and buffer objects.
+#[derive(Default)]
+pub struct Shared {
+    pub(crate) lists: DisplayLists<Item>,
+    pub(crate) buffers: HashMap<u32, Vec<u8>>,
+    pub(crate) textures: HashMap<u32, Arc<Texture>>,
+}
+
 /// One GL context's state, and the frame it is drawing.
 pub struct Context {
     pub errors: ErrorFlag,
@@ -74,13 +83,12 @@ pub struct Context {
     pub(crate) imm: Immediate,
     /// Vertices of the open glBegin, after the vertex stage.
     pub(crate) open: Vec<Out>,
-    pub(crate) lists: DisplayLists<Item>,
+    /// Display lists, textures and buffers: shared with the context's share group.
+    pub(crate) shared: Shared,
     pub(crate) nesting: usize,
     pub(crate) s: State,
     pub(crate) attrib_stack: Vec<(u32, State, crate::immediate::Current)>,
     pub(crate) client: Client,
-    pub(crate) buffers: HashMap<u32, Vec<u8>>,
-    pub(crate) textures: HashMap<u32, Arc<Texture>>,
     /// Client arrays of the next draw (the trace's arrays event that precedes it).
     pub(crate) arrays: Vec<ArrayData<'static>>,
     pub(crate) array_bytes: Vec<Vec<u8>>,
@@ -103,13 +111,11 @@ impl Default for Context {
             matrices: Matrices::default(),
             imm: Immediate::default(),
             open: Vec::new(),
-            lists: DisplayLists::default(),
+            shared: Shared::default(),
             nesting: 0,
             s: State::default(),
             attrib_stack: Vec::new(),
             client: Client { unpack: Unpack::default(), ..Client::default() },
-            buffers: HashMap::new(),
-            textures: HashMap::new(),
             arrays: Vec::new(),
             array_bytes: Vec::new(),
             frame: Frame { depth_range: (0.0, 1.0), ..Frame::default() },
@@ -176,6 +182,16 @@ impl Context {
         std::mem::replace(&mut self.frame, next)
     }
 
+    /// Hands the share group's objects over (to the group's context that runs next).
+    pub fn take_shared(&mut self) -> Shared {
+        std::mem::take(&mut self.shared)
+    }
+
+    /// Receives the share group's objects.
+    pub fn put_shared(&mut self, shared: Shared) {
+        self.shared = shared;
+    }
+
     /// The first error raised inside glBegin/glEnd since the last call (0: none).
     pub fn take_begin_error(&mut self) -> u32 {
         self.begin_error.take()
@@ -191,12 +207,12 @@ impl Context {
     /// its geometry), and into the default framebuffer (a framebuffer object may be a texture
     /// the program draws with later, which capture does not follow).
     pub fn takes_draws(&self) -> bool {
-        !self.programmable && self.lists.compiling().is_none() && self.framebuffer == 0
+        !self.programmable && self.shared.lists.compiling().is_none() && self.framebuffer == 0
     }
 
     /// Whether a display list is being compiled.
     pub fn compiling(&self) -> bool {
-        self.lists.compiling().is_some()
+        self.shared.lists.compiling().is_some()
     }
 
     /// The frame so far.
@@ -206,10 +222,10 @@ impl Context {
 
     /// Follows one call. Errors go to the context's error flag, as GL would raise them.
     pub fn call(&mut self, op: Op, ty: u32, a: &[Value]) {
-        if let Some((_, execute)) = self.lists.compiling() {
+        if let Some((_, execute)) = self.shared.lists.compiling() {
             if op.compiled() && !matches!(op, Op::NewList | Op::EndList) {
                 for item in self.compile_items(op, ty, a) {
-                    self.lists.compile(item);
+                    self.shared.lists.compile(item);
                 }
                 if !execute {
                     self.arrays.clear();
@@ -237,7 +253,7 @@ impl Context {
         if self.nesting >= MAX_NESTING {
             return Ok(()); // GL ignores calls nested deeper
         }
-        let Some(items) = self.lists.get(list) else { return Ok(()) };
+        let Some(items) = self.shared.lists.get(list) else { return Ok(()) };
         self.nesting += 1;
         for item in items.iter() {
             match item {
@@ -460,20 +476,21 @@ impl Context {
                     self.frame.cleared = true;
                 }
             }
-            Op::NewList => self.lists.new_list(args::uint(a, 0), args::uint(a, 1))?,
-            Op::EndList => self.lists.end_list()?,
+            Op::NewList => self.shared.lists.new_list(args::uint(a, 0), args::uint(a, 1))?,
+            Op::EndList => self.shared.lists.end_list()?,
             Op::CallList => self.run_list(args::uint(a, 0))?,
             Op::CallLists => {
-                let names = self.lists.call_lists_names(args::int(a, 0) as i32, args::uint(a, 1), args::bytes(a, 2))?;
+                let names =
+                    self.shared.lists.call_lists_names(args::int(a, 0) as i32, args::uint(a, 1), args::bytes(a, 2))?;
                 for n in names {
                     self.run_list(n)?;
                 }
             }
-            Op::ListBase => self.lists.list_base(args::uint(a, 0)),
+            Op::ListBase => self.shared.lists.list_base(args::uint(a, 0)),
             Op::GenLists => {
-                self.lists.gen_lists(args::int(a, 0) as i32)?;
+                self.shared.lists.gen_lists(args::int(a, 0) as i32)?;
             }
-            Op::DeleteLists => self.lists.delete_lists(args::uint(a, 0), args::int(a, 1) as i32)?,
+            Op::DeleteLists => self.shared.lists.delete_lists(args::uint(a, 0), args::int(a, 1) as i32)?,
             Op::PushAttrib => {
                 if self.attrib_stack.len() >= MAX_ATTRIB_DEPTH {
                     return Err(GlError::StackOverflow);
@@ -536,14 +553,14 @@ impl Context {
                     let size = args::int(a, 1).max(0) as usize;
                     let mut data = args::bytes(a, 2).to_vec();
                     data.resize(size.min(1 << 31), 0);
-                    self.buffers.insert(name, data);
+                    self.shared.buffers.insert(name, data);
                 }
             }
             Op::BufferSubData => {
                 if let Some(name) = self.bound_buffer(args::uint(a, 0)) {
                     let offset = args::int(a, 1).max(0) as usize;
                     let data = args::bytes(a, 3);
-                    let buf = self.buffers.entry(name).or_default();
+                    let buf = self.shared.buffers.entry(name).or_default();
                     if let Some(dst) = buf.get_mut(offset..offset + data.len()) {
                         dst.copy_from_slice(data);
                     }
@@ -551,7 +568,7 @@ impl Context {
             }
             Op::DeleteBuffers => {
                 for name in args::array(args::bytes(a, 1), GL_UNSIGNED_INT, args::int(a, 0).max(0) as usize) {
-                    self.buffers.remove(&(name as u32));
+                    self.shared.buffers.remove(&(name as u32));
                 }
             }
             Op::BindTexture => {
@@ -562,7 +579,7 @@ impl Context {
             Op::DeleteTextures => {
                 for name in args::array(args::bytes(a, 1), GL_UNSIGNED_INT, args::int(a, 0).max(0) as usize) {
                     let name = name as u32;
-                    self.textures.remove(&name);
+                    self.shared.textures.remove(&name);
                     if self.s.bound_texture == name {
                         self.s.bound_texture = 0;
                     }
@@ -692,7 +709,7 @@ impl Context {
     }
 
     fn texture_mut(&mut self) -> &mut Texture {
-        let t = self.textures.entry(self.s.bound_texture).or_default();
+        let t = self.shared.textures.entry(self.s.bound_texture).or_default();
         Arc::make_mut(t)
     }
 

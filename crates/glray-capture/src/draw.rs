@@ -15,7 +15,7 @@ impl Context {
     pub(crate) fn surface(&mut self) -> u32 {
         let s = &self.s;
         let texturing = if s.texture_2d {
-            self.textures.get(&s.bound_texture).filter(|t| t.complete()).map(|t| Texturing {
+            self.shared.textures.get(&s.bound_texture).filter(|t| t.complete()).map(|t| Texturing {
                 texture: t.clone(),
                 env_mode: s.env_mode,
                 env_color: s.env_color,

@@ -1,21 +1,61 @@
 //! Feeding recorded events (from a trace file, or from the live library's in-memory recorder)
-//! into per-thread contexts, and handing out each frame when it ends.
+//! into GL contexts, and handing out each frame when it ends.
+//!
+//! Calls go to the context current on their thread, as GL routes them: context creation and
+//! MakeCurrent calls (GLX, EGL, OSMesa) are followed for that, and for share groups (a context
+//! created with another to share with gets the same display lists, textures and buffers). A
+//! thread that never made a context current (a trace cut from a longer run) has a context of
+//! its own.
 
 use std::collections::HashMap;
 
-use glray_core::trace::Event;
+use glray_core::trace::{Event, Value};
 
 use crate::context::Context;
 use crate::frame::Frame;
 use crate::ops::{op_for, Op};
 
+/// What a command means to capture: a GL command it follows, or a context call.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Gl(Op, u32),
+    /// Creates a context; the argument at this index is the context to share with.
+    Create(usize),
+    /// Makes the context at this argument index current on the calling thread.
+    MakeCurrent(usize),
+}
+
+fn kind_of(name: &str) -> Option<Kind> {
+    Some(match name {
+        "glXCreateContext" | "glXCreateContextAttribsARB" | "eglCreateContext" => Kind::Create(2),
+        "glXCreateNewContext" | "glXCreateContextWithConfigSGIX" => Kind::Create(3),
+        "OSMesaCreateContext" | "OSMesaCreateContextAttribs" => Kind::Create(1),
+        "OSMesaCreateContextExt" => Kind::Create(4),
+        "glXMakeCurrent" => Kind::MakeCurrent(2),
+        "glXMakeContextCurrent" | "glXMakeCurrentReadSGI" | "eglMakeCurrent" => Kind::MakeCurrent(3),
+        "OSMesaMakeCurrent" => Kind::MakeCurrent(0),
+        _ => return op_for(name).map(|(op, ty)| Kind::Gl(op, ty)),
+    })
+}
+
 #[derive(Default)]
 pub struct Capture {
-    /// The op of each command number the trace has named.
-    ops: Vec<Option<(Op, u32)>>,
-    contexts: HashMap<u32, Context>,
+    /// What each command number the trace has named means.
+    kinds: Vec<Option<Kind>>,
+    contexts: HashMap<u64, Context>,
+    /// The context current on each thread.
+    current: HashMap<u32, u64>,
+    /// Each context's share group (a context alone is a group of its own).
+    groups: HashMap<u64, u64>,
+    /// Which context holds each group's shared objects now.
+    holders: HashMap<u64, u64>,
     /// The thread of the last call: the one whose frame a frame event ends.
     last_thread: u32,
+}
+
+/// The key of a thread's context when it never made one current.
+fn thread_key(thread: u32) -> u64 {
+    u64::MAX - thread as u64
 }
 
 impl Capture {
@@ -24,33 +64,99 @@ impl Capture {
     pub fn event<'a>(&mut self, ev: &Event, name: impl Fn(usize) -> &'a [u8]) -> Option<(u32, Frame)> {
         match ev {
             Event::Name { number } => {
-                let op = std::str::from_utf8(name(*number)).ok().and_then(op_for);
-                if self.ops.len() <= *number {
-                    self.ops.resize(*number + 1, None);
+                let kind = std::str::from_utf8(name(*number)).ok().and_then(kind_of);
+                if self.kinds.len() <= *number {
+                    self.kinds.resize(*number + 1, None);
                 }
-                self.ops[*number] = op;
+                self.kinds[*number] = kind;
             }
-            Event::Call { cmd, thread, args, .. } => {
+            Event::Call { cmd, thread, args, ret } => {
                 self.last_thread = *thread;
-                if let Some(Some((op, ty))) = self.ops.get(*cmd) {
-                    self.contexts.entry(*thread).or_default().call(*op, *ty, args);
+                match self.kinds.get(*cmd).copied().flatten() {
+                    Some(Kind::Gl(op, ty)) => self.context(*thread).call(op, ty, args),
+                    Some(Kind::Create(share)) => {
+                        let created = ret.as_ref().map_or(0, Value::as_int) as u64;
+                        let share = args.get(share).map_or(0, Value::as_int) as u64;
+                        if created != 0 {
+                            let group = if share != 0 { *self.groups.get(&share).unwrap_or(&share) } else { created };
+                            self.groups.insert(created, group);
+                        }
+                    }
+                    Some(Kind::MakeCurrent(at)) => {
+                        let ok = ret.as_ref().is_none_or(|r| r.as_int() != 0);
+                        if ok {
+                            match args.get(at).map_or(0, Value::as_int) as u64 {
+                                0 => self.current.remove(thread),
+                                ctx => self.current.insert(*thread, ctx),
+                            };
+                        }
+                    }
+                    None => {}
                 }
             }
-            Event::Arrays { thread, arrays } => self.contexts.entry(*thread).or_default().set_arrays(arrays),
-            Event::Drawable { thread, width, height, .. } => {
-                self.contexts.entry(*thread).or_default().set_drawable(*width, *height)
-            }
+            Event::Arrays { thread, arrays } => self.context(*thread).set_arrays(arrays),
+            Event::Drawable { thread, width, height, .. } => self.context(*thread).set_drawable(*width, *height),
             Event::Frame { .. } => {
                 let thread = self.last_thread;
-                return Some((thread, self.contexts.entry(thread).or_default().take_frame()));
+                return Some((thread, self.context(thread).take_frame()));
             }
             Event::End => {}
         }
         None
     }
 
-    /// The context of a thread.
+    /// The context current on a thread, holding its share group's objects.
     pub fn context(&mut self, thread: u32) -> &mut Context {
-        self.contexts.entry(thread).or_default()
+        let key = self.current.get(&thread).copied().unwrap_or_else(|| thread_key(thread));
+        let group = *self.groups.get(&key).unwrap_or(&key);
+        let holder = self.holders.insert(group, key);
+        if let Some(h) = holder.filter(|h| *h != key) {
+            let shared = self.contexts.get_mut(&h).map(Context::take_shared).unwrap_or_default();
+            self.contexts.entry(key).or_default().put_shared(shared);
+        }
+        self.contexts.entry(key).or_default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tiny trace: `names` are named in order; calls are (command index, thread, args, ret).
+    fn feed(c: &mut Capture, names: &[&str], calls: &[(usize, u32, Vec<Value<'static>>, Option<Value<'static>>)]) {
+        let bytes: Vec<Vec<u8>> = names.iter().map(|n| n.as_bytes().to_vec()).collect();
+        for number in 0..names.len() {
+            c.event(&Event::Name { number }, |n| &bytes[n]);
+        }
+        for (cmd, thread, args, ret) in calls {
+            c.event(&Event::Call { cmd: *cmd, thread: *thread, args: args.clone(), ret: ret.clone() }, |n| &bytes[n]);
+        }
+    }
+
+    #[test]
+    fn contexts_are_followed_per_make_current_and_share_groups_share_lists() {
+        let names = ["glXCreateContext", "glXMakeCurrent", "glGenLists", "glMatrixMode", "glIsList"];
+        let op = |v: i64| Value::Int(v);
+        let mut c = Capture::default();
+        feed(
+            &mut c,
+            &names,
+            &[
+                (0, 0, vec![op(1), op(2), op(0), op(1)], Some(Value::Opaque(0xA))), // A
+                (0, 0, vec![op(1), op(2), op(0xA), op(1)], Some(Value::Opaque(0xB))), // B shares with A
+                (0, 0, vec![op(1), op(2), op(0), op(1)], Some(Value::Opaque(0xC))), // C alone
+                (1, 0, vec![op(1), op(5), Value::Opaque(0xA)], Some(op(1))),
+                (2, 0, vec![op(3)], Some(op(1))), // lists 1-3 in A's group
+                (3, 0, vec![op(0x1701)], None),   // A: projection mode
+                (1, 0, vec![op(1), op(5), Value::Opaque(0xB)], Some(op(1))),
+            ],
+        );
+        assert!(c.context(0).shared.lists.is_list(2), "B sees A's lists");
+        assert_eq!(c.context(0).matrices.mode, crate::matrix::Mode::ModelView, "but has its own matrix mode");
+        feed(&mut c, &names, &[(1, 0, vec![op(1), op(5), Value::Opaque(0xC)], Some(op(1)))]);
+        assert!(!c.context(0).shared.lists.is_list(2), "C does not");
+        feed(&mut c, &names, &[(1, 0, vec![op(1), op(5), Value::Opaque(0xA)], Some(op(1)))]);
+        assert!(c.context(0).shared.lists.is_list(2));
+        assert_eq!(c.context(0).matrices.mode, crate::matrix::Mode::Projection);
     }
 }
