@@ -201,3 +201,20 @@ fn the_trigger_setting_chooses_where_frames_are_ray_traced() {
     let err = stderr(&out);
     assert!(err.contains("trigger") && err.contains("auto, swap, finish, flush, readpixels"), "{err}");
 }
+
+#[test]
+fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
+    // tests/helpers/readback.c reads depth as float and as unsigned int, and RGB bytes.
+    let dir = scratch("rt-readback");
+    let program = dir.join("readback");
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/helpers/readback.c");
+    run_ok(Command::new("cc").arg("-O1").arg("-o").arg(&program).arg(&src).args(["-lOSMesa", "-lGL"]), "cc readback.c");
+    let plain = run_ok(&mut command(Way::Plain, &[], &program, 60), "readback plain");
+    let scenes = dir.join("scenes");
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl").env("GLRAY_DUMP_SCENE", &scenes);
+    let traced = run_ok(&mut cmd, "readback under glray");
+    assert_eq!(dumped(&scenes).0, 1, "one triangle captured and traced");
+    assert_eq!(stdout(&traced), stdout(&plain), "glReadPixels under glray vs Mesa");
+    assert!(stdout(&plain).contains("depth 0.8"), "{}", stdout(&plain));
+}

@@ -24,7 +24,8 @@ pub struct Rendered {
 }
 
 fn to_u8(c: Vec4) -> [u8; 4] {
-    c.to_array().map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)
+    // Halves round to even, as llvmpipe converts to 8-bit unorm (0.3 clears to 76, not 77).
+    c.to_array().map(|x| (x.clamp(0.0, 1.0) * 255.0).round_ties_even() as u8)
 }
 
 /// How to render.
