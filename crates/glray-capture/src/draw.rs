@@ -31,6 +31,7 @@ impl Context {
             depth_mask: s.depth_mask,
             blend: s.blend.then_some(s.blend_func),
             alpha_test: s.alpha_test.then_some(s.alpha_func),
+            clip_planes: s.clip_planes.iter().filter(|p| p.0).map(|p| p.1).collect(),
         };
         let same = |a: &Surface, b: &Surface| {
             a.fog == b.fog
@@ -39,6 +40,7 @@ impl Context {
                 && a.depth_mask == b.depth_mask
                 && a.blend == b.blend
                 && a.alpha_test == b.alpha_test
+                && a.clip_planes == b.clip_planes
                 && match (&a.texturing, &b.texturing) {
                     (None, None) => true,
                     (Some(x), Some(y)) => {

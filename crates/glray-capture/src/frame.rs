@@ -122,6 +122,9 @@ pub struct Surface {
     pub blend: Option<(u32, u32)>,
     /// (func, reference) when GL_ALPHA_TEST is on.
     pub alpha_test: Option<(u32, f32)>,
+    /// Enabled user clip planes (glClipPlane), in eye coordinates: a point is kept where
+    /// plane . (x, y, z, 1) >= 0.
+    pub clip_planes: Vec<DVec4>,
 }
 
 /// A captured frame.

@@ -23,6 +23,8 @@ const GL_EXP2: u32 = 0x0801;
 pub struct Fragment {
     pub color: Vec4,
     pub depth: f64,
+    /// Where it is, in eye coordinates (for user clip planes).
+    pub eye: DVec3,
 }
 
 /// Barycentric weights of `p` in the triangle (in the plane of the triangle).
@@ -152,7 +154,7 @@ pub fn shade(frame: &Frame, camera: &Camera, triangle: usize, p: DVec3, per_pixe
         .clamp(0.0, 1.0);
         c = (c.xyz() * f + fog.color.xyz() * (1.0 - f)).extend(c.w);
     }
-    Fragment { color: c.clamp(Vec4::ZERO, Vec4::ONE), depth: camera.window_depth(p) }
+    Fragment { color: c.clamp(Vec4::ZERO, Vec4::ONE), depth: camera.window_depth(p), eye: p }
 }
 
 #[cfg(test)]

@@ -135,6 +135,7 @@ mod tests {
             depth_mask: true,
             blend: None,
             alpha_test: None,
+            clip_planes: Vec::new(),
         }
     }
 
@@ -210,6 +211,18 @@ mod tests {
         let r = render(&frame([red, white].concat(), vec![surface(), over]), 8, 8, None, &Options::default());
         // Alpha blends too: 0.5 * 0.5 + 1 * 0.5.
         assert_eq!(pixel(&r, 4, 4), [255, 128, 128, 191]);
+    }
+
+    #[test]
+    fn user_clip_planes_cut_surfaces_away() {
+        // The green quad in front is clipped where x < 0 (plane (1, 0, 0, 0)): red shows there.
+        let mut clipped = surface();
+        clipped.clip_planes = vec![glam::DVec4::new(1.0, 0.0, 0.0, 0.0)];
+        let red = quad(-5.0, Vec4::new(1.0, 0.0, 0.0, 1.0), 0, 0);
+        let green = quad(-3.0, Vec4::new(0.0, 1.0, 0.0, 1.0), 1, 1);
+        let r = render(&frame([red, green].concat(), vec![surface(), clipped]), 8, 8, None, &Options::default());
+        assert_eq!(pixel(&r, 1, 4), [255, 0, 0, 255]);
+        assert_eq!(pixel(&r, 6, 4), [0, 255, 0, 255]);
     }
 
     #[test]

@@ -26,6 +26,7 @@ pub fn closest_hit_suffices(frame: &Frame) -> bool {
             && matches!(s.depth_func, GL_LESS | GL_LEQUAL)
             && s.blend.is_none()
             && s.alpha_test.is_none()
+            && s.clip_planes.is_empty()
     })
 }
 
@@ -78,6 +79,9 @@ pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4
     let (mut color, mut depth) = (color, depth);
     for (h, f) in hits.iter() {
         let s = &frame.surfaces[frame.triangles[h.triangle].surface as usize];
+        if s.clip_planes.iter().any(|p| p.dot(f.eye.extend(1.0)) < 0.0) {
+            continue;
+        }
         if let Some((func, reference)) = s.alpha_test {
             if !passes(func, f.color.w as f64, reference as f64) {
                 continue;
@@ -116,6 +120,7 @@ mod tests {
             depth_mask: true,
             blend: Some((0x0302, 0x0303)),
             alpha_test: None,
+            clip_planes: Vec::new(),
         };
         let c = blend(&s, Vec4::new(1.0, 0.0, 0.0, 0.25), Vec4::new(0.0, 0.0, 1.0, 1.0));
         assert!((c - Vec4::new(0.25, 0.0, 0.75, 0.8125)).length() < 1e-6, "{c}");
