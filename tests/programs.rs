@@ -12,17 +12,11 @@ use std::path::{Path, PathBuf};
 fn frames_identical(name: &str, program: &Path, args: &[&str], frame: u32) {
     let x = Xvfb::start();
     let dir = scratch(name);
-    let shot = frameshot();
     let mut images = Vec::new();
     for way in [Way::Plain, Way::Preload, Way::Dropin] {
         let ppm = dir.join(format!("{way:?}.ppm"));
-        let mut cmd = command(way, &[&shot], program, 120);
-        cmd.args(args)
-            .env("DISPLAY", &x.display)
-            .env("FRAMESHOT_OUT", &ppm)
-            .env("FRAMESHOT_FRAME", frame.to_string())
-            .env("GLRAY_ENABLE", "0")
-            .env("GLRAY_LOG", "debug");
+        let mut cmd = frameshot_command(way, program, args, &x.display, &ppm, frame);
+        cmd.env("GLRAY_ENABLE", "0").env("GLRAY_LOG", "debug");
         let out = run_ok(&mut cmd, &format!("{name} {way:?}"));
         let err = stderr(&out);
         assert!(err.contains(&format!("frameshot: frame {frame}")), "{name} {way:?}: no frame grabbed:\n{err}");

@@ -71,17 +71,11 @@ fn the_trace_suite_ray_traces_like_osmesa() {
 fn ray_traced_like_mesa(name: &str, program: &Path, args: &[&str], frame: u32, limit: f64) {
     let x = Xvfb::start();
     let dir = scratch(&format!("rt-{name}"));
-    let shot = frameshot();
     let mut ppms = Vec::new();
     for way in [Way::Plain, Way::Preload] {
         let ppm = dir.join(format!("{way:?}.ppm"));
-        let mut cmd = command(way, &[&shot], program, 120);
-        cmd.args(args)
-            .env("DISPLAY", &x.display)
-            .env("FRAMESHOT_OUT", &ppm)
-            .env("FRAMESHOT_FRAME", frame.to_string())
-            .env("GLRAY_PRESET", "gl")
-            .env("GLRAY_DUMP_SCENE", dir.join("scenes"));
+        let mut cmd = frameshot_command(way, program, args, &x.display, &ppm, frame);
+        cmd.env("GLRAY_PRESET", "gl").env("GLRAY_DUMP_SCENE", dir.join("scenes"));
         let out = run_ok(&mut cmd, &format!("{name} {way:?}"));
         assert!(!stderr(&out).contains("glray: error"), "{name}: {}", stderr(&out));
         ppms.push(ppm);

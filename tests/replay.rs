@@ -100,8 +100,7 @@ fn real_program_replays(name: &str, program: &Path, args: &[&str], frame: u32) {
     let x = Xvfb::start();
     let dir = scratch(&format!("replay-{name}"));
     let ppm = dir.join("live.ppm");
-    let mut cmd = command(Way::Preload, &[&frameshot()], program, 120);
-    cmd.args(args).env("DISPLAY", &x.display).env("FRAMESHOT_OUT", &ppm).env("FRAMESHOT_FRAME", frame.to_string());
+    let mut cmd = frameshot_command(Way::Preload, program, args, &x.display, &ppm, frame);
     let want = format!("{}", frame - 1);
     let out = record_and_replay(name, &mut cmd, &dir, &["--frames", &want]);
     let replayed = out.join(format!("frame-{:04}.png", frame - 1));

@@ -172,3 +172,11 @@ pub fn which(program: &str) -> PathBuf {
     assert!(out.status.success(), "{program} is not installed: scripts/test installs it");
     PathBuf::from(String::from_utf8(out.stdout).unwrap().trim())
 }
+
+/// `program args` on `display` under the frameshot helper, which grabs frame `frame` into `ppm`.
+pub fn frameshot_command(way: Way, program: &Path, args: &[&str], display: &str, ppm: &Path, frame: u32) -> Command {
+    let shot = frameshot();
+    let mut cmd = command(way, &[&shot], program, 120);
+    cmd.args(args).env("DISPLAY", display).env("FRAMESHOT_OUT", ppm).env("FRAMESHOT_FRAME", frame.to_string());
+    cmd
+}

@@ -35,7 +35,16 @@ pub(crate) struct Source<'a> {
     pub(crate) bytes: &'a [u8],
 }
 
-impl Source<'_> {
+impl<'a> Source<'a> {
+    /// An array of `size` components of `ty` every `stride` bytes (0: tightly packed), whose
+    /// `bytes` start at element `first`; None for a type glray does not read.
+    fn new(size: i32, ty: u32, stride: i32, first: u64, bytes: &'a [u8]) -> Option<Source<'a>> {
+        let size = size.max(0) as usize;
+        let elem = args::type_size(ty)? * size;
+        let stride = if stride > 0 { stride as usize } else { elem };
+        Some(Source { size, ty, stride, first, bytes })
+    }
+
     pub(crate) fn fetch(&self, i: u64, normalized: bool) -> Option<DVec4> {
         let at = usize::try_from(i.checked_sub(self.first)?).ok()?.checked_mul(self.stride)?;
         let b = self.bytes.get(at..)?;
@@ -181,28 +190,12 @@ impl Context {
             if let Some((i, d)) =
                 self.arrays.iter().enumerate().find(|(_, d)| d.kind == kind && (kind != 3 || d.index == 0))
             {
-                let elem = args::type_size(d.gl_type)? * d.size.max(0) as usize;
-                let stride = if d.stride > 0 { d.stride as usize } else { elem };
-                return Some(Source {
-                    size: d.size.max(0) as usize,
-                    ty: d.gl_type,
-                    stride,
-                    first: d.first,
-                    bytes: &self.array_bytes[i],
-                });
+                return Source::new(d.size, d.gl_type, d.stride, d.first, &self.array_bytes[i]);
             }
             // A buffer object.
             if p.enabled && p.buffer != 0 {
                 let buf = self.shared.buffers.get(&p.buffer)?;
-                let elem = args::type_size(p.ty)? * p.size.max(0) as usize;
-                let stride = if p.stride > 0 { p.stride as usize } else { elem };
-                return Some(Source {
-                    size: p.size.max(0) as usize,
-                    ty: p.ty,
-                    stride,
-                    first: 0,
-                    bytes: buf.get(p.offset as usize..).unwrap_or(&[]),
-                });
+                return Source::new(p.size, p.ty, p.stride, 0, buf.get(p.offset as usize..).unwrap_or(&[]));
             }
             None
         })
