@@ -47,7 +47,9 @@ fn main() {
             let egl = kind == "egl" || (kind == "mixed" && t % 2 == 1);
             std::thread::spawn(move || unsafe {
                 let rgb = if egl {
-                    let ctx = egl::Egl::new(W, H).expect("EGL context");
+                    let mut ctx = egl::Egl::new(W, H).expect("EGL context");
+                    // Other threads still use the process's one EGL display.
+                    ctx.terminate_on_drop = false;
                     let s = scene::Scene::new(None);
                     draw_frames(&s, || {});
                     let rgb = scene::read_rgb(W, H);

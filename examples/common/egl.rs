@@ -39,6 +39,9 @@ pub struct Egl {
     pub surface: *mut c_void,
     ctx: *mut c_void,
     pub version: (i32, i32),
+    /// eglTerminate the display when dropped. The display is one per process: a program whose
+    /// threads each have a context must not terminate it while the others still use it.
+    pub terminate_on_drop: bool,
 }
 
 impl Egl {
@@ -72,7 +75,7 @@ impl Egl {
         if ctx.is_null() || surface.is_null() || eglMakeCurrent(dpy, surface, surface, ctx) == 0 {
             return Err(fail("context or surface"));
         }
-        Ok(Egl { dpy, surface, ctx, version: (major, minor) })
+        Ok(Egl { dpy, surface, ctx, version: (major, minor), terminate_on_drop: true })
     }
 
     pub unsafe fn swap(&self) {
@@ -87,7 +90,9 @@ impl Drop for Egl {
             eglMakeCurrent(self.dpy, none, none, none);
             eglDestroySurface(self.dpy, self.surface);
             eglDestroyContext(self.dpy, self.ctx);
-            eglTerminate(self.dpy);
+            if self.terminate_on_drop {
+                eglTerminate(self.dpy);
+            }
         }
     }
 }
