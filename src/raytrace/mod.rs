@@ -124,11 +124,10 @@ pub fn in_skipped_begin() -> bool {
 /// the frame when this call is the trigger (or a raster operation about to draw over it), and
 /// says whether the real call is to be skipped: geometry the ray tracer takes is not
 /// rasterized as well.
-pub fn before(c: usize, args: &[u64]) -> bool {
+pub fn before(c: usize, _args: &[u64]) -> bool {
     if !ON.load(Ordering::Relaxed) {
         return false;
     }
-    let _ = args;
     if c == cmd::glEnd {
         return SKIPPED_BEGIN.with(|s| s.replace(false));
     }
@@ -239,11 +238,7 @@ impl Live {
         if frame.triangles.is_empty() {
             return;
         }
-        let (w, h) = if frame.width > 0 && frame.height > 0 {
-            (frame.width, frame.height)
-        } else {
-            frame.viewport.map_or((0, 0), |v| ((v.x + v.width).max(0) as u32, (v.y + v.height).max(0) as u32))
-        };
+        let (w, h) = frame.size();
         if w == 0 || h == 0 {
             return;
         }

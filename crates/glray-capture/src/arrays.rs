@@ -3,7 +3,7 @@
 //! vertices for the vertex stage.
 
 use glam::DVec4;
-use glray_core::trace::Value;
+use glray_core::trace::{array_kind, Value};
 
 use crate::args::{self, GL_INT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT};
 use crate::context::{Context, Fetched};
@@ -180,15 +180,18 @@ impl Context {
     /// Where each array (vertex, normal, color, texcoord 0) of the next draw comes from.
     pub(crate) fn sources(&self) -> [Option<Source<'_>>; 4] {
         let kinds = [
-            (glray_core::trace::array_kind::VERTEX, &self.client.vertex),
-            (glray_core::trace::array_kind::NORMAL, &self.client.normal),
-            (glray_core::trace::array_kind::COLOR, &self.client.color),
-            (glray_core::trace::array_kind::TEXCOORD, &self.client.texcoord[0]),
+            (array_kind::VERTEX, &self.client.vertex),
+            (array_kind::NORMAL, &self.client.normal),
+            (array_kind::COLOR, &self.client.color),
+            (array_kind::TEXCOORD, &self.client.texcoord[0]),
         ];
         kinds.map(|(kind, p)| {
             // Client memory recorded with the draw.
-            if let Some((i, d)) =
-                self.arrays.iter().enumerate().find(|(_, d)| d.kind == kind && (kind != 3 || d.index == 0))
+            if let Some((i, d)) = self
+                .arrays
+                .iter()
+                .enumerate()
+                .find(|(_, d)| d.kind == kind && (kind != array_kind::TEXCOORD || d.index == 0))
             {
                 return Source::new(d.size, d.gl_type, d.stride, d.first, &self.array_bytes[i]);
             }

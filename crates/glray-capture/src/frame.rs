@@ -161,6 +161,14 @@ impl Frame {
         self.triangles.is_empty()
     }
 
+    /// The size to render the frame at: the drawable, else the viewport's extent.
+    pub fn size(&self) -> (u32, u32) {
+        if self.width > 0 && self.height > 0 {
+            return (self.width, self.height);
+        }
+        self.viewport.map_or((0, 0), |v| ((v.x + v.width).max(0) as u32, (v.y + v.height).max(0) as u32))
+    }
+
     /// The camera most triangles were drawn with (the one `unified` keeps).
     pub fn main_camera(&self) -> u32 {
         let mut counts = vec![0usize; self.cameras.len()];

@@ -105,7 +105,8 @@ impl Context {
             if s.normalize {
                 n = n.normalize_or_zero();
             } else if s.rescale_normal {
-                let len = DMat3::from_mat4(mv).inverse().row(2).length();
+                // The inverse modelview's third row: the normal matrix's third column.
+                let len = nm.col(2).length();
                 if len > 0.0 {
                     n /= len;
                 }
@@ -121,6 +122,8 @@ impl Context {
             let c = cur.color.clamp(DVec4::ZERO, DVec4::ONE);
             ([c, c], [DVec4::ZERO; 2])
         };
+        let sphere_map = self.s.texgen.iter().any(|g| g.enabled && g.mode == GL_SPHERE_MAP);
+        let sphere_nm = if sphere_map { self.normal_matrix(&mv) } else { DMat3::IDENTITY };
         let s = &self.s;
         let mut tex = cur.texcoords[0];
         for (k, g) in s.texgen.iter().enumerate() {
@@ -129,8 +132,7 @@ impl Context {
                     GL_OBJECT_LINEAR => g.object_plane.dot(object),
                     GL_EYE_LINEAR => g.eye_plane.dot(eye),
                     GL_SPHERE_MAP => {
-                        let nm = DMat3::from_mat4(mv).inverse().transpose();
-                        let n = (nm * cur.normal).normalize_or_zero();
+                        let n = (sphere_nm * cur.normal).normalize_or_zero();
                         let u = (eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 }).normalize_or_zero();
                         let r = u - 2.0 * n.dot(u) * n;
                         let m = 2.0 * (r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0)).sqrt();

@@ -99,7 +99,8 @@ pub fn shade(frame: &Frame, camera: &Camera, triangle: usize, p: DVec3, per_pixe
     let mix4 = |v: [Vec4; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix3 = |v: [Vec3; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix2 = |v: [Vec2; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
-    let lit_here = per_pixel && t.lighting != NO_LIGHTING && t.camera == frame.main_camera();
+    // Triangles carried in from another camera have no lighting left (Frame::unified).
+    let lit_here = per_pixel && t.lighting != NO_LIGHTING;
     let (mut c, sec) = if lit_here {
         let l = &frame.lightings[t.lighting as usize];
         let mats = l.materials(mix4(t.base_colors).as_dvec4());

@@ -81,16 +81,13 @@ pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered
             let ray = Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack);
             let at = |hit: &Hit| r.origin + r.direction * hit.t as f64;
             let (color, d) = if simple {
-                match scene.closest(ray) {
-                    Some(hit)
-                        if frame.cleared
-                            || shade(frame, &camera, hit.triangle, at(&hit), per_pixel).depth < drow[x] as f64 =>
-                    {
-                        let f = shade(frame, &camera, hit.triangle, at(&hit), per_pixel);
-                        (opaque(&f), f.depth)
-                    }
-                    _ => continue,
+                let Some(hit) = scene.closest(ray) else { continue };
+                let f = shade(frame, &camera, hit.triangle, at(&hit), per_pixel);
+                // Over the last frame (no clear), the depth it left still tests.
+                if !frame.cleared && f.depth >= drow[x] as f64 {
+                    continue;
                 }
+                (opaque(&f), f.depth)
             } else {
                 scene.all(ray, &mut hits);
                 if hits.is_empty() {

@@ -21,17 +21,9 @@ pub struct Summary {
     pub triangles: u64,
 }
 
-/// The size to render a frame at: the drawable, else the viewport's extent.
-fn size_of(frame: &Frame) -> (u32, u32) {
-    if frame.width > 0 && frame.height > 0 {
-        return (frame.width, frame.height);
-    }
-    frame.viewport.map_or((0, 0), |v| ((v.x + v.width).max(0) as u32, (v.y + v.height).max(0) as u32))
-}
-
 /// The frame rendered (over `previous` if it did not clear), and as a top-down RGB image.
 pub fn picture(frame: &Frame, previous: Option<&Rendered>, options: &Options) -> Option<(Rendered, Image)> {
-    let (w, h) = size_of(frame);
+    let (w, h) = frame.size();
     if w == 0 || h == 0 {
         return None;
     }
