@@ -1,6 +1,7 @@
 //! GLRAY_DUMP_SCENE: each ray-traced frame's captured scene as OBJ + MTL (eye coordinates,
-//! one material per draw state, vertex colours averaged per triangle into the material's Kd
-//! when they are uniform) and a JSON summary, for debugging and tests.
+//! one material per draw state, vertex colours as OBJ's per-vertex colour extension; display
+//! list instances written out as the triangles they draw) and a JSON summary (triangles,
+//! meshes, instances, lights, camera), for debugging and tests.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -16,7 +17,8 @@ pub fn write(dir: &Path, number: u64, frame: &Frame) -> Result<(), String> {
         let _ = writeln!(mtl, "newmtl surface{i}\nKd 1 1 1\n# textured: {}\n", s.texturing.is_some());
     }
     let mut surface = u32::MAX;
-    for (i, t) in frame.triangles.iter().enumerate() {
+    let triangles = frame.all_triangles();
+    for (i, t) in triangles.iter().enumerate() {
         if t.surface != surface {
             surface = t.surface;
             let _ = writeln!(obj, "usemtl surface{surface}");
@@ -38,9 +40,16 @@ pub fn write(dir: &Path, number: u64, frame: &Frame) -> Result<(), String> {
         ),
         _ => "null".into(),
     };
+    let mut meshes: Vec<u64> = frame.instances.iter().map(|i| i.mesh.id).collect();
+    meshes.sort_unstable();
+    meshes.dedup();
+    let lights = frame.lightings.iter().map(|l| l.lights.len()).max().unwrap_or(0);
     let json = format!(
-        "{{\"frame\":{number},\"triangles\":{},\"surfaces\":{},\"textured_surfaces\":{},\"cameras\":{},\"unsupported_draws\":{},\"width\":{},\"height\":{},\"clear_color\":{:?},\"camera\":{camera}}}\n",
+        "{{\"frame\":{number},\"triangles\":{},\"frame_triangles\":{},\"meshes\":{},\"instances\":{},\"lights\":{lights},\"surfaces\":{},\"textured_surfaces\":{},\"cameras\":{},\"unsupported_draws\":{},\"width\":{},\"height\":{},\"clear_color\":{:?},\"camera\":{camera}}}\n",
+        triangles.len(),
         frame.triangles.len(),
+        meshes.len(),
+        frame.instances.len(),
         frame.surfaces.len(),
         frame.surfaces.iter().filter(|s| s.texturing.is_some()).count(),
         frame.cameras.len(),

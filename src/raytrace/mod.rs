@@ -39,7 +39,8 @@ struct Live {
     /// Command names by the recorder's numbers.
     names: Vec<Vec<u8>>,
     trigger: Trigger,
-    options: glray_render::Options,
+    /// The tracer, with the BVHs of display-list meshes kept across frames.
+    renderer: glray_render::Renderer,
     dump: Option<PathBuf>,
     /// The frame revision each thread presented last.
     presented: HashMap<u32, u64>,
@@ -65,7 +66,9 @@ pub fn configure(config: &Config) {
         capture: Capture::default(),
         names: Vec::new(),
         trigger,
-        options: glray_render::Options { per_pixel_lighting: config.per_pixel_lighting() },
+        renderer: glray_render::Renderer::new(glray_render::Options {
+            per_pixel_lighting: config.per_pixel_lighting(),
+        }),
         dump: config.dump_scene().map(PathBuf::from),
         presented: HashMap::new(),
         last: HashMap::new(),
@@ -235,14 +238,14 @@ impl Live {
             self.shown.remove(&thread);
             return;
         }
-        if frame.triangles.is_empty() {
+        if frame.is_empty() {
             return;
         }
         let (w, h) = frame.size();
         if w == 0 || h == 0 {
             return;
         }
-        let rendered = glray_render::render(frame, w, h, self.last.get(&thread), &self.options);
+        let rendered = self.renderer.render(frame, w, h, self.last.get(&thread));
         if let Some(dir) = &self.dump {
             if let Err(e) = dump::write(dir, self.frames, frame) {
                 glray_core::warn!("dump_scene: {e}");

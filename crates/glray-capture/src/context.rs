@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::{DMat3, DMat4, DVec3, DVec4, Vec4};
 use glray_core::trace::{ArrayData, Value};
 
-use crate::args::{self, GL_INT, GL_UNSIGNED_INT};
+use crate::args::{self, GL_DOUBLE, GL_FLOAT, GL_INT, GL_UNSIGNED_INT};
 use crate::arrays::Client;
 use crate::camera::Viewport;
 use crate::error::{ErrorFlag, GlError, GlResult};
@@ -19,10 +19,12 @@ use crate::gl::*;
 use crate::immediate::{Immediate, TEXCOORD_UNITS};
 use crate::lists::{DisplayLists, MAX_NESTING};
 use crate::matrix::{from_gl, Matrices};
-use crate::ops::Op;
+use crate::mesh::{Mesh, MeshBuilder};
+use crate::ops::{Attr, AttrForm, Op};
 use crate::primitive::GL_POLYGON;
 use crate::state::State;
 use crate::texture::{self, Level, Texture, Unpack};
+use crate::vertex::{decode_attribute, Given};
 
 /// A vertex after the vertex stage: eye position, lit colours of both faces, texture
 /// coordinates.
@@ -47,6 +49,26 @@ pub(crate) struct Fetched {
     pub(crate) tex: Option<DVec4>,
 }
 
+/// An array draw's fetched vertices as a mesh.
+fn fetched_mesh(mode: u32, verts: &[Fetched]) -> Mesh {
+    let mut b = MeshBuilder::new(mode, true);
+    for v in verts {
+        if let Some(n) = v.normal {
+            b.normal(n);
+        }
+        if let Some(c) = v.color {
+            b.color(c);
+        }
+        if let Some(t) = v.tex {
+            b.texcoord(t);
+        }
+        if let Some(p) = v.position {
+            b.vertex(p);
+        }
+    }
+    b.finish()
+}
+
 /// An argument kept by a display list.
 #[derive(Debug, Clone)]
 pub(crate) enum Kept {
@@ -60,8 +82,8 @@ pub(crate) enum Kept {
 #[derive(Debug, Clone)]
 pub(crate) enum Item {
     Call(Op, u32, Vec<Kept>),
-    /// An array draw, resolved to its vertices at compile time.
-    Draw(u32, Vec<Fetched>),
+    /// A glBegin/glEnd, or an array draw resolved to its vertices at compile time.
+    Mesh(Arc<Mesh>),
 }
 
 /// What the contexts of a share group share (glXCreateContext's shareList, eglCreateContext's
@@ -101,6 +123,8 @@ pub struct Context {
     pub(crate) revision: u64,
     /// The framebuffer object draws go to (0: the window's or OSMesa's buffer).
     pub(crate) framebuffer: u32,
+    /// The glBegin/glEnd being compiled into a list, as a mesh.
+    pub(crate) building: Option<MeshBuilder>,
 }
 
 impl Default for Context {
@@ -124,6 +148,7 @@ impl Default for Context {
             programmable: false,
             revision: 0,
             framebuffer: 0,
+            building: None,
         }
     }
 }
@@ -237,16 +262,63 @@ impl Context {
         self.errors.record(r);
     }
 
+    /// What the open list keeps of a call. A glBegin/glEnd of vertex attributes becomes one
+    /// mesh (glMaterial or a nested glCallList inside it, which a mesh cannot keep, turn it
+    /// back into calls); array draws become meshes of the vertices they fetch now.
     fn compile_items(&mut self, op: Op, ty: u32, a: &[Value]) -> Vec<Item> {
         if matches!(
             op,
             Op::DrawArrays | Op::DrawElements | Op::DrawRangeElements | Op::MultiDrawArrays | Op::MultiDrawElements
-        ) {
+        ) && self.building.is_none()
+        {
             // Client data is copied at compile time: keep the vertices the draw would fetch.
             let runs = self.fetch_draw(op, a).unwrap_or_default();
-            return runs.into_iter().map(|(mode, verts)| Item::Draw(mode, verts)).collect();
+            return runs.into_iter().map(|(mode, verts)| Item::Mesh(Arc::new(fetched_mesh(mode, &verts)))).collect();
+        }
+        if let Some(b) = self.building.as_mut() {
+            let given = match op {
+                Op::Attr(f) => decode_attribute(f, a).ok(),
+                _ => None,
+            };
+            match given {
+                Some(Given::Vertex(p)) => b.vertex(p),
+                Some(Given::Normal(n)) => b.normal(n),
+                Some(Given::Color(c)) => b.color(c),
+                Some(Given::TexCoord(0, t)) => b.texcoord(t),
+                Some(Given::SecondaryColor) => {}
+                _ if op == Op::End => {
+                    let mesh = self.building.take().map(|b| b.finish());
+                    return mesh.map(|m| Item::Mesh(Arc::new(m))).into_iter().collect();
+                }
+                _ => {
+                    let mut items = self.spill();
+                    items.push(Item::Call(op, ty, a.iter().map(keep).collect()));
+                    return items;
+                }
+            }
+            return Vec::new();
+        }
+        if op == Op::Begin && args::uint(a, 0) <= GL_POLYGON {
+            self.building = Some(MeshBuilder::new(args::uint(a, 0), false));
+            return Vec::new();
         }
         vec![Item::Call(op, ty, a.iter().map(keep).collect())]
+    }
+
+    /// The glBegin/glEnd being compiled, back as the calls that made it.
+    fn spill(&mut self) -> Vec<Item> {
+        let Some(b) = self.building.take() else { return Vec::new() };
+        let attr = |attr, n| Op::Attr(AttrForm { attr, n, ty: GL_DOUBLE, vector: false });
+        let call = |op, v: &[f64]| Item::Call(op, GL_DOUBLE, v.iter().map(|x| Kept::Float(*x)).collect());
+        let mut items = vec![Item::Call(Op::Begin, GL_FLOAT, vec![Kept::Int(b.mode() as i64)])];
+        items.extend(b.given().into_iter().map(|g| match g {
+            Given::Vertex(p) => call(attr(Attr::Vertex, 4), &p.to_array()),
+            Given::Normal(n) => call(attr(Attr::Normal, 3), &n.to_array()),
+            Given::Color(c) => call(attr(Attr::Color, 4), &c.to_array()),
+            Given::TexCoord(_, t) => call(attr(Attr::TexCoord, 4), &t.to_array()),
+            Given::SecondaryColor | Given::EdgeFlag(_) => unreachable!("a builder keeps neither"),
+        }));
+        items
     }
 
     fn run_list(&mut self, list: u32) -> GlResult {
@@ -262,10 +334,54 @@ impl Context {
                     let r = self.execute(*op, *ty, &a);
                     self.errors.record(r);
                 }
-                Item::Draw(mode, verts) => self.draw_fetched(*mode, verts),
+                Item::Mesh(mesh) => {
+                    let r = self.run_mesh(mesh);
+                    self.errors.record(r);
+                }
             }
         }
         self.nesting -= 1;
+        Ok(())
+    }
+
+    /// A list's mesh, called: an instance when the state allows, else its vertices through
+    /// the vertex stage as the calls that made it would have gone. The attribute values it
+    /// gave last stay current either way.
+    fn run_mesh(&mut self, mesh: &Arc<Mesh>) -> GlResult {
+        if self.imm.inside() && !mesh.from_arrays {
+            // The list's glBegin, inside the caller's.
+            self.begin_error.record::<()>(Err(GlError::InvalidOperation));
+            return Err(GlError::InvalidOperation);
+        }
+        let saved = self.imm.current;
+        if self.instances(mesh) {
+            self.instance(mesh);
+        } else {
+            let mut outs = Vec::with_capacity(mesh.positions.len());
+            for i in 0..mesh.vertex_count() {
+                let cur = &mut self.imm.current;
+                if let Some(n) = mesh.normals.at(i) {
+                    cur.normal = n.as_dvec3();
+                }
+                if let Some(c) = mesh.colors.at(i) {
+                    cur.color = c.as_dvec4();
+                }
+                if let Some(t) = mesh.texcoords.at(i) {
+                    cur.texcoords[0] = t.as_dvec4();
+                }
+                outs.push(self.vertex_stage(mesh.position(i)));
+            }
+            self.draw(mesh.mode, &outs);
+        }
+        // GL leaves the current values of enabled arrays undefined after a draw; Mesa keeps
+        // the last one of a colour array only.
+        let cur = &mut self.imm.current;
+        *cur = saved;
+        if !mesh.from_arrays || mesh.end_color.is_some() {
+            cur.normal = mesh.end_normal.unwrap_or(cur.normal);
+            cur.color = mesh.end_color.unwrap_or(cur.color);
+            cur.texcoords[0] = mesh.end_texcoord.unwrap_or(cur.texcoords[0]);
+        }
         Ok(())
     }
 
@@ -467,6 +583,7 @@ impl Context {
                     // What was drawn before is covered: the frame starts again.
                     self.frame.unsupported_draws = 0;
                     self.frame.triangles.clear();
+                    self.frame.instances.clear();
                     self.frame.surfaces.clear();
                     self.frame.lightings.clear();
                     self.frame.projection = None;
@@ -477,7 +594,13 @@ impl Context {
                 }
             }
             Op::NewList => self.shared.lists.new_list(args::uint(a, 0), args::uint(a, 1))?,
-            Op::EndList => self.shared.lists.end_list()?,
+            Op::EndList => {
+                // A glBegin left open in the list stays calls.
+                for item in self.spill() {
+                    self.shared.lists.compile(item);
+                }
+                self.shared.lists.end_list()?
+            }
             Op::CallList => self.run_list(args::uint(a, 0))?,
             Op::CallLists => {
                 let names =
@@ -847,6 +970,7 @@ impl Context {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frame::{Triangle, TriangleId};
     use crate::ops::op_for;
     use glam::Vec3;
 
@@ -954,17 +1078,142 @@ mod tests {
         call(&mut c, "glTranslatef", &[f(0.5), f(0.0), f(0.0)]);
         call(&mut c, "glCallList", &[i(1)]);
         call(&mut c, "glEndList", &[]);
-        assert_eq!(c.frame().triangles.len(), 1);
+        assert_eq!(c.frame().instances.len(), 1, "list 1's mesh, instanced");
         call(&mut c, "glLoadIdentity", &[]);
         call(&mut c, "glListBase", &[i(1)]);
         call(&mut c, "glCallLists", &[i(2), i(0x1401), Value::Blob(&[0, 1])]);
-        let t = &c.frame().triangles;
+        let t = &c.frame().all_triangles();
         assert_eq!(t.len(), 3, "lists 1 and 2 through glListBase");
+        assert!(c.frame().triangles.is_empty() && c.frame().instances.len() == 3);
         assert_eq!(t[1].positions[0].x, 0.0);
         assert_eq!(t[2].positions[0].x, 0.5, "list 2's translate, then list 1 nested");
         call(&mut c, "glNewList", &[i(3), i(0x1300)]);
         call(&mut c, "glNewList", &[i(4), i(0x1300)]);
         assert_eq!(c.errors.take(), 0x0502, "glNewList inside glNewList");
+    }
+
+    /// The state a list mesh's instance and the same draw made at once are compared under:
+    /// lighting with colour material, two sides, rescaled normals, a texture matrix.
+    fn lit_scene(c: &mut Context) {
+        for cap in [GL_LIGHTING, GL_LIGHT0, GL_COLOR_MATERIAL, GL_RESCALE_NORMAL] {
+            call(c, "glEnable", &[i(cap as i64)]);
+        }
+        call(c, "glLightModeli", &[i(GL_LIGHT_MODEL_TWO_SIDE as i64), i(1)]);
+        call(c, "glLightfv", &[i(GL_LIGHT0 as i64), i(0x1203), Value::Blob(&f32s(&[0.3, 0.4, 1.0, 0.0]))]);
+        call(c, "glMatrixMode", &[i(0x1702)]); // GL_TEXTURE
+        call(c, "glScalef", &[f(2.0), f(1.0), f(1.0)]);
+        call(c, "glMatrixMode", &[i(0x1700)]);
+        call(c, "glRotatef", &[f(30.0), f(1.0), f(1.0), f(0.0)]);
+        call(c, "glScalef", &[f(0.5), f(0.5), f(0.5)]);
+    }
+
+    fn f32s(v: &[f32]) -> Vec<u8> {
+        v.iter().flat_map(|x| x.to_ne_bytes()).collect()
+    }
+
+    /// A strip with a colour and normal given part-way, after a colour current at the call.
+    fn strip(c: &mut Context) {
+        call(c, "glBegin", &[i(5)]); // GL_TRIANGLE_STRIP
+        for (k, (x, y)) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].into_iter().enumerate() {
+            if k == 1 {
+                call(c, "glNormal3f", &[f(0.0), f(0.6), f(0.8)]);
+                call(c, "glTexCoord2f", &[f(0.25), f(0.5)]);
+            }
+            if k == 2 {
+                call(c, "glColor3f", &[f(0.0), f(1.0), f(0.0)]);
+            }
+            call(c, "glVertex3f", &[f(x), f(y), f(0.25)]);
+        }
+        call(c, "glEnd", &[]);
+    }
+
+    #[test]
+    pub(crate) fn list_meshes_are_instanced_as_the_vertex_stage_would_draw_them() {
+        let mut c = context();
+        lit_scene(&mut c);
+        call(&mut c, "glNewList", &[i(1), i(0x1300)]);
+        strip(&mut c);
+        call(&mut c, "glEndList", &[]);
+        for (flat, front_face) in [(false, GL_CCW), (true, GL_CCW), (false, GL_CW)] {
+            call(&mut c, "glShadeModel", &[i(if flat { GL_FLAT } else { GL_SMOOTH } as i64)]);
+            call(&mut c, "glFrontFace", &[i(front_face as i64)]);
+            let current = |c: &mut Context| {
+                call(c, "glColor3f", &[f(1.0), f(0.0), f(0.0)]);
+                call(c, "glNormal3f", &[f(0.0), f(0.0), f(1.0)]);
+                call(c, "glTexCoord2f", &[f(0.125), f(0.0)]);
+            };
+            current(&mut c);
+            strip(&mut c);
+            current(&mut c);
+            call(&mut c, "glCallList", &[i(1)]);
+            assert_eq!(c.imm.current.color, DVec4::new(0.0, 1.0, 0.0, 1.0), "the list's last colour stays current");
+            let frame = c.take_frame();
+            assert_eq!(frame.instances.len(), 1);
+            let direct = &frame.triangles;
+            let instanced = frame.instances[0].triangles(&frame.lightings);
+            assert_eq!(direct.len(), 2);
+            assert_eq!(instanced.len(), 2);
+            for (a, b) in direct.iter().zip(&instanced) {
+                let close = |x: &[f32], y: &[f32]| x.iter().zip(y).all(|(p, q)| (p - q).abs() < 1e-5);
+                let flat4 = |v: [Vec4; 3]| v.iter().flat_map(|c| c.to_array()).collect::<Vec<_>>();
+                let flat3 = |v: [Vec3; 3]| v.iter().flat_map(|c| c.to_array()).collect::<Vec<_>>();
+                assert!(close(&flat3(a.positions), &flat3(b.positions)), "{a:?}\n{b:?}");
+                assert!(close(&flat4(a.colors), &flat4(b.colors)), "flat {flat}: {:?} vs {:?}", a.colors, b.colors);
+                assert!(close(&flat3(a.normals), &flat3(b.normals)));
+                assert!(close(&flat4(a.base_colors), &flat4(b.base_colors)));
+                let uv = |t: &Triangle| t.texcoords.iter().flat_map(|c| c.to_array()).collect::<Vec<_>>();
+                assert!(close(&uv(a), &uv(b)), "{:?} vs {:?}", a.texcoords, b.texcoords);
+                assert_eq!((a.back, a.clip_w), (b.back, b.clip_w));
+                assert_eq!(a.sequence + 1, b.sequence);
+            }
+        }
+    }
+
+    #[test]
+    pub(crate) fn instances_cull_and_fall_back_to_the_vertex_stage_when_they_must() {
+        let mut c = context();
+        call(&mut c, "glNewList", &[i(1), i(0x1300)]);
+        triangle(&mut c, true);
+        triangle(&mut c, false);
+        call(&mut c, "glEndList", &[]);
+        call(&mut c, "glEnable", &[i(GL_CULL_FACE as i64)]);
+        call(&mut c, "glCallList", &[i(1)]);
+        let frame = c.take_frame();
+        assert_eq!(frame.instances.len(), 2);
+        let id = |instance| TriangleId { instance, index: 0 };
+        assert!(frame.triangle(id(0)).is_some() && frame.triangle(id(1)).is_none(), "the back one is culled");
+        assert_eq!(frame.all_triangles().len(), 1);
+        // Outlines are screen-space quads: the list's vertices go through the vertex stage.
+        call(&mut c, "glPolygonMode", &[i(GL_FRONT_AND_BACK as i64), i(GL_LINE as i64)]);
+        call(&mut c, "glCallList", &[i(1)]);
+        let frame = c.take_frame();
+        assert!(frame.instances.is_empty());
+        assert_eq!(frame.triangles.len(), 6, "three edges of the front triangle");
+    }
+
+    #[test]
+    pub(crate) fn a_glbegin_a_mesh_cannot_keep_stays_calls() {
+        let mut c = context();
+        call(&mut c, "glEnable", &[i(GL_LIGHTING as i64)]);
+        call(&mut c, "glNewList", &[i(1), i(0x1300)]);
+        call(&mut c, "glBegin", &[i(4)]);
+        call(&mut c, "glVertex2f", &[f(0.0), f(0.0)]);
+        // glMaterial between glBegin and glEnd: allowed, but not in a mesh.
+        call(&mut c, "glMaterialfv", &[i(GL_FRONT as i64), i(0x1200), Value::Blob(&f32s(&[1.0, 0.0, 0.0, 1.0]))]);
+        call(&mut c, "glVertex2f", &[f(1.0), f(0.0)]);
+        call(&mut c, "glVertex2f", &[f(0.0), f(1.0)]);
+        call(&mut c, "glEnd", &[]);
+        // Left open: stays calls too, and raises INVALID_OPERATION at the next glBegin.
+        call(&mut c, "glBegin", &[i(4)]);
+        call(&mut c, "glEndList", &[]);
+        call(&mut c, "glCallList", &[i(1)]);
+        let frame = c.take_frame();
+        assert!(frame.instances.is_empty());
+        assert_eq!(frame.triangles.len(), 1);
+        assert!(frame.triangles[0].colors[2].x > 0.1, "the material changed mid-glBegin: {:?}", frame.triangles[0]);
+        assert_eq!(c.errors.take(), 0, "the list's glBegin is open, not an error yet");
+        triangle(&mut c, true);
+        assert_eq!(c.errors.take(), 0x0502, "glBegin inside the list's glBegin");
     }
 
     #[test]

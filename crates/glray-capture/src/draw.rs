@@ -4,12 +4,44 @@
 
 use std::sync::Arc;
 
-use glam::{DMat3, DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
+use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
 
+use crate::camera::Viewport;
 use crate::context::{vec4, Context, Out};
 use crate::frame::{Surface, Texturing, Triangle, View, NO_LIGHTING};
 use crate::gl::*;
+use crate::instance::Instance;
+use crate::mesh::Mesh;
 use crate::primitive::{assemble, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
+
+/// What `draw_setup` decided for a draw.
+struct Setup {
+    projection: DMat4,
+    viewport: Viewport,
+    camera: u32,
+    surface: u32,
+    lighting: u32,
+    sequence: u32,
+}
+
+/// Whether a triangle with these clip-space corners faces front, from its window-space winding
+/// (from clip coordinates: exact even for triangles that cross the near plane, which clipping
+/// keeps on the same plane); None for one with no area on the screen.
+pub(crate) fn window_facing(clip: [DVec4; 3], front_ccw: bool) -> Option<bool> {
+    let [a, b, c] = clip;
+    let det =
+        DMat3::from_cols(DVec3::new(a.x, a.y, a.w), DVec3::new(b.x, b.y, b.w), DVec3::new(c.x, c.y, c.w)).determinant();
+    (det != 0.0).then_some((det > 0.0) == front_ccw)
+}
+
+/// Whether glCullFace's `cull` (when GL_CULL_FACE is on) removes a triangle of this facing.
+pub(crate) fn culled(cull: Option<u32>, front: bool) -> bool {
+    match cull {
+        Some(GL_FRONT_AND_BACK) => true,
+        Some(face) => (face == GL_FRONT) == front,
+        None => false,
+    }
+}
 
 impl Context {
     pub(crate) fn surface(&mut self) -> u32 {
@@ -58,17 +90,9 @@ impl Context {
         (self.frame.surfaces.len() - 1) as u32
     }
 
-    /// Assembles one draw's vertices into the frame's triangles.
-    pub(crate) fn draw(&mut self, mode: u32, verts: &[Out]) {
-        self.revision += 1;
-        if self.programmable {
-            self.frame.unsupported_draws += 1;
-            return;
-        }
-        let Ok(asm) = assemble(mode, verts.len()) else { return };
-        if verts.is_empty() || (asm.triangles.is_empty() && asm.lines.is_empty() && asm.points.is_empty()) {
-            return;
-        }
+    /// What every draw records in the frame: its camera (the first 3D draw's is the frame's),
+    /// surface, lighting and place in drawing order.
+    fn draw_setup(&mut self) -> Setup {
         let projection = *self.matrices.projection.top();
         let viewport = self.s.viewport;
         if self.frame.projection.is_none() {
@@ -96,6 +120,67 @@ impl Context {
         };
         let sequence = self.sequence;
         self.sequence += 1;
+        Setup { projection, viewport, camera, surface, lighting, sequence }
+    }
+
+    /// Whether a list's mesh can be drawn now as an instance: triangles filled, texture
+    /// coordinates not generated from positions, positions with w = 1, an invertible affine
+    /// modelview (rays go into the mesh's space through its inverse).
+    pub(crate) fn instances(&self, mesh: &Mesh) -> bool {
+        let mv = self.matrices.modelview.top();
+        !self.programmable
+            && !mesh.lines_or_points
+            && mesh.ws.is_none()
+            && self.s.polygon_mode == [GL_FILL, GL_FILL]
+            && !self.s.texgen.iter().any(|g| g.enabled)
+            && mv.determinant().is_normal()
+            && mv.row(3) == DVec4::W
+    }
+
+    /// A list's mesh drawn as an instance (the caller checked `instances`).
+    pub(crate) fn instance(&mut self, mesh: &Arc<Mesh>) {
+        self.revision += 1;
+        if mesh.triangles.is_empty() {
+            return;
+        }
+        let setup = self.draw_setup();
+        let modelview = *self.matrices.modelview.top();
+        let normal_matrix = self.normal_matrix(&modelview);
+        let s = &self.s;
+        let cur = &self.imm.current;
+        self.frame.instances.push(Instance {
+            mesh: mesh.clone(),
+            modelview,
+            object_to_clip: setup.projection * modelview,
+            normal_matrix,
+            normalize: s.normalize,
+            rescale_normal: s.rescale_normal,
+            texture_matrix: *self.matrices.texture[0].top(),
+            normal: cur.normal,
+            color: cur.color,
+            texcoord: cur.texcoords[0],
+            surface: setup.surface,
+            camera: setup.camera,
+            sequence: setup.sequence,
+            lighting: setup.lighting,
+            flat: s.flat,
+            front_ccw: s.front_ccw,
+            cull: s.cull.then_some(s.cull_face),
+        });
+    }
+
+    /// Assembles one draw's vertices into the frame's triangles.
+    pub(crate) fn draw(&mut self, mode: u32, verts: &[Out]) {
+        self.revision += 1;
+        if self.programmable {
+            self.frame.unsupported_draws += 1;
+            return;
+        }
+        let Ok(asm) = assemble(mode, verts.len()) else { return };
+        if verts.is_empty() || (asm.triangles.is_empty() && asm.lines.is_empty() && asm.points.is_empty()) {
+            return;
+        }
+        let Setup { projection, viewport, camera, surface, lighting, sequence } = self.draw_setup();
         let clip: Vec<DVec4> = verts.iter().map(|v| projection * v.eye).collect();
         let flat = self.s.flat;
         let color = |v: &Out, face: usize| vec4(v.colors[face]);
@@ -128,16 +213,8 @@ impl Context {
             }
         }
         for (index, &(t, provoking)) in asm.triangles.iter().enumerate() {
-            let [a, b, c] = t.map(|i| clip[i as usize]);
-            // The window-space winding, from clip coordinates (exact even for triangles that
-            // cross the near plane, which clipping keeps on the same plane).
-            let det = DMat3::from_cols(DVec3::new(a.x, a.y, a.w), DVec3::new(b.x, b.y, b.w), DVec3::new(c.x, c.y, c.w))
-                .determinant();
-            if det == 0.0 {
-                continue;
-            }
-            let front = (det > 0.0) == self.s.front_ccw;
-            if self.s.cull && (self.s.cull_face == GL_FRONT_AND_BACK || (self.s.cull_face == GL_FRONT) == front) {
+            let Some(front) = window_facing(t.map(|i| clip[i as usize]), self.s.front_ccw) else { continue };
+            if culled(self.s.cull.then_some(self.s.cull_face), front) {
                 continue;
             }
             let face = if front { 0 } else { 1 };

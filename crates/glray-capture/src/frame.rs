@@ -1,6 +1,7 @@
 //! What capture hands the renderer for one frame: triangles in eye coordinates with the colours
-//! the rasterizer would interpolate (already lit, with the face and flat shading decided), the
-//! surface state each was drawn with, and the camera. Lines and points arrive as the
+//! the rasterizer would interpolate (already lit, with the face and flat shading decided),
+//! instances of display-list meshes that make such triangles when a ray hits them, the surface
+//! state each was drawn with, and the camera. Lines and points arrive as the
 //! screen-aligned quads a rasterizer fills for them, so that the GL look needs no other
 //! primitive.
 
@@ -9,6 +10,7 @@ use std::sync::Arc;
 use glam::{DMat4, DVec4, Vec2, Vec3, Vec4};
 
 use crate::camera::Viewport;
+use crate::instance::Instance;
 use crate::lighting::{Light, LightModel, Material};
 use crate::texture::Texture;
 
@@ -127,10 +129,26 @@ pub struct Surface {
     pub clip_planes: Vec<DVec4>,
 }
 
+/// Which triangle of a frame: one of `Frame::triangles`, or one of an instance's mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct TriangleId {
+    /// Index into `Frame::instances`, or `TriangleId::FLAT` for `Frame::triangles`.
+    pub instance: u32,
+    pub index: u32,
+}
+
+impl TriangleId {
+    pub const FLAT: u32 = u32::MAX;
+}
+
 /// A captured frame.
 #[derive(Debug, Clone, Default)]
 pub struct Frame {
+    /// Triangles made this frame (immediate mode, array draws, lines and points), in eye
+    /// coordinates.
     pub triangles: Vec<Triangle>,
+    /// Display-list meshes drawn this frame, each with the state of its call.
+    pub instances: Vec<Instance>,
     pub surfaces: Vec<Surface>,
     /// The projection and viewport of the frame's first 3D draw: the camera.
     pub projection: Option<DMat4>,
@@ -158,7 +176,30 @@ pub struct Frame {
 
 impl Frame {
     pub fn is_empty(&self) -> bool {
-        self.triangles.is_empty()
+        self.triangles.is_empty() && self.instances.is_empty()
+    }
+
+    /// Triangles drawn, counting every instance's mesh (before culling).
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len() + self.instances.iter().map(|i| i.mesh.triangles.len()).sum::<usize>()
+    }
+
+    /// A triangle as the rasterizer would have drawn it; None for an instance's triangle that
+    /// is culled or has no area on the screen.
+    pub fn triangle(&self, id: TriangleId) -> Option<Triangle> {
+        if id.instance == TriangleId::FLAT {
+            return self.triangles.get(id.index as usize).copied();
+        }
+        self.instances.get(id.instance as usize)?.triangle(id.index as usize, &self.lightings)
+    }
+
+    /// Every triangle drawn, instances' made flat: for dumps and tests.
+    pub fn all_triangles(&self) -> Vec<Triangle> {
+        let mut out = self.triangles.clone();
+        for i in &self.instances {
+            out.extend(i.triangles(&self.lightings));
+        }
+        out
     }
 
     /// The size to render the frame at: the drawable, else the viewport's extent.
@@ -175,6 +216,11 @@ impl Frame {
         for t in &self.triangles {
             if let Some(c) = counts.get_mut(t.camera as usize) {
                 *c += 1;
+            }
+        }
+        for i in &self.instances {
+            if let Some(c) = counts.get_mut(i.camera as usize) {
+                *c += i.mesh.triangles.len();
             }
         }
         (0..counts.len()).max_by_key(|&i| (counts[i], std::cmp::Reverse(i))).unwrap_or(0) as u32
@@ -211,6 +257,13 @@ impl Frame {
             })
             .collect();
         let mut out = self.clone();
+        // Instances drawn with another camera are made flat, to be carried over below.
+        let (keep, carry): (Vec<Instance>, Vec<Instance>) =
+            std::mem::take(&mut out.instances).into_iter().partition(|i| i.camera as usize == main);
+        out.instances = keep;
+        for i in &carry {
+            out.triangles.extend(i.triangles(&self.lightings));
+        }
         out.projection = Some(to.projection);
         out.viewport = Some(to.viewport);
         for t in &mut out.triangles {

@@ -12,6 +12,9 @@
 //! - `draw`: a draw's vertices into the frame's triangles (facing, culling, polygon modes, flat
 //!   shading, lines and points as quads);
 //! - `frame`: what a frame hands the tracer, and bringing every draw into one camera;
+//! - `mesh`: a display list's draw kept in object coordinates, compiled once;
+//! - `instance`: one call of a mesh, whose triangles are made (lit, faced, culled) when a ray
+//!   hits them;
 //! - `texture`: texture objects and GL's sampling;
 //! - `camera`: rays through pixel centres from the projection and viewport, window depth of hits;
 //! - `error`: GL error codes and the error flag glGetError reads;
@@ -33,9 +36,11 @@ pub mod events;
 pub mod frame;
 mod gl;
 pub mod immediate;
+pub mod instance;
 pub mod lighting;
 pub mod lists;
 pub mod matrix;
+pub mod mesh;
 pub mod ops;
 pub mod primitive;
 mod state;

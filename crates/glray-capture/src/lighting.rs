@@ -148,6 +148,24 @@ pub fn light_vertex(
     }
 }
 
+/// The lit colours (primary, secondary) of one face of a vertex: the front with `materials[0]`,
+/// or, for face 1 with two-sided lighting, the back with the reversed normal and
+/// `materials[1]` (one-sided lighting gives the back face the front's colours).
+pub fn light_face(
+    position: DVec3,
+    normal: DVec3,
+    materials: &[Material; 2],
+    lights: &[Light],
+    model: &LightModel,
+    face: usize,
+) -> (DVec4, DVec4) {
+    if face == 1 && model.two_side {
+        light_vertex(position, -normal, &materials[1], lights, model)
+    } else {
+        light_vertex(position, normal, &materials[0], lights, model)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

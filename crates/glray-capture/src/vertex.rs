@@ -11,58 +11,99 @@ use crate::error::{GlError, GlResult};
 use crate::frame::Lighting;
 use crate::gl::*;
 use crate::immediate::TEXCOORD_UNITS;
-use crate::lighting::light_vertex;
+use crate::lighting::light_face;
 use crate::ops::{Attr, AttrForm};
+
+/// What an attribute command gives, decoded from its arguments.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Given {
+    Vertex(DVec4),
+    Normal(DVec3),
+    Color(DVec4),
+    /// A texture unit's coordinates.
+    TexCoord(usize, DVec4),
+    SecondaryColor,
+    EdgeFlag(bool),
+}
+
+/// Decodes glVertex*, glNormal*, glColor*, glTexCoord*, glMultiTexCoord*, ...: missing
+/// components take GL's defaults, integer colours and normals are normalised.
+pub(crate) fn decode_attribute(f: AttrForm, a: &[Value]) -> GlResult<Given> {
+    let (first, unit) = match f.attr {
+        Attr::MultiTexCoord => {
+            let unit = args::uint(a, 0).wrapping_sub(GL_TEXTURE0) as usize;
+            if unit >= TEXCOORD_UNITS {
+                return Err(GlError::InvalidEnum);
+            }
+            (1, unit)
+        }
+        _ => (0, 0),
+    };
+    let raw: Vec<f64> = if f.vector {
+        args::array(args::bytes(a, first), f.ty, f.n)
+    } else {
+        (first..first + f.n).map(|i| args::float(a, i)).collect()
+    };
+    let get = |k: usize, default: f64| raw.get(k).copied().unwrap_or(default);
+    let norm = |k: usize, default: f64| raw.get(k).map_or(default, |x| args::normalize(*x, f.ty));
+    Ok(match f.attr {
+        Attr::Vertex => Given::Vertex(DVec4::new(
+            get(0, 0.0),
+            get(1, 0.0),
+            if f.n > 2 { get(2, 0.0) } else { 0.0 },
+            if f.n > 3 { get(3, 1.0) } else { 1.0 },
+        )),
+        Attr::Normal => Given::Normal(DVec3::new(norm(0, 0.0), norm(1, 0.0), norm(2, 1.0))),
+        Attr::Color => {
+            let alpha = if f.n > 3 { norm(3, 1.0) } else { 1.0 };
+            Given::Color(DVec4::new(norm(0, 0.0), norm(1, 0.0), norm(2, 0.0), alpha))
+        }
+        Attr::TexCoord | Attr::MultiTexCoord => Given::TexCoord(
+            unit,
+            DVec4::new(
+                get(0, 0.0),
+                if f.n > 1 { get(1, 0.0) } else { 0.0 },
+                if f.n > 2 { get(2, 0.0) } else { 0.0 },
+                if f.n > 3 { get(3, 1.0) } else { 1.0 },
+            ),
+        ),
+        Attr::SecondaryColor => Given::SecondaryColor,
+        Attr::EdgeFlag => Given::EdgeFlag(get(0, 1.0) != 0.0),
+    })
+}
+
+/// An object-space normal in eye coordinates, as lighting uses it: through the normal matrix,
+/// then GL_NORMALIZE (to unit length) or GL_RESCALE_NORMAL (by the modelview's scale).
+pub(crate) fn eye_normal(nm: &DMat3, n: DVec3, normalize: bool, rescale: bool) -> DVec3 {
+    let n = *nm * n;
+    if normalize {
+        return n.normalize_or_zero();
+    }
+    if rescale {
+        // The inverse modelview's third row: the normal matrix's third column.
+        let len = nm.col(2).length();
+        if len > 0.0 {
+            return n / len;
+        }
+    }
+    n
+}
 
 impl Context {
     pub(crate) fn attribute(&mut self, f: AttrForm, a: &[Value]) -> GlResult {
-        let (first, unit) = match f.attr {
-            Attr::MultiTexCoord => {
-                let unit = args::uint(a, 0).wrapping_sub(GL_TEXTURE0) as usize;
-                if unit >= TEXCOORD_UNITS {
-                    return Err(GlError::InvalidEnum);
-                }
-                (1, unit)
-            }
-            _ => (0, 0),
-        };
-        let raw: Vec<f64> = if f.vector {
-            args::array(args::bytes(a, first), f.ty, f.n)
-        } else {
-            (first..first + f.n).map(|i| args::float(a, i)).collect()
-        };
-        let get = |k: usize, default: f64| raw.get(k).copied().unwrap_or(default);
-        let norm = |k: usize, default: f64| raw.get(k).map_or(default, |x| args::normalize(*x, f.ty));
-        match f.attr {
-            Attr::Vertex => {
-                let p = DVec4::new(
-                    get(0, 0.0),
-                    get(1, 0.0),
-                    if f.n > 2 { get(2, 0.0) } else { 0.0 },
-                    if f.n > 3 { get(3, 1.0) } else { 1.0 },
-                );
+        match decode_attribute(f, a)? {
+            Given::Vertex(p) => {
                 if self.imm.inside() {
                     let out = self.vertex_stage(p);
                     self.open.push(out);
                     self.imm.vertex(p);
                 }
             }
-            Attr::Normal => self.imm.normal(DVec3::new(norm(0, 0.0), norm(1, 0.0), norm(2, 1.0))),
-            Attr::Color => {
-                let alpha = if f.n > 3 { norm(3, 1.0) } else { 1.0 };
-                self.imm.color(DVec4::new(norm(0, 0.0), norm(1, 0.0), norm(2, 0.0), alpha));
-            }
-            Attr::TexCoord | Attr::MultiTexCoord => {
-                let t = DVec4::new(
-                    get(0, 0.0),
-                    if f.n > 1 { get(1, 0.0) } else { 0.0 },
-                    if f.n > 2 { get(2, 0.0) } else { 0.0 },
-                    if f.n > 3 { get(3, 1.0) } else { 1.0 },
-                );
-                self.imm.tex_coord(unit, t)?;
-            }
-            Attr::SecondaryColor => {}
-            Attr::EdgeFlag => self.imm.edge_flag(get(0, 1.0) != 0.0),
+            Given::Normal(n) => self.imm.normal(n),
+            Given::Color(c) => self.imm.color(c),
+            Given::TexCoord(unit, t) => self.imm.tex_coord(unit, t)?,
+            Given::SecondaryColor => {}
+            Given::EdgeFlag(e) => self.imm.edge_flag(e),
         }
         Ok(())
     }
@@ -101,22 +142,13 @@ impl Context {
         let (colors, secondary) = if s.lighting {
             let nm = self.normal_matrix(&mv);
             let s = &self.s;
-            let mut n = nm * cur.normal;
-            if s.normalize {
-                n = n.normalize_or_zero();
-            } else if s.rescale_normal {
-                // The inverse modelview's third row: the normal matrix's third column.
-                let len = nm.col(2).length();
-                if len > 0.0 {
-                    n /= len;
-                }
-            }
-            normal = n;
+            normal = eye_normal(&nm, cur.normal, s.normalize, s.rescale_normal);
             let mats = self.lighting_state().materials(cur.color);
             let s = &self.s;
             let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
-            let (f0, f1) = light_vertex(p, n, &mats[0], &s.lights, &s.model);
-            let (b0, b1) = if s.model.two_side { light_vertex(p, -n, &mats[1], &s.lights, &s.model) } else { (f0, f1) };
+            let (f0, f1) = light_face(p, normal, &mats, &s.lights, &s.model, 0);
+            let (b0, b1) =
+                if s.model.two_side { light_face(p, normal, &mats, &s.lights, &s.model, 1) } else { (f0, f1) };
             ([f0, b0], [f1, b1])
         } else {
             let c = cur.color.clamp(DVec4::ZERO, DVec4::ONE);

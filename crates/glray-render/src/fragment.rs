@@ -25,6 +25,8 @@ pub struct Fragment {
     pub depth: f64,
     /// Where it is, in eye coordinates (for user clip planes).
     pub eye: DVec3,
+    /// Its draw's surface (`Frame::surfaces`).
+    pub surface: u32,
 }
 
 /// Barycentric weights of `p` in the triangle (in the plane of the triangle).
@@ -92,8 +94,7 @@ fn lod(t: &Triangle, camera: &Camera, texels: f64) -> f32 {
 /// The fragment of `triangle` at eye-space point `p`. With `per_pixel`, lit triangles run the
 /// lighting equation at the point with the interpolated normal (Phong shading) instead of
 /// interpolating the colours lit at the corners (Gouraud, what GL does).
-pub fn shade(frame: &Frame, camera: &Camera, triangle: usize, p: DVec3, per_pixel: bool) -> Fragment {
-    let t = &frame.triangles[triangle];
+pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: bool) -> Fragment {
     let surface = &frame.surfaces[t.surface as usize];
     let b = weights(t, camera, p).as_vec3();
     let mix4 = |v: [Vec4; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
@@ -155,7 +156,7 @@ pub fn shade(frame: &Frame, camera: &Camera, triangle: usize, p: DVec3, per_pixe
         .clamp(0.0, 1.0);
         c = (c.xyz() * f + fog.color.xyz() * (1.0 - f)).extend(c.w);
     }
-    Fragment { color: c.clamp(Vec4::ZERO, Vec4::ONE), depth: camera.window_depth(p), eye: p }
+    Fragment { color: c.clamp(Vec4::ZERO, Vec4::ONE), depth: camera.window_depth(p), eye: p, surface: t.surface }
 }
 
 #[cfg(test)]

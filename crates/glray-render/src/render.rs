@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::fragment::{shade, Fragment};
 use crate::resolve::{closest_hit_suffices, in_drawing_order, opaque};
-use crate::scene::{Hit, Scene};
+use crate::scene::{Hit, Meshes, Scene};
 
 /// A rendered frame, laid out as GL's framebuffer: rows bottom-up.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,9 +35,44 @@ pub struct Options {
     pub per_pixel_lighting: bool,
 }
 
-/// Renders `frame` into a `width` x `height` image. A frame that did not clear the colour
-/// buffer is drawn over `previous` (the last frame of the same drawable), as GL would.
+/// Renders frames, keeping what outlives a frame: the BVHs of display-list meshes.
+#[derive(Default)]
+pub struct Renderer {
+    pub options: Options,
+    meshes: Meshes,
+}
+
+impl Renderer {
+    pub fn new(options: Options) -> Renderer {
+        Renderer { options, meshes: Meshes::default() }
+    }
+
+    /// Renders `frame` into a `width` x `height` image. A frame that did not clear the colour
+    /// buffer is drawn over `previous` (the last frame of the same drawable), as GL would.
+    pub fn render(&mut self, frame: &Frame, width: u32, height: u32, previous: Option<&Rendered>) -> Rendered {
+        self.meshes.prune();
+        render_with(frame, width, height, previous, &self.options, &mut self.meshes)
+    }
+
+    /// The display-list meshes whose BVHs are kept.
+    pub fn kept_meshes(&self) -> usize {
+        self.meshes.len()
+    }
+}
+
+/// Renders one frame with nothing kept for the next (see `Renderer`).
 pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered>, options: &Options) -> Rendered {
+    render_with(frame, width, height, previous, options, &mut Meshes::default())
+}
+
+fn render_with(
+    frame: &Frame,
+    width: u32,
+    height: u32,
+    previous: Option<&Rendered>,
+    options: &Options,
+    meshes: &mut Meshes,
+) -> Rendered {
     let unified;
     let frame = if frame.cameras.len() > 1 {
         unified = frame.unified();
@@ -55,13 +90,13 @@ pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered
         _ => (clear.repeat(w * h), vec![1.0f32; w * h]),
     };
     let camera = match (frame.projection, frame.viewport) {
-        (Some(p), Some(v)) if !frame.triangles.is_empty() => Camera::new(p, v, frame.depth_range),
+        (Some(p), Some(v)) if !frame.is_empty() => Camera::new(p, v, frame.depth_range),
         _ => None,
     };
     let Some(camera) = camera else {
         return Rendered { width, height, rgba, depth };
     };
-    let scene = Scene::build(frame);
+    let scene = Scene::build(frame, meshes);
     let simple = closest_hit_suffices(frame);
     let per_pixel = options.per_pixel_lighting;
     let v = camera.viewport;
@@ -82,7 +117,8 @@ pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered
             let at = |hit: &Hit| r.origin + r.direction * hit.t as f64;
             let (color, d) = if simple {
                 let Some(hit) = scene.closest(ray) else { continue };
-                let f = shade(frame, &camera, hit.triangle, at(&hit), per_pixel);
+                let Some(t) = frame.triangle(hit.id) else { continue };
+                let f = shade(frame, &camera, &t, at(&hit), per_pixel);
                 // Over the last frame (no clear), the depth it left still tests.
                 if !frame.cleared && f.depth >= drow[x] as f64 {
                     continue;
@@ -95,16 +131,13 @@ pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered
                 }
                 // A ray through a shared edge hits both triangles; the rasterizer's fill rule
                 // gives the pixel to one of them, so one hit per draw and depth is kept.
-                hits.sort_by(|a, b| {
-                    let (sa, sb) = (frame.triangles[a.triangle].sequence, frame.triangles[b.triangle].sequence);
-                    sa.cmp(&sb).then(a.t.total_cmp(&b.t)).then(a.triangle.cmp(&b.triangle))
-                });
-                hits.dedup_by(|b, a| {
-                    frame.triangles[a.triangle].sequence == frame.triangles[b.triangle].sequence
-                        && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1e-3)
-                });
+                hits.sort_by(|a, b| a.sequence.cmp(&b.sequence).then(a.t.total_cmp(&b.t)).then(a.id.cmp(&b.id)));
+                hits.dedup_by(|b, a| a.sequence == b.sequence && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1e-3));
                 frags.clear();
-                frags.extend(hits.iter().map(|hit| (*hit, shade(frame, &camera, hit.triangle, at(hit), per_pixel))));
+                frags.extend(hits.iter().filter_map(|hit| {
+                    let t = frame.triangle(hit.id)?;
+                    Some((*hit, shade(frame, &camera, &t, at(hit), per_pixel)))
+                }));
                 let under = &row[4 * x..4 * x + 4];
                 let under = Vec4::from_array(std::array::from_fn(|i| under[i] as f32 / 255.0));
                 in_drawing_order(frame, &mut frags, under, drow[x] as f64)
@@ -291,5 +324,88 @@ mod tests {
         let one = run(1);
         assert_eq!(one, run(2));
         assert_eq!(one, run(8));
+    }
+
+    /// Follows calls (scalar arguments: integers, or floats as F64) in a fresh context with
+    /// a perspective camera; returns the context.
+    fn followed(calls: &[(&str, Vec<glray_core::trace::Value<'static>>)]) -> glray_capture::context::Context {
+        use glray_core::trace::Value;
+        let mut c = glray_capture::context::Context::default();
+        c.set_drawable(48, 48);
+        let setup: Vec<(&str, Vec<Value>)> = vec![
+            ("glMatrixMode", vec![Value::Int(0x1701)]),
+            ("glFrustum", [-0.5, 0.5, -0.5, 0.5, 1.0, 20.0].map(Value::F64).to_vec()),
+            ("glMatrixMode", vec![Value::Int(0x1700)]),
+            ("glEnable", vec![Value::Int(0x0B50)]), // GL_LIGHTING
+            ("glEnable", vec![Value::Int(0x4000)]), // GL_LIGHT0
+            ("glEnable", vec![Value::Int(0x0B57)]), // GL_COLOR_MATERIAL
+            ("glEnable", vec![Value::Int(0x0B71)]), // GL_DEPTH_TEST
+        ];
+        for (name, args) in setup.iter().chain(calls) {
+            let (op, ty) = glray_capture::ops::op_for(name).unwrap();
+            c.call(op, ty, args);
+        }
+        c
+    }
+
+    /// A box of quads at (x, 0, -6), in a colour, with normals: four sides and a top.
+    fn box_calls(x: f64, color: [f64; 3]) -> Vec<(&'static str, Vec<glray_core::trace::Value<'static>>)> {
+        use glray_core::trace::Value::{Int, F64};
+        vec![
+            ("glPushMatrix", vec![]),
+            ("glTranslatef", vec![F64(x), F64(0.0), F64(-6.0)]),
+            ("glRotatef", vec![F64(30.0), F64(1.0), F64(1.0), F64(0.0)]),
+            ("glColor3f", color.map(F64).to_vec()),
+            ("glCallList", vec![Int(1)]),
+            ("glPopMatrix", vec![]),
+        ]
+    }
+
+    fn box_list() -> Vec<(&'static str, Vec<glray_core::trace::Value<'static>>)> {
+        use glray_core::trace::Value::{Int, F64};
+        let faces: [([f64; 3], [[f64; 3]; 4]); 3] = [
+            ([0.0, 0.0, 1.0], [[-1.0, -1.0, 1.0], [1.0, -1.0, 1.0], [1.0, 1.0, 1.0], [-1.0, 1.0, 1.0]]),
+            ([1.0, 0.0, 0.0], [[1.0, -1.0, 1.0], [1.0, -1.0, -1.0], [1.0, 1.0, -1.0], [1.0, 1.0, 1.0]]),
+            ([0.0, 1.0, 0.0], [[-1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, -1.0], [-1.0, 1.0, -1.0]]),
+        ];
+        let mut v = vec![("glNewList", vec![Int(1), Int(0x1300)]), ("glBegin", vec![Int(7)])];
+        for (n, corners) in faces {
+            v.push(("glNormal3f", n.map(F64).to_vec()));
+            for c in corners {
+                v.push(("glVertex3f", c.map(F64).to_vec()));
+            }
+        }
+        v.push(("glEnd", vec![]));
+        v.push(("glEndList", vec![]));
+        v
+    }
+
+    #[test]
+    fn list_instances_render_as_their_triangles_would_and_keep_their_bvh() {
+        let mut calls = box_list();
+        calls.extend(box_calls(-1.2, [1.0, 0.5, 0.0]));
+        calls.extend(box_calls(1.2, [0.0, 0.5, 1.0]));
+        let mut c = followed(&calls);
+        let frame = c.take_frame();
+        assert_eq!((frame.instances.len(), frame.triangles.len()), (2, 0));
+        let mut renderer = Renderer::default();
+        let traced = renderer.render(&frame, 48, 48, None);
+        assert_eq!(renderer.kept_meshes(), 1, "one mesh, two instances");
+        // The same triangles, made flat: the picture must not change.
+        let flat = Frame { triangles: frame.all_triangles(), instances: Vec::new(), ..frame.clone() };
+        let reference = render(&flat, 48, 48, None, &Options::default());
+        let differ = traced.rgba.iter().zip(&reference.rgba).filter(|(a, b)| a.abs_diff(**b) > 1).count();
+        assert_eq!(differ, 0, "instances and flat triangles differ");
+        let lit = traced.rgba.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
+        assert!(lit > 300, "both boxes are seen: {lit} pixels");
+        // Deleting the list frees its mesh, and the tracer its BVH, at the next frame.
+        let delete = [("glDeleteLists", vec![glray_core::trace::Value::Int(1), glray_core::trace::Value::Int(1)])];
+        for (name, args) in &delete {
+            let (op, ty) = glray_capture::ops::op_for(name).unwrap();
+            c.call(op, ty, args);
+        }
+        drop((frame, flat));
+        renderer.render(&c.take_frame(), 48, 48, None);
+        assert_eq!(renderer.kept_meshes(), 0);
     }
 }

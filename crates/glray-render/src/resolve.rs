@@ -75,10 +75,10 @@ fn blend(surface: &Surface, src: Vec4, dst: Vec4) -> Vec4 {
 /// A pixel's colour and depth after all its fragments, in drawing order. `hits` come with
 /// their fragments; `color` and `depth` are what the pixel held before the frame's draws.
 pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4, depth: f64) -> (Vec4, f64) {
-    hits.sort_by_key(|(h, _)| (frame.triangles[h.triangle].sequence, h.triangle));
+    hits.sort_by_key(|(h, _)| (h.sequence, h.id));
     let (mut color, mut depth) = (color, depth);
-    for (h, f) in hits.iter() {
-        let s = &frame.surfaces[frame.triangles[h.triangle].surface as usize];
+    for (_, f) in hits.iter() {
+        let s = &frame.surfaces[f.surface as usize];
         if s.clip_planes.iter().any(|p| p.dot(f.eye.extend(1.0)) < 0.0) {
             continue;
         }

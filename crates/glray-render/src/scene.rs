@@ -1,20 +1,26 @@
-//! The frame's triangles and a BVH over them. Built per frame (every triangle is already in eye
-//! coordinates); obvhs's compressed-wide BVH with its closest-hit and all-hits traversals.
+//! The frame's geometry and its BVHs (obvhs compressed-wide BVHs), in two levels:
+//! - the triangles made this frame (immediate mode, array draws, lines and points), already in
+//!   eye coordinates: one BVH, built per frame;
+//! - display-list meshes: one BVH each, in object coordinates, built the first time a frame
+//!   draws the mesh and kept while the mesh lives (`Meshes`), so that a list drawn every frame
+//!   is built once; a top-level BVH over the frame's instances (their bounds in eye space),
+//!   and rays taken into each instance's object space.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Weak};
 use std::time::Duration;
 
-use glam::Vec3A;
-use glray_capture::frame::Frame;
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use glam::{Affine3A, DMat4, Vec3, Vec3A};
+use glray_capture::frame::{Frame, TriangleId};
+use glray_capture::instance::Instance;
+use glray_capture::mesh::Mesh;
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::builder::{build_cwbvh, build_cwbvh_from_tris};
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
-
-pub struct Scene {
-    tris: Vec<Triangle>,
-    bvh: Option<CwBvh>,
-}
+use rayon::prelude::*;
 
 /// Ray-triangle intersection (Moller-Trumbore) that accepts hits a hair outside the edges:
 /// a ray through a pixel centre that lies exactly on an edge two triangles share must hit one
@@ -47,50 +53,207 @@ fn intersect(tri: &Triangle, ray: &Ray) -> f32 {
     }
 }
 
-/// A ray's hit: which of the frame's triangles, and where along the ray.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Hit {
-    pub triangle: usize,
-    pub t: f32,
+fn triangle(corners: [Vec3; 3]) -> Triangle {
+    let [v0, v1, v2] = corners.map(Vec3A::from);
+    Triangle { v0, v1, v2 }
 }
 
-impl Scene {
-    pub fn build(frame: &Frame) -> Scene {
-        let tris: Vec<Triangle> = frame
-            .triangles
-            .iter()
-            .map(|t| Triangle {
-                v0: Vec3A::from(t.positions[0]),
-                v1: Vec3A::from(t.positions[1]),
-                v2: Vec3A::from(t.positions[2]),
+/// A ray's hit: which triangle, where along the ray, and its draw's place in drawing order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    pub id: TriangleId,
+    pub t: f32,
+    pub sequence: u32,
+}
+
+/// The BVHs of display-list meshes, kept across frames for as long as a list holds the mesh.
+#[derive(Default)]
+pub struct Meshes {
+    built: HashMap<u64, (Weak<Mesh>, Arc<CwBvh>)>,
+}
+
+impl Meshes {
+    /// The BVH of each of the frame's instances' meshes: built (in parallel) for meshes not
+    /// seen before; those of meshes no list holds any more are dropped.
+    fn prepare(&mut self, frame: &Frame) -> Vec<Arc<CwBvh>> {
+        self.prune();
+        let mut new: Vec<&Arc<Mesh>> =
+            frame.instances.iter().map(|i| &i.mesh).filter(|m| !self.built.contains_key(&m.id)).collect();
+        new.sort_by_key(|m| m.id);
+        new.dedup_by_key(|m| m.id);
+        let bvhs: Vec<(u64, Weak<Mesh>, Arc<CwBvh>)> = new
+            .par_iter()
+            .map(|m| {
+                let tris: Vec<Triangle> = (0..m.triangles.len()).map(|i| triangle(m.corners(i))).collect();
+                let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Duration::default());
+                (m.id, Arc::downgrade(m), Arc::new(bvh))
             })
             .collect();
+        for (id, mesh, bvh) in bvhs {
+            self.built.insert(id, (mesh, bvh));
+        }
+        frame.instances.iter().map(|i| self.built[&i.mesh.id].1.clone()).collect()
+    }
+
+    /// Drops the BVHs of meshes no list holds any more.
+    pub fn prune(&mut self) {
+        self.built.retain(|_, (mesh, _)| mesh.strong_count() > 0);
+    }
+
+    /// How many meshes have a BVH.
+    pub fn len(&self) -> usize {
+        self.built.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.built.is_empty()
+    }
+}
+
+/// An instance ready to trace: its mesh's BVH and the way into its object space.
+struct Placed<'f> {
+    instance: &'f Instance,
+    bvh: Arc<CwBvh>,
+    to_object: Affine3A,
+}
+
+impl Placed<'_> {
+    fn ray(&self, r: &Ray) -> Ray {
+        // A linear map keeps the ray's parameter: t is the same in both spaces.
+        let o = self.to_object.transform_point3a(r.origin);
+        let d = self.to_object.transform_vector3a(r.direction);
+        Ray::new(o, d, r.tmin, r.tmax)
+    }
+
+    /// The hit with the mesh's triangle in BVH slot `slot`, if the triangle is drawn at all.
+    fn intersect(&self, ray: &Ray, slot: usize) -> (u32, f32) {
+        let index = self.bvh.primitive_indices[slot] as usize;
+        let t = intersect(&triangle(self.instance.mesh.corners(index)), ray);
+        if t.is_finite() && !self.instance.keeps(index) {
+            return (index as u32, f32::INFINITY);
+        }
+        (index as u32, t)
+    }
+}
+
+pub struct Scene<'f> {
+    frame: &'f Frame,
+    tris: Vec<Triangle>,
+    bvh: Option<CwBvh>,
+    placed: Vec<Placed<'f>>,
+    top: Option<CwBvh>,
+}
+
+impl<'f> Scene<'f> {
+    pub fn build(frame: &'f Frame, meshes: &mut Meshes) -> Scene<'f> {
+        let tris: Vec<Triangle> = frame.triangles.iter().map(|t| triangle(t.positions)).collect();
         let bvh = (!tris.is_empty())
             .then(|| build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Duration::default()));
-        Scene { tris, bvh }
+        let bvhs = meshes.prepare(frame);
+        let placed: Vec<Placed> = frame
+            .instances
+            .iter()
+            .zip(bvhs)
+            .map(|(instance, bvh)| Placed {
+                instance,
+                bvh,
+                to_object: Affine3A::from_mat4(instance.modelview.inverse().as_mat4()),
+            })
+            .collect();
+        let bounds: Vec<Aabb> = placed.iter().map(|p| eye_bounds(&p.instance.mesh, &p.instance.modelview)).collect();
+        let top =
+            (!bounds.is_empty()).then(|| build_cwbvh(&bounds, BvhBuildParams::fast_build(), &mut Duration::default()));
+        Scene { frame, tris, bvh, placed, top }
     }
 
     /// The closest hit in [tmin, tmax].
     pub fn closest(&self, ray: Ray) -> Option<Hit> {
-        let bvh = self.bvh.as_ref()?;
-        let mut hit = RayHit::none();
-        if bvh.ray_traverse(ray, &mut hit, |r, id| intersect(&self.tris[bvh.primitive_indices[id] as usize], r)) {
-            Some(Hit { triangle: bvh.primitive_indices[hit.primitive_id as usize] as usize, t: hit.t })
-        } else {
-            None
+        let mut best: Option<(TriangleId, f32)> = None;
+        let mut ray = ray;
+        if let Some(bvh) = &self.bvh {
+            let mut hit = RayHit::none();
+            if bvh.ray_traverse(ray, &mut hit, |r, slot| intersect(&self.tris[bvh.primitive_indices[slot] as usize], r))
+            {
+                let index = bvh.primitive_indices[hit.primitive_id as usize];
+                best = Some((TriangleId { instance: TriangleId::FLAT, index }, hit.t));
+                ray.tmax = hit.t;
+            }
         }
+        if let Some(top) = &self.top {
+            let mut hit = RayHit::none();
+            top.ray_traverse(ray, &mut hit, |r, slot| {
+                let k = top.primitive_indices[slot] as usize;
+                let p = &self.placed[k];
+                let mut inner = RayHit::none();
+                let mut index = 0;
+                if p.bvh.ray_traverse(p.ray(r), &mut inner, |r, slot| {
+                    let (i, t) = p.intersect(r, slot);
+                    if t < r.tmax {
+                        index = i;
+                    }
+                    t
+                }) {
+                    best = Some((TriangleId { instance: k as u32, index }, inner.t));
+                    inner.t
+                } else {
+                    f32::INFINITY
+                }
+            });
+        }
+        best.map(|(id, t)| Hit { id, t, sequence: self.sequence(id) })
     }
 
     /// Every hit in [tmin, tmax], in no particular order.
     pub fn all(&self, ray: Ray, out: &mut Vec<Hit>) {
         out.clear();
-        let Some(bvh) = self.bvh.as_ref() else { return };
-        bvh.ray_traverse_anyhit(ray, |r, id| {
-            let triangle = bvh.primitive_indices[id] as usize;
-            let t = intersect(&self.tris[triangle], r);
-            if t >= r.tmin && t <= r.tmax {
-                out.push(Hit { triangle, t });
-            }
-        });
+        if let Some(bvh) = &self.bvh {
+            bvh.ray_traverse_anyhit(ray, |r, slot| {
+                let index = bvh.primitive_indices[slot];
+                let t = intersect(&self.tris[index as usize], r);
+                if t >= r.tmin && t <= r.tmax {
+                    let id = TriangleId { instance: TriangleId::FLAT, index };
+                    out.push(Hit { id, t, sequence: self.sequence(id) });
+                }
+            });
+        }
+        if let Some(top) = &self.top {
+            top.ray_traverse_anyhit(ray, |r, slot| {
+                let k = top.primitive_indices[slot] as usize;
+                let p = &self.placed[k];
+                p.bvh.ray_traverse_anyhit(p.ray(r), |r, slot| {
+                    let (index, t) = p.intersect(r, slot);
+                    if t >= r.tmin && t <= r.tmax {
+                        out.push(Hit {
+                            id: TriangleId { instance: k as u32, index },
+                            t,
+                            sequence: p.instance.sequence,
+                        });
+                    }
+                });
+            });
+        }
     }
+
+    fn sequence(&self, id: TriangleId) -> u32 {
+        if id.instance == TriangleId::FLAT {
+            self.frame.triangles[id.index as usize].sequence
+        } else {
+            self.placed[id.instance as usize].instance.sequence
+        }
+    }
+}
+
+/// The eye-space box around a mesh drawn with `modelview`.
+fn eye_bounds(mesh: &Mesh, modelview: &DMat4) -> Aabb {
+    let (lo, hi) = (mesh.min.as_dvec3(), mesh.max.as_dvec3());
+    let mut b = Aabb::INVALID;
+    for k in 0..8 {
+        let c = glam::DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        );
+        b.extend(Vec3A::from(modelview.transform_point3(c).as_vec3()));
+    }
+    b
 }

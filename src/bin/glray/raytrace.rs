@@ -9,7 +9,7 @@ use glray_capture::events::Capture;
 use glray_capture::frame::Frame;
 use glray_core::image::Image;
 use glray_core::trace::{Event, Reader};
-use glray_render::{Options, Rendered};
+use glray_render::{Options, Rendered, Renderer};
 
 use crate::replay::FrameSet;
 
@@ -22,12 +22,12 @@ pub struct Summary {
 }
 
 /// The frame rendered (over `previous` if it did not clear), and as a top-down RGB image.
-pub fn picture(frame: &Frame, previous: Option<&Rendered>, options: &Options) -> Option<(Rendered, Image)> {
+pub fn picture(frame: &Frame, previous: Option<&Rendered>, renderer: &mut Renderer) -> Option<(Rendered, Image)> {
     let (w, h) = frame.size();
     if w == 0 || h == 0 {
         return None;
     }
-    let r = glray_render::render(frame, w, h, previous, options);
+    let r = renderer.render(frame, w, h, previous);
     let image = Image::from_bottom_up(w, h, &r.rgba, 4);
     Some((r, image))
 }
@@ -54,6 +54,7 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options
     let mut summary = Summary::default();
     let mut read_pixels: Vec<bool> = Vec::new();
     let mut last: HashMap<u32, Rendered> = HashMap::new();
+    let mut renderer = Renderer::new(*options);
     while let Some(event) = reader.next_event().map_err(|e| e.to_string())? {
         if let Event::Name { number } = event {
             read_pixels.resize(number + 1, false);
@@ -70,8 +71,8 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options
                 && a[5] == 0x1401
             {
                 let frame = capture.context(*thread).frame().clone();
-                let image =
-                    picture(&frame, last.get(thread), options).and_then(|(_, i)| crop(&i, a[0], a[1], a[2], a[3]));
+                let image = picture(&frame, last.get(thread), &mut renderer)
+                    .and_then(|(_, i)| crop(&i, a[0], a[1], a[2], a[3]));
                 if let Some(image) = image {
                     let path: PathBuf = out.join(format!("readpixels-{:04}.png", summary.readpixels_written));
                     image.write_png(&path)?;
@@ -84,9 +85,9 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options
         if let Some((thread, frame)) = capture.event(&event, |n| names[n]) {
             let number = number.unwrap_or_default();
             // Every frame is rendered (a later one may draw over it); the chosen ones written.
-            if let Some((rendered, image)) = picture(&frame, last.get(&thread), options) {
+            if let Some((rendered, image)) = picture(&frame, last.get(&thread), &mut renderer) {
                 if frames.contains(number) {
-                    summary.triangles += frame.triangles.len() as u64;
+                    summary.triangles += frame.triangle_count() as u64;
                     image.write_png(&out.join(format!("frame-{number:04}.png")))?;
                     summary.frames_written += 1;
                 }

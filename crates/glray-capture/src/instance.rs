@@ -1,0 +1,114 @@
+//! One glCallList of a display list's mesh: the transform and the state of that call. Its
+//! triangles are made when a ray needs one (`Instance::triangle`), with what the vertex stage
+//! and primitive assembly would have made of them then: eye positions, facing and culling,
+//! lighting of the visible face at each corner (or the provoking one's, flat), texture
+//! coordinates through the texture matrix. A frame therefore costs its instances, and the
+//! lighting of what is seen, not a pass over every vertex.
+
+use std::sync::Arc;
+
+use glam::{DMat3, DMat4, DVec3, DVec4, Vec2};
+
+use crate::context::vec4;
+use crate::draw::{culled, window_facing};
+use crate::frame::{Lighting, Triangle, NO_LIGHTING};
+use crate::lighting::light_face;
+use crate::mesh::Mesh;
+use crate::vertex::eye_normal;
+
+/// A mesh drawn once, with the state of that draw.
+#[derive(Debug, Clone)]
+pub struct Instance {
+    pub mesh: Arc<Mesh>,
+    /// Object to eye coordinates (the modelview of the call).
+    pub modelview: DMat4,
+    /// Object to clip coordinates (the projection of the call times the modelview): facing.
+    pub object_to_clip: DMat4,
+    pub normal_matrix: DMat3,
+    pub normalize: bool,
+    pub rescale_normal: bool,
+    pub texture_matrix: DMat4,
+    /// The attribute values current at the call, for vertices the list gave none.
+    pub normal: DVec3,
+    pub color: DVec4,
+    pub texcoord: DVec4,
+    pub surface: u32,
+    pub camera: u32,
+    pub sequence: u32,
+    /// Index into `Frame::lightings`, or `NO_LIGHTING`.
+    pub lighting: u32,
+    pub flat: bool,
+    pub front_ccw: bool,
+    /// glCullFace's face when GL_CULL_FACE is on.
+    pub cull: Option<u32>,
+}
+
+impl Instance {
+    /// Clip coordinates of triangle `index`'s corners.
+    fn clip(&self, index: usize) -> [DVec4; 3] {
+        let m = &self.mesh;
+        m.triangles[index].map(|i| self.object_to_clip * m.position(i))
+    }
+
+    /// Whether triangle `index` is drawn at all (not culled, not degenerate on the screen).
+    pub fn keeps(&self, index: usize) -> bool {
+        window_facing(self.clip(index), self.front_ccw).is_some_and(|front| !culled(self.cull, front))
+    }
+
+    /// Triangle `index` as the rasterizer would have drawn it; None if culled or degenerate.
+    pub fn triangle(&self, index: usize, lightings: &[Lighting]) -> Option<Triangle> {
+        let m = &self.mesh;
+        let clip = self.clip(index);
+        let front = window_facing(clip, self.front_ccw)?;
+        if culled(self.cull, front) {
+            return None;
+        }
+        let face = usize::from(!front);
+        let corners = m.triangles[index];
+        let lighting = lightings.get(self.lighting as usize).filter(|_| self.lighting != NO_LIGHTING);
+        // What the vertex stage makes of vertex i: eye position, colours, normal, base colour.
+        let vertex = |i: u32| {
+            let eye = self.modelview * m.position(i);
+            let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
+            let color = m.colors.at(i).map_or(self.color, |c| c.as_dvec4());
+            let (primary, secondary, n) = match lighting {
+                Some(l) => {
+                    let object_normal = m.normals.at(i).map_or(self.normal, |n| n.as_dvec3());
+                    let n = eye_normal(&self.normal_matrix, object_normal, self.normalize, self.rescale_normal);
+                    let mats = l.materials(color);
+                    let (a, b) = light_face(p, n, &mats, &l.lights, &l.model, face);
+                    (a, b, n)
+                }
+                None => (color.clamp(DVec4::ZERO, DVec4::ONE), DVec4::ZERO, DVec3::Z),
+            };
+            (p, vec4(primary), vec4(secondary).truncate(), n, vec4(color))
+        };
+        let vs = corners.map(vertex);
+        let pv = if self.flat { Some(vertex(m.provoking[index])) } else { None };
+        let pick = |k: usize| pv.unwrap_or(vs[k]);
+        let tex = |i: u32| {
+            let t = self.texture_matrix * m.texcoords.at(i).map_or(self.texcoord, |t| t.as_dvec4());
+            let q = if t.w != 0.0 { t.w } else { 1.0 };
+            Vec2::new((t.x / q) as f32, (t.y / q) as f32)
+        };
+        Some(Triangle {
+            positions: vs.map(|v| v.0.as_vec3()),
+            colors: [0, 1, 2].map(|k| pick(k).1),
+            secondary: [0, 1, 2].map(|k| pick(k).2),
+            texcoords: corners.map(tex),
+            surface: self.surface,
+            sequence: self.sequence,
+            camera: self.camera,
+            clip_w: clip.map(|c| c.w as f32),
+            normals: vs.map(|v| (if front { v.3 } else { -v.3 }).as_vec3()),
+            base_colors: [0, 1, 2].map(|k| pick(k).4),
+            lighting: self.lighting,
+            back: !front,
+        })
+    }
+
+    /// Every triangle of the instance that is drawn.
+    pub fn triangles(&self, lightings: &[Lighting]) -> Vec<Triangle> {
+        (0..self.mesh.triangles.len()).filter_map(|i| self.triangle(i, lightings)).collect()
+    }
+}

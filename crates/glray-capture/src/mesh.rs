@@ -1,0 +1,236 @@
+//! A draw a display list keeps, in object coordinates. A list's glBegin/glEnd (or array draw)
+//! becomes a `Mesh` once, when the list is compiled; every glCallList then adds an instance of
+//! it (the modelview and the state of that call) instead of running its vertices again, and the
+//! tracer keeps the mesh's BVH for as long as the list lives. That is what makes a program that
+//! draws big lists every frame cheap to follow: its frames cost the instances, not the
+//! triangles.
+//!
+//! Vertices keep the attributes the list gave them. One the list did not give (a sphere list
+//! drawn after a glColor) is the value current at the call: `Attribute::first` says from which
+//! vertex on the list gives its own.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::{DVec3, DVec4, Vec3, Vec4};
+
+use crate::primitive::assemble;
+use crate::vertex::Given;
+
+/// One per-vertex attribute of a mesh.
+#[derive(Debug, Clone, Default)]
+pub struct Attribute<T> {
+    /// The first vertex that has its own value (the number of vertices if none has).
+    pub first: u32,
+    /// Values of vertices `first..`.
+    pub values: Vec<T>,
+}
+
+impl<T: Copy> Attribute<T> {
+    /// Vertex `i`'s own value; None when it takes the value current at the call.
+    pub fn at(&self, i: u32) -> Option<T> {
+        i.checked_sub(self.first).and_then(|k| self.values.get(k as usize).copied())
+    }
+
+    /// Appends vertex `index`'s value (None: not given yet).
+    fn push(&mut self, index: u32, value: Option<T>) {
+        match value {
+            Some(v) => {
+                if self.values.is_empty() {
+                    self.first = index;
+                }
+                self.values.push(v);
+            }
+            None => self.first = index + 1,
+        }
+    }
+}
+
+/// A compiled draw in object coordinates.
+#[derive(Debug, Default)]
+pub struct Mesh {
+    /// Unique for the life of the process: the tracer keys its BVHs by it.
+    pub id: u64,
+    pub mode: u32,
+    pub positions: Vec<Vec3>,
+    /// w of every position when one is not 1 (such a mesh is never instanced).
+    pub ws: Option<Vec<f32>>,
+    pub normals: Attribute<Vec3>,
+    pub colors: Attribute<Vec4>,
+    /// Texture unit 0's coordinates.
+    pub texcoords: Attribute<Vec4>,
+    /// The mode's triangles (vertex indices) and each one's provoking vertex.
+    pub triangles: Vec<[u32; 3]>,
+    pub provoking: Vec<u32>,
+    /// The mode draws lines or points, which depend on the screen: never instanced.
+    pub lines_or_points: bool,
+    /// An array draw (GL leaves current values as Mesa does: only a colour array changes
+    /// them) rather than glBegin/glEnd (the last values given stay current).
+    pub from_arrays: bool,
+    /// The attribute values current after the draw, exactly as given.
+    pub end_normal: Option<DVec3>,
+    pub end_color: Option<DVec4>,
+    pub end_texcoord: Option<DVec4>,
+    /// Object-space bounds of the positions.
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Mesh {
+    pub fn vertex_count(&self) -> u32 {
+        self.positions.len() as u32
+    }
+
+    /// The object-space corners of triangle `index`.
+    pub fn corners(&self, index: usize) -> [Vec3; 3] {
+        self.triangles[index].map(|i| self.positions[i as usize])
+    }
+
+    /// Position `i` with its w.
+    pub fn position(&self, i: u32) -> DVec4 {
+        let w = self.ws.as_ref().map_or(1.0, |ws| ws[i as usize]);
+        self.positions[i as usize].as_dvec3().extend(w as f64)
+    }
+}
+
+/// A mesh being compiled: the attribute values given so far, and the vertices.
+#[derive(Debug)]
+pub struct MeshBuilder {
+    mesh: Mesh,
+    normal: Option<DVec3>,
+    color: Option<DVec4>,
+    texcoord: Option<DVec4>,
+}
+
+impl MeshBuilder {
+    pub fn new(mode: u32, from_arrays: bool) -> MeshBuilder {
+        MeshBuilder { mesh: Mesh { mode, from_arrays, ..Mesh::default() }, normal: None, color: None, texcoord: None }
+    }
+
+    pub fn mode(&self) -> u32 {
+        self.mesh.mode
+    }
+
+    pub fn normal(&mut self, n: DVec3) {
+        self.normal = Some(n);
+    }
+
+    pub fn color(&mut self, c: DVec4) {
+        self.color = Some(c);
+    }
+
+    pub fn texcoord(&mut self, t: DVec4) {
+        self.texcoord = Some(t);
+    }
+
+    /// A vertex: it takes the attributes given so far.
+    pub fn vertex(&mut self, p: DVec4) {
+        let m = &mut self.mesh;
+        let i = m.positions.len() as u32;
+        m.positions.push(p.truncate().as_vec3());
+        if p.w != 1.0 || m.ws.is_some() {
+            m.ws.get_or_insert_with(|| vec![1.0; i as usize]).push(p.w as f32);
+        }
+        m.normals.push(i, self.normal.map(|n| n.as_vec3()));
+        m.colors.push(i, self.color.map(|c| c.as_vec4()));
+        m.texcoords.push(i, self.texcoord.map(|t| t.as_vec4()));
+    }
+
+    /// The finished mesh, assembled into triangles.
+    pub fn finish(self) -> Mesh {
+        static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+        let mut m = self.mesh;
+        m.id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
+        (m.end_normal, m.end_color, m.end_texcoord) = (self.normal, self.color, self.texcoord);
+        let n = m.positions.len() as u32;
+        for a in [&mut m.normals.first, &mut m.colors.first, &mut m.texcoords.first] {
+            *a = (*a).min(n);
+        }
+        if let Ok(asm) = assemble(m.mode, m.positions.len()) {
+            m.lines_or_points = !asm.lines.is_empty() || !asm.points.is_empty();
+            m.triangles = asm.triangles.iter().map(|(t, _)| *t).collect();
+            m.provoking = asm.triangles.iter().map(|(_, p)| *p).collect();
+        }
+        m.min = m.positions.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
+        m.max = m.positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+        m
+    }
+
+    /// What was given, in order, as commands (for a glBegin/glEnd the list cannot keep as a
+    /// mesh after all: one with glMaterial or glCallList inside).
+    pub(crate) fn given(&self) -> Vec<Given> {
+        let m = &self.mesh;
+        let mut out = Vec::new();
+        let (mut normal, mut color, mut texcoord) = (None, None, None);
+        for i in 0..m.positions.len() as u32 {
+            if let Some(n) = m.normals.at(i).filter(|n| Some(*n) != normal) {
+                out.push(Given::Normal(n.as_dvec3()));
+                normal = Some(n);
+            }
+            if let Some(c) = m.colors.at(i).filter(|c| Some(*c) != color) {
+                out.push(Given::Color(c.as_dvec4()));
+                color = Some(c);
+            }
+            if let Some(t) = m.texcoords.at(i).filter(|t| Some(*t) != texcoord) {
+                out.push(Given::TexCoord(0, t.as_dvec4()));
+                texcoord = Some(t);
+            }
+            out.push(Given::Vertex(m.position(i)));
+        }
+        // Attributes given after the last vertex.
+        let tail = [
+            self.normal.filter(|n| Some(n.as_vec3()) != normal).map(Given::Normal),
+            self.color.filter(|c| Some(c.as_vec4()) != color).map(Given::Color),
+            self.texcoord.filter(|t| Some(t.as_vec4()) != texcoord).map(|t| Given::TexCoord(0, t)),
+        ];
+        out.extend(tail.into_iter().flatten());
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::primitive::{GL_LINES, GL_QUADS, GL_TRIANGLES};
+
+    #[test]
+    fn attributes_start_where_the_list_gives_them() {
+        let mut b = MeshBuilder::new(GL_TRIANGLES, false);
+        b.vertex(DVec4::new(0.0, 0.0, 0.0, 1.0));
+        b.normal(DVec3::X);
+        b.vertex(DVec4::new(1.0, 0.0, 0.0, 1.0));
+        b.vertex(DVec4::new(0.0, 1.0, 0.0, 1.0));
+        b.color(DVec4::new(1.0, 0.0, 0.0, 1.0));
+        let given = b.given();
+        let m = b.finish();
+        assert_eq!(m.normals.at(0), None, "the first vertex takes the normal current at the call");
+        assert_eq!(m.normals.at(1), Some(Vec3::X));
+        assert_eq!(m.normals.at(2), Some(Vec3::X));
+        assert_eq!(m.colors.first, 3, "no vertex has its own colour");
+        assert_eq!(m.end_color, Some(DVec4::new(1.0, 0.0, 0.0, 1.0)), "but it stays current after");
+        assert_eq!(m.triangles, vec![[0, 1, 2]]);
+        assert_eq!((m.min, m.max), (Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)));
+        assert!(m.ws.is_none() && !m.lines_or_points);
+        assert_eq!(given.len(), 5, "{given:?}");
+        assert_eq!(given[1], Given::Normal(DVec3::X));
+        assert_eq!(given[4], Given::Color(DVec4::new(1.0, 0.0, 0.0, 1.0)));
+    }
+
+    #[test]
+    fn modes_assemble_and_ids_differ() {
+        let quad = |mode| {
+            let mut b = MeshBuilder::new(mode, false);
+            for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+                b.vertex(DVec4::new(x, y, 0.0, 1.0));
+            }
+            b.finish()
+        };
+        let (a, b) = (quad(GL_QUADS), quad(GL_LINES));
+        assert_eq!(a.triangles.len(), 2);
+        assert_eq!(a.provoking, vec![3, 3]);
+        assert!(b.lines_or_points && b.triangles.is_empty());
+        assert_ne!(a.id, b.id);
+        let mut h = MeshBuilder::new(GL_TRIANGLES, false);
+        h.vertex(DVec4::new(0.0, 0.0, 0.0, 2.0));
+        assert_eq!(h.finish().position(0).w, 2.0);
+    }
+}
