@@ -598,6 +598,14 @@ fn record_pointer(c: &Command, p: &Param, types: &HashMap<String, String>, sizes
     if !p.c.contains("const") {
         return format!("rec.output_pointer({v});");
     }
+    if stars >= 2 && base == "void" && p.name == "indices" {
+        // glMultiDrawElements: one index array per draw, of `count[i]` indices of `type`.
+        let counts = c.params.iter().find(|q| q.name == "count" && q.rust.contains('*'));
+        if let (Some(counts), Some(ty), Some(n)) = (counts, int_param(c, "type"), int_param(c, "drawcount")) {
+            return format!("rec.index_arrays({v}, {}, {ty}, {n});", ident(&counts.name));
+        }
+        return unknown;
+    }
     if stars >= 2 {
         // Arrays of strings (glShaderSource): `len` is the count, `length` the optional lengths.
         if is_char(&base) {

@@ -1,7 +1,9 @@
 //! Calls GL the wrong way and prints what happens, one line per call, so that a run under glray
 //! can be compared line for line with a run without it: calls without a current context, bad
 //! enums and values, calls inside glBegin/glEnd that are not allowed there, matrix stack
-//! overflow and underflow, a failed MakeCurrent, unknown GetProcAddress names.
+//! overflow and underflow, a failed MakeCurrent, unknown GetProcAddress names; then, once a
+//! frame has been shown (under glray: ray traced, after which the real GL no longer gets the
+//! geometry), draws that are wrong in every way glGetError reports.
 //!
 //!     gl_misuse
 
@@ -92,6 +94,33 @@ fn main() {
         check("glDeleteLists(1, -1)");
         glReadPixels(0, 0, 1, 1, 0xDEAD, GL_UNSIGNED_BYTE, buffer.as_mut_ptr().cast());
         check("glReadPixels(bad format)");
+        // Frames that end at glFinish, as OSMesa programs' do: glray ray traces them and takes
+        // the geometry from the real GL from then on, so what follows reaches glray only.
+        for _ in 0..2 {
+            glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+            glBegin(GL_TRIANGLES);
+            for (x, y) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)] {
+                glVertex3f(x, y, 0.0);
+            }
+            glEnd();
+            glFinish();
+        }
+        glDrawArrays(0x20, 0, 3);
+        check("glDrawArrays(bad mode)");
+        glDrawArrays(GL_TRIANGLES, 0, -1);
+        check("glDrawArrays(count -1)");
+        let indices = [0u32, 1, 2];
+        glDrawElements(GL_TRIANGLES, 3, GL_FLOAT, indices.as_ptr().cast());
+        check("glDrawElements(GL_FLOAT indices)");
+        glBegin(0x20);
+        check("glBegin(bad mode)");
+        // (glGetError itself is not allowed inside glBegin/glEnd: checked after the glEnd.)
+        glBegin(GL_TRIANGLES);
+        glBegin(GL_TRIANGLES);
+        glEnd();
+        check("glBegin inside glBegin");
+        glEnd();
+        check("glEnd again");
         println!(
             "OSMesaGetProcAddress(\"glNotAFunction\") is null = {}",
             OSMesaGetProcAddress(c"glNotAFunction".as_ptr().cast()).is_null()

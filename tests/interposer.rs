@@ -187,15 +187,30 @@ fn misuse_gets_the_real_gl_behaviour() {
         "41 x glPopMatrix: glGetError = 0x504",
         "no context: glGetError = 0x0",
         "eglGetError = 0x3008",
+        "glDrawArrays(bad mode): glGetError = 0x500",
+        "glDrawArrays(count -1): glGetError = 0x501",
+        "glDrawElements(GL_FLOAT indices): glGetError = 0x500",
+        "glBegin inside glBegin: glGetError = 0x502",
+        "glEnd again: glGetError = 0x502",
         "done",
     ] {
         assert!(text.contains(expect), "plain run lacks {expect:?}:\n{text}");
     }
     for way in GLRAY_WAYS {
-        for enable in ["0", "1"] {
-            let out =
-                run_ok(command(way, &[], &program, 60).env("GLRAY_ENABLE", enable), &format!("gl_misuse {way:?}"));
-            assert_eq!(stdout(&out), text, "gl_misuse under glray ({way:?}, GLRAY_ENABLE={enable}) differs");
+        // Pass-through, and ray traced (where glray, not the real GL, gets the geometry).
+        for (enable, preset) in [("0", "off"), ("1", "off"), ("1", "gl")] {
+            let scenes = scratch(&format!("misuse-{way:?}-{enable}-{preset}"));
+            let mut cmd = command(way, &[], &program, 60);
+            cmd.env("GLRAY_ENABLE", enable).env("GLRAY_PRESET", preset).env("GLRAY_DUMP_SCENE", &scenes);
+            let out = run_ok(&mut cmd, &format!("gl_misuse {way:?} preset={preset}"));
+            assert_eq!(
+                stdout(&out),
+                text,
+                "gl_misuse under glray ({way:?}, GLRAY_ENABLE={enable}, preset={preset}) differs"
+            );
+            // With the gl preset the frames were ray traced: the draws after them reached glray only.
+            let traced = std::fs::read_dir(&scenes).map_or(0, |d| d.count());
+            assert_eq!(traced > 0, preset == "gl", "{way:?} preset={preset}: {traced} scene files");
         }
     }
 }

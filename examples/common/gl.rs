@@ -28,6 +28,7 @@ pub const GL_PROJECTION: u32 = 0x1701;
 pub const GL_VERTEX_ARRAY: u32 = 0x8074;
 pub const GL_COLOR_ARRAY: u32 = 0x8076;
 pub const GL_FLOAT: u32 = 0x1406;
+pub const GL_UNSIGNED_SHORT: u32 = 0x1403;
 pub const GL_RGB: u32 = 0x1907;
 pub const GL_RGBA: u32 = 0x1908;
 pub const GL_UNSIGNED_BYTE: u32 = 0x1401;
@@ -69,6 +70,7 @@ extern "C" {
     pub fn glColorMaterial(face: u32, mode: u32);
     pub fn glBegin(mode: u32);
     pub fn glEnd();
+    pub fn glArrayElement(i: i32);
     pub fn glVertex3f(x: f32, y: f32, z: f32);
     pub fn glNormal3f(x: f32, y: f32, z: f32);
     pub fn glColor3f(r: f32, g: f32, b: f32);
@@ -82,6 +84,7 @@ extern "C" {
     pub fn glVertexPointer(size: i32, ty: u32, stride: i32, p: *const c_void);
     pub fn glColorPointer(size: i32, ty: u32, stride: i32, p: *const c_void);
     pub fn glDrawArrays(mode: u32, first: i32, count: i32);
+    pub fn glDrawElements(mode: u32, count: i32, ty: u32, indices: *const std::ffi::c_void);
     pub fn glPixelStorei(pname: u32, param: i32);
     pub fn glReadPixels(x: i32, y: i32, w: i32, h: i32, format: u32, ty: u32, data: *mut c_void);
     pub fn glFinish();

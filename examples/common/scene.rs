@@ -15,17 +15,19 @@ pub struct BufferFns {
     pub data: unsafe extern "C" fn(u32, isize, *const c_void, u32),
     pub map_range: unsafe extern "C" fn(u32, isize, isize, u32) -> *mut c_void,
     pub unmap: unsafe extern "C" fn(u32) -> u8,
+    pub multi_draw_elements: unsafe extern "C" fn(u32, *const i32, u32, *const *const c_void, i32),
 }
 
 impl BufferFns {
-    /// Looks the three functions up with `get_proc`; None if any is missing.
+    /// Looks the functions up with `get_proc`; None if any is missing.
     pub unsafe fn load(get_proc: impl Fn(&std::ffi::CStr) -> *const c_void) -> Option<BufferFns> {
         let g = get_proc(c"glGenBuffers");
         let b = get_proc(c"glBindBuffer");
         let d = get_proc(c"glBufferData");
         let m = get_proc(c"glMapBufferRange");
         let u = get_proc(c"glUnmapBuffer");
-        if [g, b, d, m, u].iter().any(|p| p.is_null()) {
+        let md = get_proc(c"glMultiDrawElements");
+        if [g, b, d, m, u, md].iter().any(|p| p.is_null()) {
             return None;
         }
         Some(BufferFns {
@@ -36,6 +38,10 @@ impl BufferFns {
                 m,
             ),
             unmap: std::mem::transmute::<*const c_void, unsafe extern "C" fn(u32) -> u8>(u),
+            multi_draw_elements: std::mem::transmute::<
+                *const c_void,
+                unsafe extern "C" fn(u32, *const i32, u32, *const *const c_void, i32),
+            >(md),
         })
     }
 }
@@ -233,6 +239,23 @@ impl Scene {
             glVertexPointer(3, GL_FLOAT, 0, verts.as_ptr().cast());
             glColorPointer(3, GL_FLOAT, 0, colors.as_ptr().cast());
             glDrawArrays(GL_TRIANGLE_FAN, 0, 4);
+            // The same arrays, one element at a time inside glBegin/glEnd.
+            glTranslatef(0.8, 0.0, 0.0);
+            glBegin(GL_TRIANGLES);
+            for k in [1, 2, 3] {
+                glArrayElement(k);
+            }
+            glEnd();
+            // Two draws of the same arrays in one call (GL 1.4, fetched like the buffer calls).
+            if let Some((_, b)) = self.vbo {
+                glTranslatef(0.0, -0.8, 0.0);
+                let (first, second) = ([0u16, 1, 2], [0u16, 2, 3]);
+                let counts = [3i32, 3];
+                let indices = [first.as_ptr().cast::<c_void>(), second.as_ptr().cast::<c_void>()];
+                (b.multi_draw_elements)(GL_TRIANGLES, counts.as_ptr(), GL_UNSIGNED_SHORT, indices.as_ptr(), 2);
+                glTranslatef(0.0, 0.8, 0.0);
+            }
+            glTranslatef(-0.8, 0.0, 0.0);
             glDisableClientState(GL_COLOR_ARRAY);
         }
 

@@ -1,12 +1,13 @@
-//! glGetError: the real GL's error, or, when it has none, the error GL would have raised inside
-//! a glBegin/glEnd the real GL never saw (captured geometry is not passed on, so a program's
-//! misplaced call inside glBegin reaches the real GL outside one and raises nothing there).
+//! glGetError: the real GL's error, or, when it has none, the error GL would have raised for a
+//! call the real GL never saw (geometry glray ray traces instead of passing it on: a bad
+//! glDrawArrays mode, a glBegin inside glBegin) or saw out of place (a call inside a glBegin
+//! the real GL never got reaches it outside one and raises nothing there).
 
 use crate::real;
 
 pub unsafe fn glGetError() -> u32 {
     let real = real::glGetError();
-    let ours = crate::raytrace::take_begin_error();
+    let ours = crate::raytrace::take_unseen_error();
     if real != 0 {
         real
     } else {

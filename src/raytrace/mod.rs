@@ -99,6 +99,10 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
                 live.names.resize(number + 1, Vec::new());
                 live.names[number] = reader.names[number].to_vec();
             }
+            if let Event::Call { thread, .. } = event {
+                // Errors of a call the real GL did not get are glGetError's to report.
+                live.capture.context(thread).unseen = UNSEEN.with(|u| u.replace(false)) || in_skipped_begin();
+            }
             let names = &live.names;
             live.capture.event(&event, |n| names.get(n).map_or(&[][..], |v| &v[..]));
         }
@@ -115,6 +119,9 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
 thread_local! {
     /// The real GL did not get this thread's open glBegin: its vertices and glEnd skip it too.
     static SKIPPED_BEGIN: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    /// The real GL did not get this thread's last call (capture, following it next, reports
+    /// its errors instead).
+    static UNSEEN: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
 /// Whether this thread is between a glBegin and glEnd the real GL did not get.
@@ -127,12 +134,21 @@ pub fn in_skipped_begin() -> bool {
 /// the frame when this call is the trigger (or a raster operation about to draw over it), and
 /// says whether the real call is to be skipped: geometry the ray tracer takes is not
 /// rasterized as well.
-pub fn before(c: usize, _args: &[u64]) -> bool {
+pub fn before(c: usize, args: &[u64]) -> bool {
+    let skip = skips(c, args);
+    UNSEEN.with(|u| u.set(skip));
+    skip
+}
+
+fn skips(c: usize, _args: &[u64]) -> bool {
     if !ON.load(Ordering::Relaxed) {
         return false;
     }
     if c == cmd::glEnd {
         return SKIPPED_BEGIN.with(|s| s.replace(false));
+    }
+    if matches!(c, cmd::glArrayElement | cmd::glArrayElementEXT) {
+        return in_skipped_begin();
     }
     let geometry = matches!(
         c,
@@ -152,6 +168,8 @@ pub fn before(c: usize, _args: &[u64]) -> bool {
             | cmd::glDrawRangeElementsEXT
             | cmd::glMultiDrawArrays
             | cmd::glMultiDrawArraysEXT
+            | cmd::glMultiDrawElements
+            | cmd::glMultiDrawElementsEXT
             | cmd::glCallList
             | cmd::glCallLists
     );
@@ -207,14 +225,14 @@ pub fn before(c: usize, _args: &[u64]) -> bool {
     })
 }
 
-/// The error GL would have raised inside a glBegin/glEnd of this thread (0: none).
-pub fn take_begin_error() -> u32 {
+/// The first error this thread's context raised that the real GL could not (0: none).
+pub fn take_unseen_error() -> u32 {
     if !ON.load(Ordering::Relaxed) {
         return 0;
     }
     let Some(thread) = crate::record::thread_number() else { return 0 };
     let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
-    guard.as_mut().map_or(0, |live| live.capture.context(thread).take_begin_error())
+    guard.as_mut().map_or(0, |live| live.capture.context(thread).take_unseen_error())
 }
 
 impl Live {

@@ -424,6 +424,33 @@ impl Recorder {
         self.e.strings(&list);
     }
 
+    /// glMultiDrawElements' per-draw index pointers: with an element buffer bound they are
+    /// offsets into it, recorded as they are (a blob of pointer-sized offsets); otherwise the
+    /// indices each points to, `counts[i]` of `ty`, as a list.
+    pub fn index_arrays(&mut self, p: *mut c_void, counts: *mut c_void, ty: i64, drawcount: i64) {
+        if p.is_null() || counts.is_null() || drawcount < 0 {
+            return self.e.null();
+        }
+        let n = drawcount as usize;
+        let ptrs = p as *const *const u8;
+        if bound_buffer(GL_ELEMENT_ARRAY_BUFFER_BINDING) != 0 {
+            // SAFETY: GL reads `drawcount` pointers.
+            let raw = unsafe { std::slice::from_raw_parts(ptrs as *const u8, n * std::mem::size_of::<usize>()) };
+            return self.e.blob(raw);
+        }
+        let size = glray_core::gltypes::array_element_bytes(1, ty as u32) as usize;
+        let counts = counts as *const i32;
+        let mut list: Vec<&[u8]> = Vec::with_capacity(n);
+        for i in 0..n {
+            // SAFETY: GL reads `drawcount` counts and pointers, and `counts[i]` indices from each.
+            unsafe {
+                let (q, count) = (*ptrs.add(i), (*counts.add(i)).max(0) as usize);
+                list.push(if q.is_null() || size == 0 { &[][..] } else { std::slice::from_raw_parts(q, count * size) });
+            }
+        }
+        self.e.strings(&list);
+    }
+
     /// A vertex array pointer: an offset when a buffer object is bound, else the address (the
     /// memory is captured when a draw reads it).
     pub fn array_pointer(&mut self, p: *mut c_void) {

@@ -14,6 +14,13 @@ use crate::ops::Op;
 use crate::primitive::GL_POLYGON;
 use crate::texture::Unpack;
 
+/// An array draw of buffer objects: its arguments and pointer state, and the buffers it reads.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub(crate) struct BufferDraw {
+    words: Vec<i64>,
+    buffers: [Option<u32>; 5],
+}
+
 /// One array's pointer state, for arrays in buffer objects (client memory arrives with the
 /// draw, in the trace's arrays event).
 #[derive(Debug, Clone, Copy, Default)]
@@ -68,6 +75,16 @@ pub(crate) struct Client {
     pub(crate) array_buffer: u32,
     pub(crate) element_buffer: u32,
     pub(crate) unpack: Unpack,
+}
+
+/// Element `i` of each array (vertex, normal, colour, texture coordinates).
+fn fetch(sources: &[Option<Source<'_>>; 4], i: u64) -> Fetched {
+    Fetched {
+        position: sources[0].as_ref().and_then(|s| s.fetch(i, false)),
+        normal: sources[1].as_ref().and_then(|s| s.fetch(i, true)).map(|n| n.truncate()),
+        color: sources[2].as_ref().and_then(|s| s.fetch(i, true)),
+        tex: sources[3].as_ref().and_then(|s| s.fetch(i, false)),
+    }
 }
 
 impl Context {
@@ -135,34 +152,106 @@ impl Context {
                 vec![self.indices(a.get(idx).unwrap_or(&Value::Null), ty, count as usize)]
             }
             Op::MultiDrawElements => {
-                // The per-draw index pointers are not recorded as memory: not captured yet.
-                Vec::new()
+                let n = args::int(a, 4);
+                let ty = args::uint(a, 2);
+                if n < 0 {
+                    return Err(GlError::InvalidValue);
+                }
+                if !matches!(ty, GL_UNSIGNED_BYTE | GL_UNSIGNED_SHORT | GL_UNSIGNED_INT) {
+                    return Err(GlError::InvalidEnum);
+                }
+                let counts = args::array(args::bytes(a, 1), GL_INT, n as usize);
+                if counts.iter().any(|c| *c < 0.0) {
+                    return Err(GlError::InvalidValue);
+                }
+                match a.get(3) {
+                    // Client memory: each draw's indices.
+                    Some(Value::Strings(list)) => list
+                        .iter()
+                        .zip(&counts)
+                        .map(|(bytes, count)| self.indices(&Value::Blob(bytes), ty, *count as usize))
+                        .collect(),
+                    // Offsets into the element buffer, as the pointers were.
+                    Some(Value::Blob(raw)) if self.client.element_buffer != 0 => raw
+                        .chunks_exact(std::mem::size_of::<usize>())
+                        .zip(&counts)
+                        .map(|(o, count)| {
+                            let offset = usize::from_ne_bytes(o.try_into().expect("pointer-sized")) as u64;
+                            self.indices(&Value::Offset(offset), ty, *count as usize)
+                        })
+                        .collect(),
+                    _ => Vec::new(),
+                }
             }
             _ => Vec::new(),
         };
         let sources = self.sources();
-        let out = runs
-            .into_iter()
-            .map(|run| {
-                let verts = run
-                    .iter()
-                    .map(|&i| Fetched {
-                        position: sources[0].as_ref().and_then(|s| s.fetch(i, false)),
-                        normal: sources[1].as_ref().and_then(|s| s.fetch(i, true)).map(|n| n.truncate()),
-                        color: sources[2].as_ref().and_then(|s| s.fetch(i, true)),
-                        tex: sources[3].as_ref().and_then(|s| s.fetch(i, false)),
-                    })
-                    .collect();
-                (mode, verts)
-            })
-            .collect();
+        let out = runs.into_iter().map(|run| (mode, run.iter().map(|&i| fetch(&sources, i)).collect())).collect();
         Ok(out)
+    }
+
+    /// glArrayElement(i): element `i` of the enabled arrays.
+    pub(crate) fn element(&self, i: u64) -> Fetched {
+        fetch(&self.sources(), i)
+    }
+
+    /// What identifies an array draw that reads buffer objects only (vertex, normal, colour
+    /// and texture arrays, and indices): the same draw of unchanged buffers makes the same
+    /// mesh, kept with the buffers (`Shared::buffer_draws`) so that its BVH is kept too. None
+    /// for a draw that reads client memory, or is invalid (the uncached path raises its error).
+    pub(crate) fn buffer_draw_key(&self, op: Op, a: &[Value]) -> Option<BufferDraw> {
+        if !self.arrays.is_empty() || args::uint(a, 0) > GL_POLYGON {
+            return None;
+        }
+        let c = &self.client;
+        let pointers = [&c.vertex, &c.normal, &c.color, &c.texcoord[0]];
+        if !c.vertex.enabled || pointers.iter().any(|p| p.enabled && p.buffer == 0) {
+            return None;
+        }
+        let mut words: Vec<i64> = vec![i64::from(op == Op::DrawArrays)];
+        match op {
+            Op::DrawArrays => words.extend([0, 1, 2].map(|i| args::int(a, i))),
+            Op::DrawElements | Op::DrawRangeElements => {
+                let (count, ty, idx) = if op == Op::DrawElements { (1, 2, 3) } else { (3, 4, 5) };
+                if c.element_buffer == 0
+                    || !matches!(args::uint(a, ty), GL_UNSIGNED_BYTE | GL_UNSIGNED_SHORT | GL_UNSIGNED_INT)
+                {
+                    return None;
+                }
+                let offset = match a.get(idx) {
+                    Some(Value::Offset(o) | Value::Opaque(o)) => *o as i64,
+                    Some(Value::Null) | None => 0,
+                    _ => return None,
+                };
+                words.extend([args::int(a, 0), args::int(a, count), args::int(a, ty), offset]);
+            }
+            _ => return None,
+        }
+        if words[1..].iter().any(|w| *w < 0) {
+            return None;
+        }
+        for p in pointers {
+            words.extend([p.enabled as i64, p.size as i64, p.ty as i64, p.stride as i64, p.offset as i64]);
+        }
+        let buffers = [c.vertex.buffer, c.normal.buffer, c.color.buffer, c.texcoord[0].buffer, c.element_buffer];
+        Some(BufferDraw { words, buffers: buffers.map(|b| if b == 0 { None } else { Some(b) }) })
+    }
+
+    /// A buffer's contents changed (or it is gone): meshes made from it are stale.
+    pub(crate) fn buffer_changed(&mut self, name: u32) {
+        self.shared.buffer_draws.retain(|k, _| !k.buffers.contains(&Some(name)));
     }
 
     pub(crate) fn indices(&self, v: &Value, ty: u32, count: usize) -> Vec<u64> {
         let (bytes, start): (&[u8], usize) = match v {
-            Value::Offset(o) | Value::Opaque(o) if self.client.element_buffer != 0 => {
-                (self.shared.buffers.get(&self.client.element_buffer).map_or(&[][..], |b| &b[..]), *o as usize)
+            // With an element buffer bound the pointer is an offset into it; offset 0 is a
+            // null pointer, recorded as such.
+            Value::Offset(_) | Value::Opaque(_) | Value::Null if self.client.element_buffer != 0 => {
+                let o = match v {
+                    Value::Offset(o) | Value::Opaque(o) => *o as usize,
+                    _ => 0,
+                };
+                (self.shared.buffers.get(&self.client.element_buffer).map_or(&[][..], |b| &b[..]), o)
             }
             Value::Blob(b) => (b, 0),
             _ => (&[], 0),

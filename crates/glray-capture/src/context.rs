@@ -11,7 +11,7 @@ use glam::{DMat3, DMat4, DVec3, DVec4, Vec4};
 use glray_core::trace::{ArrayData, Value};
 
 use crate::args::{self, GL_DOUBLE, GL_FLOAT, GL_INT, GL_UNSIGNED_INT};
-use crate::arrays::Client;
+use crate::arrays::{BufferDraw, Client};
 use crate::camera::Viewport;
 use crate::error::{ErrorFlag, GlError, GlResult};
 use crate::frame::Frame;
@@ -48,6 +48,10 @@ pub(crate) struct Fetched {
     pub(crate) color: Option<DVec4>,
     pub(crate) tex: Option<DVec4>,
 }
+
+/// How many buffer draws' meshes a share group keeps (a program that makes new draws every
+/// frame must not grow it without end).
+const MAX_BUFFER_DRAWS: usize = 256;
 
 /// An array draw's fetched vertices as a mesh.
 fn fetched_mesh(mode: u32, verts: &[Fetched]) -> Mesh {
@@ -92,15 +96,19 @@ pub(crate) enum Item {
 pub struct Shared {
     pub(crate) lists: DisplayLists<Item>,
     pub(crate) buffers: HashMap<u32, Vec<u8>>,
+    /// Meshes of array draws that read buffer objects only, while the buffers are unchanged.
+    pub(crate) buffer_draws: HashMap<BufferDraw, Arc<Mesh>>,
     pub(crate) textures: HashMap<u32, Arc<Texture>>,
 }
 
 /// One GL context's state, and the frame it is drawing.
 pub struct Context {
     pub errors: ErrorFlag,
-    /// Errors raised between glBegin and glEnd (what a real GL that did not get the glBegin
-    /// cannot raise).
-    pub(crate) begin_error: ErrorFlag,
+    /// Errors the real GL cannot raise: those of calls it did not get (geometry glray takes
+    /// instead, `unseen`), and of calls inside a glBegin it did not get.
+    pub(crate) unseen_error: ErrorFlag,
+    /// The call being followed did not reach the real GL.
+    pub unseen: bool,
     pub matrices: Matrices,
     pub(crate) imm: Immediate,
     /// Vertices of the open glBegin, after the vertex stage.
@@ -131,7 +139,8 @@ impl Default for Context {
     fn default() -> Self {
         Context {
             errors: ErrorFlag::default(),
-            begin_error: ErrorFlag::default(),
+            unseen_error: ErrorFlag::default(),
+            unseen: false,
             matrices: Matrices::default(),
             imm: Immediate::default(),
             open: Vec::new(),
@@ -217,9 +226,18 @@ impl Context {
         self.shared = shared;
     }
 
-    /// The first error raised inside glBegin/glEnd since the last call (0: none).
-    pub fn take_begin_error(&mut self) -> u32 {
-        self.begin_error.take()
+    /// The first error since the last call that the real GL could not raise (0: none).
+    pub fn take_unseen_error(&mut self) -> u32 {
+        self.unseen_error.take()
+    }
+
+    /// Records a command's outcome in the error flag (and, for a call the real GL did not get,
+    /// in the flag glGetError adds to the real one).
+    fn raise(&mut self, r: GlResult) {
+        if self.unseen {
+            self.unseen_error.record(r);
+        }
+        self.errors.record(r);
     }
 
     /// Changes whenever the frame does.
@@ -259,7 +277,7 @@ impl Context {
             }
         }
         let r = self.execute(op, ty, a);
-        self.errors.record(r);
+        self.raise(r);
     }
 
     /// What the open list keeps of a call. A glBegin/glEnd of vertex attributes becomes one
@@ -278,6 +296,24 @@ impl Context {
         if let Some(b) = self.building.as_mut() {
             let given = match op {
                 Op::Attr(f) => decode_attribute(f, a).ok(),
+                Op::ArrayElement if args::int(a, 0) >= 0 => {
+                    // Client data is copied at compile time: the element's values now.
+                    let v = self.element(args::int(a, 0) as u64);
+                    let b = self.building.as_mut().expect("building");
+                    if let Some(n) = v.normal {
+                        b.normal(n);
+                    }
+                    if let Some(c) = v.color {
+                        b.color(c);
+                    }
+                    if let Some(t) = v.tex {
+                        b.texcoord(t);
+                    }
+                    if let Some(p) = v.position {
+                        b.vertex(p);
+                    }
+                    return Vec::new();
+                }
                 _ => None,
             };
             match given {
@@ -332,11 +368,11 @@ impl Context {
                 Item::Call(op, ty, kept) => {
                     let a: Vec<Value> = kept.iter().map(unkeep).collect();
                     let r = self.execute(*op, *ty, &a);
-                    self.errors.record(r);
+                    self.raise(r);
                 }
                 Item::Mesh(mesh) => {
                     let r = self.run_mesh(mesh);
-                    self.errors.record(r);
+                    self.raise(r);
                 }
             }
         }
@@ -350,7 +386,7 @@ impl Context {
     fn run_mesh(&mut self, mesh: &Arc<Mesh>) -> GlResult {
         if self.imm.inside() && !mesh.from_arrays {
             // The list's glBegin, inside the caller's.
-            self.begin_error.record::<()>(Err(GlError::InvalidOperation));
+            self.unseen_error.record::<()>(Err(GlError::InvalidOperation));
             return Err(GlError::InvalidOperation);
         }
         let saved = self.imm.current;
@@ -443,7 +479,7 @@ impl Context {
             Op::Attr(_) | Op::Material | Op::End | Op::CallList | Op::CallLists | Op::ArrayElement | Op::GetError
         );
         if !inside_ok && self.imm.inside() {
-            self.begin_error.record::<()>(Err(GlError::InvalidOperation));
+            self.unseen_error.record::<()>(Err(GlError::InvalidOperation));
             return Err(GlError::InvalidOperation);
         }
         match op {
@@ -661,11 +697,29 @@ impl Context {
                 self.client.vertex.buffer = 0;
             }
             Op::DrawArrays | Op::DrawElements | Op::DrawRangeElements | Op::MultiDrawArrays | Op::MultiDrawElements => {
+                if let Some(key) = self.buffer_draw_key(op, a) {
+                    // Buffer objects only: the mesh (and its BVH) lives as long as the buffers
+                    // stay as they are.
+                    let mesh = match self.shared.buffer_draws.get(&key) {
+                        Some(m) => m.clone(),
+                        None => {
+                            let runs = self.fetch_draw(op, a)?;
+                            let Some((mode, verts)) = runs.first() else { return Ok(()) };
+                            let mesh = Arc::new(fetched_mesh(*mode, verts));
+                            if self.shared.buffer_draws.len() >= MAX_BUFFER_DRAWS {
+                                self.shared.buffer_draws.clear();
+                            }
+                            self.shared.buffer_draws.insert(key, mesh.clone());
+                            mesh
+                        }
+                    };
+                    return self.run_mesh(&mesh);
+                }
                 for (mode, verts) in self.fetch_draw(op, a)? {
                     self.draw_fetched(mode, &verts);
                 }
             }
-            Op::ArrayElement => {}
+            Op::ArrayElement => self.array_element(args::int(a, 0)),
             Op::BindBuffer => match args::uint(a, 0) {
                 GL_ARRAY_BUFFER => self.client.array_buffer = args::uint(a, 1),
                 GL_ELEMENT_ARRAY_BUFFER => self.client.element_buffer = args::uint(a, 1),
@@ -677,6 +731,7 @@ impl Context {
                     let mut data = args::bytes(a, 2).to_vec();
                     data.resize(size.min(1 << 31), 0);
                     self.shared.buffers.insert(name, data);
+                    self.buffer_changed(name);
                 }
             }
             Op::BufferSubData => {
@@ -687,11 +742,13 @@ impl Context {
                     if let Some(dst) = buf.get_mut(offset..offset + data.len()) {
                         dst.copy_from_slice(data);
                     }
+                    self.buffer_changed(name);
                 }
             }
             Op::DeleteBuffers => {
                 for name in args::array(args::bytes(a, 1), GL_UNSIGNED_INT, args::int(a, 0).max(0) as usize) {
                     self.shared.buffers.remove(&(name as u32));
+                    self.buffer_changed(name as u32);
                 }
             }
             Op::BindTexture => {
@@ -1014,8 +1071,8 @@ mod tests {
         call(&mut c, "glColor3f", &[f(1.0), f(0.0), f(0.0)]); // allowed
         call(&mut c, "glEnd", &[]);
         assert_eq!(c.errors.take(), 0x0502);
-        assert_eq!(c.take_begin_error(), 0x0502, "kept apart for glGetError");
-        assert_eq!(c.take_begin_error(), 0);
+        assert_eq!(c.take_unseen_error(), 0x0502, "kept apart for glGetError");
+        assert_eq!(c.take_unseen_error(), 0);
         call(&mut c, "glEnd", &[]);
         assert_eq!(c.errors.take(), 0x0502, "glEnd without glBegin");
         call(&mut c, "glBegin", &[i(10)]);
@@ -1238,7 +1295,7 @@ mod tests {
         call(&mut c, "glVertexPointer", &[i(2), i(0x1406), i(0), Value::Offset(0)]);
         call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
         call(&mut c, "glDrawArrays", &[i(4), i(0), i(3)]);
-        assert_eq!(c.frame().triangles.len(), 1);
+        assert_eq!(c.frame().all_triangles().len(), 1);
         // Client memory, as the trace's arrays event gives it, with client indices.
         call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(0)]);
         c.set_arrays(&[ArrayData {
@@ -1253,10 +1310,168 @@ mod tests {
         }]);
         call(&mut c, "glDrawElements", &[i(4), i(3), i(0x1401), Value::Blob(&[2, 1, 0])]);
         let t = &c.frame().triangles;
+        assert_eq!(t.len(), 1, "client memory: made this frame");
+        assert_eq!(t[0].positions[0], Vec3::new(0.0, 1.0, 0.0), "index 2 first");
+        // Indices in an element buffer from offset 0: a null pointer in the recording.
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(7)]);
+        call(&mut c, "glVertexPointer", &[i(2), i(0x1406), i(0), Value::Null]);
+        call(&mut c, "glBindBuffer", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(8)]);
+        call(&mut c, "glBufferData", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(3), Value::Blob(&[1, 2, 0]), i(0x88E4)]);
+        call(&mut c, "glDrawElements", &[i(4), i(3), i(0x1401), Value::Null]);
+        let t = &c.frame().instances;
         assert_eq!(t.len(), 2);
-        assert_eq!(t[1].positions[0], Vec3::new(0.0, 1.0, 0.0), "index 2 first");
+        assert_eq!(
+            c.frame().triangle(TriangleId { instance: 1, index: 0 }).unwrap().positions[0],
+            Vec3::new(1.0, 0.0, 0.0),
+            "index 1 first"
+        );
         call(&mut c, "glDrawArrays", &[i(4), i(-1), i(3)]);
         assert_eq!(c.errors.take(), 0x0501);
+    }
+
+    #[test]
+    pub(crate) fn array_elements_give_vertices_inside_glbegin_and_in_lists() {
+        let mut c = context();
+        let floats = f32s(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
+        let colors = [255u8, 0, 0, 0, 255, 0, 0, 0, 255];
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        call(&mut c, "glEnableClientState", &[i(GL_COLOR_ARRAY as i64)]);
+        // What the recorder captures before each glArrayElement: that element's memory.
+        let element = |c: &mut Context, k: usize| {
+            c.set_arrays(&[
+                ArrayData {
+                    kind: 0,
+                    index: 0,
+                    size: 2,
+                    gl_type: 0x1406,
+                    stride: 0,
+                    normalized: false,
+                    first: k as u64,
+                    bytes: &floats[8 * k..8 * k + 8],
+                },
+                ArrayData {
+                    kind: 2,
+                    index: 0,
+                    size: 3,
+                    gl_type: 0x1401,
+                    stride: 0,
+                    normalized: true,
+                    first: k as u64,
+                    bytes: &colors[3 * k..3 * k + 3],
+                },
+            ]);
+            call(c, "glArrayElement", &[i(k as i64)]);
+        };
+        let triangle = |c: &mut Context| {
+            call(c, "glBegin", &[i(4)]);
+            for k in [2, 0, 1] {
+                element(c, k);
+            }
+            call(c, "glEnd", &[]);
+        };
+        triangle(&mut c);
+        let t = c.frame().triangles[0];
+        assert_eq!(t.positions[0], Vec3::new(0.0, 1.0, 0.0), "element 2 first");
+        assert_eq!(t.colors[0], Vec4::new(0.0, 0.0, 1.0, 1.0), "with its colour");
+        assert_eq!(c.imm.current.color, DVec4::new(0.0, 1.0, 0.0, 1.0), "the last colour stays current");
+        // Compiled: the elements' values are copied into the list.
+        call(&mut c, "glNewList", &[i(1), i(0x1300)]);
+        triangle(&mut c);
+        call(&mut c, "glEndList", &[]);
+        call(&mut c, "glDisableClientState", &[i(GL_COLOR_ARRAY as i64)]);
+        call(&mut c, "glCallList", &[i(1)]);
+        let frame = c.take_frame();
+        assert_eq!(frame.instances.len(), 1);
+        let listed = frame.all_triangles()[1];
+        assert_eq!((listed.positions, listed.colors), (t.positions, t.colors));
+    }
+
+    #[test]
+    pub(crate) fn multi_draw_elements_draws_each_index_array() {
+        let mut c = context();
+        let floats = f32s(&[0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0]);
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        c.set_arrays(&[ArrayData {
+            kind: 0,
+            index: 0,
+            size: 2,
+            gl_type: 0x1406,
+            stride: 0,
+            normalized: false,
+            first: 0,
+            bytes: &floats,
+        }]);
+        let counts: Vec<u8> = [3i32, 3].iter().flat_map(|x| x.to_ne_bytes()).collect();
+        let lists = Value::Strings(vec![&[0u8, 1, 2][..], &[0u8, 2, 3][..]]);
+        call(&mut c, "glMultiDrawElements", &[i(4), Value::Blob(&counts), i(0x1401), lists, i(2)]);
+        let t = &c.frame().triangles;
+        assert_eq!(t.len(), 2);
+        assert_eq!(t[1].positions[2], Vec3::new(0.0, 1.0, 0.0), "the second draw's last index, 3");
+        // Offsets into an element buffer.
+        call(&mut c, "glBindBuffer", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(8)]);
+        call(
+            &mut c,
+            "glBufferData",
+            &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(6), Value::Blob(&[0, 1, 2, 0, 2, 3]), i(0x88E4)],
+        );
+        let offsets: Vec<u8> = [3usize].iter().flat_map(|x| x.to_ne_bytes()).collect();
+        c.set_arrays(&[ArrayData {
+            kind: 0,
+            index: 0,
+            size: 2,
+            gl_type: 0x1406,
+            stride: 0,
+            normalized: false,
+            first: 0,
+            bytes: &floats,
+        }]);
+        call(&mut c, "glMultiDrawElements", &[i(4), Value::Blob(&counts[..4]), i(0x1401), Value::Blob(&offsets), i(1)]);
+        assert_eq!(c.frame().triangles[2].positions, t_positions(&floats, [0, 2, 3]));
+        call(&mut c, "glMultiDrawElements", &[i(4), Value::Blob(&counts), i(0x1406), Value::Null, i(2)]);
+        assert_eq!(c.errors.take(), 0x0500, "GL_FLOAT indices");
+    }
+
+    fn t_positions(floats: &[u8], idx: [usize; 3]) -> [Vec3; 3] {
+        let f = |k: usize| f32::from_ne_bytes(floats[4 * k..4 * k + 4].try_into().unwrap());
+        idx.map(|i| Vec3::new(f(2 * i), f(2 * i + 1), 0.0))
+    }
+
+    #[test]
+    pub(crate) fn draws_of_unchanged_buffers_keep_their_mesh() {
+        let mut c = context();
+        let floats = f32s(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(7)]);
+        call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(24), Value::Blob(&floats), i(0x88E4)]);
+        call(&mut c, "glVertexPointer", &[i(2), i(0x1406), i(0), Value::Null]);
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        let draw = |c: &mut Context| call(c, "glDrawArrays", &[i(4), i(0), i(3)]);
+        draw(&mut c);
+        draw(&mut c);
+        let frame = c.take_frame();
+        assert_eq!((frame.instances.len(), frame.triangles.len()), (2, 0));
+        assert_eq!(frame.instances[0].mesh.id, frame.instances[1].mesh.id, "one mesh for the same draw");
+        // New contents: a new mesh, with the new positions.
+        call(&mut c, "glBufferSubData", &[i(GL_ARRAY_BUFFER as i64), i(0), i(4), Value::Blob(&f32s(&[0.5]))]);
+        draw(&mut c);
+        let next = c.take_frame();
+        assert_ne!(next.instances[0].mesh.id, frame.instances[0].mesh.id);
+        assert_eq!(next.all_triangles()[0].positions[0].x, 0.5);
+        // Client memory is not kept: its draws stay per frame.
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(0)]);
+        call(&mut c, "glVertexPointer", &[i(2), i(0x1406), i(0), Value::Opaque(64)]);
+        c.set_arrays(&[ArrayData {
+            kind: 0,
+            index: 0,
+            size: 2,
+            gl_type: 0x1406,
+            stride: 0,
+            normalized: false,
+            first: 0,
+            bytes: &floats,
+        }]);
+        draw(&mut c);
+        let client = c.take_frame();
+        assert_eq!((client.instances.len(), client.triangles.len()), (0, 1));
     }
 
     #[test]

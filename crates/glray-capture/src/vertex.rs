@@ -92,13 +92,7 @@ pub(crate) fn eye_normal(nm: &DMat3, n: DVec3, normalize: bool, rescale: bool) -
 impl Context {
     pub(crate) fn attribute(&mut self, f: AttrForm, a: &[Value]) -> GlResult {
         match decode_attribute(f, a)? {
-            Given::Vertex(p) => {
-                if self.imm.inside() {
-                    let out = self.vertex_stage(p);
-                    self.open.push(out);
-                    self.imm.vertex(p);
-                }
-            }
+            Given::Vertex(p) => self.vertex(p),
             Given::Normal(n) => self.imm.normal(n),
             Given::Color(c) => self.imm.color(c),
             Given::TexCoord(unit, t) => self.imm.tex_coord(unit, t)?,
@@ -106,6 +100,37 @@ impl Context {
             Given::EdgeFlag(e) => self.imm.edge_flag(e),
         }
         Ok(())
+    }
+
+    /// glVertex: a vertex of the open glBegin (outside one it does nothing).
+    pub(crate) fn vertex(&mut self, p: DVec4) {
+        if self.imm.inside() {
+            let out = self.vertex_stage(p);
+            self.open.push(out);
+            self.imm.vertex(p);
+        }
+    }
+
+    /// glArrayElement: the enabled arrays' element `i` given as glNormal, glColor,
+    /// glTexCoord and glVertex would give it.
+    pub(crate) fn array_element(&mut self, i: i64) {
+        if i < 0 {
+            return;
+        }
+        let v = self.element(i as u64);
+        self.arrays.clear();
+        if let Some(n) = v.normal {
+            self.imm.normal(n);
+        }
+        if let Some(c) = v.color {
+            self.imm.color(c);
+        }
+        if let Some(t) = v.tex {
+            self.imm.current.texcoords[0] = t;
+        }
+        if let Some(p) = v.position {
+            self.vertex(p);
+        }
     }
 
     /// The inverse transpose of the modelview's upper 3x3, cached per modelview.

@@ -132,6 +132,8 @@ pub struct Replayer {
     thread: u32,
     /// Memory for the arguments of the call being replayed.
     strings: Vec<CString>,
+    /// Copies of string-list arguments, NUL-terminated, and the pointer arrays to them.
+    byte_lists: Vec<Vec<u8>>,
     pointer_lists: Vec<Vec<*const c_char>>,
     outputs: Vec<Vec<u8>>,
     /// Where the outputs of queries go (glGet*): nothing reads them, so all calls share it.
@@ -163,6 +165,7 @@ impl Replayer {
             current: None,
             thread: 0,
             strings: Vec::new(),
+            byte_lists: Vec::new(),
             pointer_lists: Vec::new(),
             outputs: Vec::new(),
             scratch: vec![0; 1 << 20],
@@ -205,11 +208,15 @@ impl Replayer {
                 p
             }
             Value::Strings(list) => {
+                // Shader sources (NUL-terminated, unless lengths are given) or index arrays
+                // (glMultiDrawElements, binary): each copied with a NUL after it.
                 let mut ptrs = Vec::with_capacity(list.len());
                 for s in list {
-                    let c = CString::new(s.to_vec()).map_err(|_| "a string argument contains a NUL byte")?;
-                    ptrs.push(c.as_ptr());
-                    self.strings.push(c);
+                    let mut bytes = Vec::with_capacity(s.len() + 1);
+                    bytes.extend_from_slice(s);
+                    bytes.push(0);
+                    ptrs.push(bytes.as_ptr() as *const c_char);
+                    self.byte_lists.push(bytes);
                 }
                 let p = ptrs.as_ptr() as *mut c_void;
                 self.pointer_lists.push(ptrs);
@@ -347,6 +354,7 @@ impl Replayer {
             self.write_read_pixels(args)?;
         }
         self.strings.clear();
+        self.byte_lists.clear();
         self.pointer_lists.clear();
         self.outputs.clear();
         self.pending_read = None;
