@@ -53,7 +53,8 @@ fn the_trace_suite_ray_traces_like_osmesa() {
                 .arg("replay")
                 .arg(suite.join(format!("{name}.trace")))
                 .args(["--renderer", "both", "--out"])
-                .arg(&out),
+                .arg(&out)
+                .env("GLRAY_PRESET", "gl"),
             name,
         );
         assert!(stdout(&o).contains("ray traced"), "{name}: {}", stdout(&o));
@@ -159,6 +160,45 @@ fn openscad_render_is_ray_traced_like_mesa() {
     assert!(triangles > 100, "{triangles}");
     let share = differing(&pngs[0], &pngs[1]);
     assert!(share <= 0.02, "openscad: {:.3}% differ", share * 100.0);
+}
+
+#[test]
+fn effect_presets_change_the_picture_and_report_their_statistics() {
+    let dir = scratch("rt-effects");
+    let program = example("osmesa_scene");
+    let mut pngs = Vec::new();
+    for preset in ["gl", "ao", "full"] {
+        let (png, stats) = (dir.join(format!("{preset}.png")), dir.join(format!("{preset}.jsonl")));
+        let mut cmd = command(Way::Preload, &[], &program, 120);
+        cmd.arg(&png).arg("2").env("GLRAY_PRESET", preset).env("GLRAY_STATS", &stats);
+        run_ok(&mut cmd, &format!("osmesa_scene preset={preset}"));
+        let lines: Vec<String> = std::fs::read_to_string(&stats).unwrap().lines().map(String::from).collect();
+        assert_eq!(lines.len(), 2, "one line per frame: {lines:?}");
+        let field = |line: &str, key: &str| -> f64 {
+            let rest =
+                &line[line.find(&format!("\"{key}\":")).unwrap_or_else(|| panic!("{key} in {line}")) + key.len() + 3..];
+            rest[..rest.find([',', '}']).unwrap()].parse().unwrap()
+        };
+        let last = lines.last().unwrap();
+        let samples = if preset == "full" { 4.0 } else { 1.0 };
+        assert_eq!(field(last, "samples"), samples, "{last}");
+        assert!(field(last, "rays") >= 200.0 * 200.0 && field(last, "triangles") > 0.0, "{last}");
+        assert!(field(last, "trace_ms") > 0.0 && field(last, "mrays_per_s") > 0.0, "{last}");
+        pngs.push(png);
+    }
+    // Ambient occlusion only darkens (where things are close together); the full look differs
+    // again (shadows, reflections, antialiased edges).
+    let (gl, ao) = (Image::read(&pngs[0]).unwrap(), Image::read(&pngs[1]).unwrap());
+    let brighter = gl.rgb.iter().zip(&ao.rgb).filter(|(g, a)| **a > g.saturating_add(1)).count();
+    let darker = gl.rgb.iter().zip(&ao.rgb).filter(|(g, a)| a.saturating_add(2) < **g).count();
+    assert_eq!(brighter, 0, "ambient occlusion brightened {brighter} channels");
+    assert!(darker > 100, "ambient occlusion darkened only {darker} channels");
+    assert!(differing(&pngs[1], &pngs[2]) > 0.01, "full vs ao: {}", differing(&pngs[1], &pngs[2]));
+    // Statistics on standard error, one line per frame.
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.arg(dir.join("stderr.png")).arg("1").env("GLRAY_PRESET", "gl").env("GLRAY_STATS", "stderr");
+    let err = stderr(&run_ok(&mut cmd, "osmesa_scene stats=stderr"));
+    assert!(err.contains("glray: frame 0 (") && err.contains("Mrays/s"), "{err}");
 }
 
 #[test]

@@ -9,6 +9,7 @@
 
 mod dump;
 mod present;
+mod stats;
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -51,6 +52,9 @@ struct Live {
     /// Each thread's last ray-traced frame, for frames drawn without a clear.
     last: HashMap<u32, glray_render::Rendered>,
     frames: u64,
+    /// GLRAY_STATS, and the time capture took since the last frame (measured only for it).
+    stats: Option<stats::Sink>,
+    capture_time: std::time::Duration,
 }
 
 /// Turns live ray tracing on with the settings in force (before recording starts).
@@ -66,15 +70,15 @@ pub fn configure(config: &Config) {
         capture: Capture::default(),
         names: Vec::new(),
         trigger,
-        renderer: glray_render::Renderer::new(glray_render::Options {
-            per_pixel_lighting: config.per_pixel_lighting(),
-        }),
+        renderer: glray_render::Renderer::new(glray_render::Options::from_config(config).unwrap_or_default()),
         dump: config.dump_scene().map(PathBuf::from),
         presented: HashMap::new(),
         last: HashMap::new(),
         shown: Default::default(),
         told_shaders: Default::default(),
         frames: 0,
+        stats: config.stats().and_then(|spec| stats::Sink::open(spec).map_err(|e| glray_core::warn!("{e}")).ok()),
+        capture_time: std::time::Duration::ZERO,
     };
     *LIVE.lock().unwrap_or_else(|e| e.into_inner()) = Some(live);
     ON.store(true, Ordering::Relaxed);
@@ -93,6 +97,7 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
     let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
     let Some(live) = guard.as_mut() else { return named };
     let mut reader = Reader::events(bytes, named);
+    let started = live.stats.is_some().then(std::time::Instant::now);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<(), String> {
         while let Some(event) = reader.next_event().map_err(|e| e.to_string())? {
             if let Event::Name { number } = event {
@@ -108,6 +113,9 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
         }
         Ok(())
     }));
+    if let Some(t) = started {
+        live.capture_time += t.elapsed();
+    }
     match result {
         Ok(Ok(())) => {}
         Ok(Err(e)) => stop(&format!("capture could not read a call: {e}")),
@@ -269,9 +277,22 @@ impl Live {
                 glray_core::warn!("dump_scene: {e}");
             }
         }
+        let number = self.frames;
         self.frames += 1;
+        let start = std::time::Instant::now();
         // SAFETY: called on the thread whose context is current, before its swap/finish/read.
         unsafe { present::draw(&rendered) };
+        if let Some(sink) = self.stats.as_mut() {
+            sink.write(&stats::FrameStats {
+                frame: number,
+                thread,
+                width: w,
+                height: h,
+                capture: std::mem::take(&mut self.capture_time),
+                render: self.renderer.stats(),
+                present: start.elapsed(),
+            });
+        }
         self.shown.insert(thread);
         self.last.insert(thread, rendered);
     }

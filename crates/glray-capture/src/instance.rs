@@ -50,16 +50,23 @@ impl Instance {
         m.triangles[index].map(|i| self.object_to_clip * m.position(i))
     }
 
-    /// Whether triangle `index` is drawn at all (not culled, not degenerate on the screen).
+    /// Whether triangle `index` is drawn at all (not culled).
     pub fn keeps(&self, index: usize) -> bool {
-        window_facing(self.clip(index), self.front_ccw).is_some_and(|front| !culled(self.cull, front))
+        // Without culling every triangle is (the common case: no clip transform per hit).
+        self.cull.is_none() || !culled(self.cull, self.front(index))
     }
 
-    /// Triangle `index` as the rasterizer would have drawn it; None if culled or degenerate.
+    /// Whether triangle `index` faces front on the screen (one with no area there, which a
+    /// ray can only graze, counts as front).
+    fn front(&self, index: usize) -> bool {
+        window_facing(self.clip(index), self.front_ccw).unwrap_or(true)
+    }
+
+    /// Triangle `index` as the rasterizer would have drawn it; None if culled.
     pub fn triangle(&self, index: usize, lightings: &[Lighting]) -> Option<Triangle> {
         let m = &self.mesh;
         let clip = self.clip(index);
-        let front = window_facing(clip, self.front_ccw)?;
+        let front = window_facing(clip, self.front_ccw).unwrap_or(true);
         if culled(self.cull, front) {
             return None;
         }

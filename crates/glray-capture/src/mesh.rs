@@ -75,7 +75,38 @@ pub struct Mesh {
     pub max: Vec3,
 }
 
+/// A new mesh's id.
+fn next_id() -> u64 {
+    static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+    NEXT_ID.fetch_add(1, Ordering::Relaxed)
+}
+
 impl Mesh {
+    /// Indexed triangles with a normal per vertex (a mesh file's, a benchmark's): as a list of
+    /// GL_TRIANGLES would keep them, without repeating shared vertices. None if an index is out
+    /// of range.
+    pub fn indexed(positions: Vec<Vec3>, normals: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Option<Mesh> {
+        let n = positions.len() as u32;
+        if normals.len() != positions.len() || triangles.iter().flatten().any(|&i| i >= n) {
+            return None;
+        }
+        let min = positions.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
+        let max = positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+        Some(Mesh {
+            id: next_id(),
+            mode: crate::primitive::GL_TRIANGLES,
+            provoking: triangles.iter().map(|t| t[2]).collect(),
+            triangles,
+            positions,
+            normals: Attribute { first: 0, values: normals },
+            colors: Attribute { first: n, values: Vec::new() },
+            texcoords: Attribute { first: n, values: Vec::new() },
+            min,
+            max,
+            ..Mesh::default()
+        })
+    }
+
     pub fn vertex_count(&self) -> u32 {
         self.positions.len() as u32
     }
@@ -137,9 +168,8 @@ impl MeshBuilder {
 
     /// The finished mesh, assembled into triangles.
     pub fn finish(self) -> Mesh {
-        static NEXT_ID: AtomicU64 = AtomicU64::new(1);
         let mut m = self.mesh;
-        m.id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
+        m.id = next_id();
         (m.end_normal, m.end_color, m.end_texcoord) = (self.normal, self.color, self.texcoord);
         let n = m.positions.len() as u32;
         for a in [&mut m.normals.first, &mut m.colors.first, &mut m.texcoords.first] {

@@ -11,13 +11,19 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 /// What values a setting accepts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Kind {
     Bool,
     /// One of the listed words.
     Choice(&'static [&'static str]),
     /// A file system path; empty means "not set".
     Path,
+    /// A whole number in [min, max]; empty means "the preset's".
+    Int(i64, i64),
+    /// A number in [min, max]; empty means "the preset's".
+    Float(f64, f64),
+    /// true or false; empty means "the preset's".
+    OptionalBool,
 }
 
 /// One setting: its key in the TOML file; its environment variable is GLRAY_ + KEY uppercased.
@@ -30,7 +36,7 @@ pub struct Setting {
 }
 
 pub const LOG_LEVELS: &[&str] = &["off", "error", "warn", "info", "debug"];
-pub const PRESETS: &[&str] = &["off", "gl"];
+pub const PRESETS: &[&str] = &["off", "gl", "ao", "full"];
 pub const TRIGGERS: &[&str] = &["auto", "swap", "finish", "flush", "readpixels"];
 pub const LIGHTING: &[&str] = &["vertex", "pixel"];
 
@@ -66,10 +72,70 @@ pub const SETTINGS: &[Setting] = &[
     Setting {
         key: "preset",
         kind: Kind::Choice(PRESETS),
-        default: "gl",
+        default: "ao",
         doc: "What the program's frames become: `gl`, ray traced in the look of GL's fixed-function pipeline \
-              (matching what Mesa draws); `off`, the real GL's own frames (glray only passes calls through, \
-              and records if asked).",
+              (matching what Mesa draws); `ao`, that look times ambient occlusion (16 rays); `full`, the \
+              advanced look (36 AO rays, shadows from the GL lights, one reflection, 4 samples per pixel); \
+              `off`, the real GL's own frames (glray only passes calls through, and records if asked). The \
+              effect settings below override a preset's choice one by one.",
+    },
+    Setting {
+        key: "ao_samples",
+        kind: Kind::Int(0, 1024),
+        default: "",
+        doc: "Ambient-occlusion rays per visible point (0: none). Empty: the preset's (gl 0, ao 16, full 36).",
+    },
+    Setting {
+        key: "ao_distance",
+        kind: Kind::Float(0.0, 10.0),
+        default: "",
+        doc: "How far an occluder darkens a point, as a fraction of the scene's diagonal (default 0.1).",
+    },
+    Setting {
+        key: "ao_intensity",
+        kind: Kind::Float(0.0, 1.0),
+        default: "",
+        doc: "How dark a fully occluded point becomes: its colour times 1 - intensity (default 1).",
+    },
+    Setting {
+        key: "shadows",
+        kind: Kind::OptionalBool,
+        default: "",
+        doc: "Hard shadows from every enabled GL light (lit surfaces are then lit per pixel). Empty: the \
+              preset's (on in full).",
+    },
+    Setting {
+        key: "reflections",
+        kind: Kind::Int(0, 16),
+        default: "",
+        doc: "Reflection bounces (0: none). Empty: the preset's (1 in full).",
+    },
+    Setting {
+        key: "reflectivity",
+        kind: Kind::Float(0.0, 1.0),
+        default: "",
+        doc: "How much of every surface is mirror when reflections are on (default 0.2).",
+    },
+    Setting {
+        key: "samples",
+        kind: Kind::Int(1, 1024),
+        default: "",
+        doc: "Samples per pixel: the first at the pixel centre, the others jittered over it (antialiasing). \
+              Empty: the preset's (4 in full, else 1).",
+    },
+    Setting {
+        key: "progressive",
+        kind: Kind::Bool,
+        default: "true",
+        doc: "While the scene and camera stay the same from frame to frame, each frame adds its samples to \
+              the ones before (up to 64 frames), so a still picture converges to full quality.",
+    },
+    Setting {
+        key: "stats",
+        kind: Kind::Path,
+        default: "",
+        doc: "Per-frame statistics: `stderr`, or a file to append JSON lines to (capture, BVH build, trace \
+              and present times, rays, rays per second, triangles, samples). Empty: none.",
     },
     Setting {
         key: "trigger",
@@ -181,6 +247,9 @@ fn allowed(kind: Kind) -> String {
         Kind::Bool => "true, false (also 1, 0, yes, no, on, off)".into(),
         Kind::Choice(words) => words.join(", "),
         Kind::Path => "a file path".into(),
+        Kind::Int(lo, hi) => format!("a whole number from {lo} to {hi}, or empty for the preset's"),
+        Kind::Float(lo, hi) => format!("a number from {lo} to {hi}, or empty for the preset's"),
+        Kind::OptionalBool => "true, false (also 1, 0, yes, no, on, off), or empty for the preset's".into(),
     }
 }
 
@@ -201,6 +270,12 @@ fn validate(s: &Setting, value: &str, place: &dyn Fn() -> String) -> Result<Stri
             words.contains(&v.as_str()).then_some(v)
         }
         Kind::Path => Some(value.to_string()),
+        _ if value.trim().is_empty() => Some(String::new()),
+        Kind::OptionalBool => parse_bool(value).map(|b| b.to_string()),
+        Kind::Int(lo, hi) => value.trim().parse::<i64>().ok().filter(|v| (lo..=hi).contains(v)).map(|v| v.to_string()),
+        Kind::Float(lo, hi) => {
+            value.trim().parse::<f64>().ok().filter(|v| v.is_finite() && (lo..=hi).contains(v)).map(|v| v.to_string())
+        }
     };
     ok.ok_or_else(|| {
         ConfigError(format!("bad value {value:?} for setting `{}` ({}); allowed: {}", s.key, place(), allowed(s.kind)))
@@ -332,6 +407,21 @@ impl Config {
         self.get("lighting") == "pixel"
     }
 
+    /// A number setting, if set (empty: the preset decides).
+    pub fn number(&self, key: &str) -> Option<f64> {
+        self.get(key).parse().ok()
+    }
+
+    /// A true/false setting, if set (empty: the preset decides).
+    pub fn flag(&self, key: &str) -> Option<bool> {
+        parse_bool(self.get(key))
+    }
+
+    /// Where per-frame statistics go: "stderr", a file, or nowhere.
+    pub fn stats(&self) -> Option<&str> {
+        Some(self.get("stats")).filter(|p| !p.is_empty())
+    }
+
     /// Where to dump each frame's scene, if anywhere.
     pub fn dump_scene(&self) -> Option<&str> {
         Some(self.get("dump_scene")).filter(|p| !p.is_empty())
@@ -357,6 +447,30 @@ mod tests {
         assert!(c.enable());
         assert_eq!(c.log_level(), crate::log::Level::Warn);
         assert!(c.entries().iter().all(|(_, _, s)| **s == Source::Default));
+    }
+
+    #[test]
+    fn effect_settings_take_numbers_in_range_or_nothing() {
+        let env = |k: &str, v: &str| vars(&[("HOME", "/nonexistent"), (k, v)]);
+        let c = Config::resolve(&env("GLRAY_AO_SAMPLES", "36"), &[]).unwrap();
+        assert_eq!(c.number("ao_samples"), Some(36.0));
+        assert_eq!(c.number("reflections"), None, "empty: the preset's");
+        assert_eq!(c.flag("shadows"), None);
+        let c = Config::resolve(&env("GLRAY_SHADOWS", "on"), &[]).unwrap();
+        assert_eq!(c.flag("shadows"), Some(true));
+        for (k, v) in [
+            ("GLRAY_AO_SAMPLES", "-1"),
+            ("GLRAY_AO_INTENSITY", "1.5"),
+            ("GLRAY_SAMPLES", "0"),
+            ("GLRAY_AO_DISTANCE", "x"),
+        ] {
+            let e = Config::resolve(&env(k, v), &[]).unwrap_err().to_string();
+            let key = k.trim_start_matches("GLRAY_").to_ascii_lowercase();
+            assert!(e.contains(&format!("`{key}`")) && e.contains("or empty for the preset's"), "{e}");
+        }
+        let flags = [("preset".to_string(), "full".to_string()), ("reflectivity".to_string(), "0.5".to_string())];
+        let c = Config::resolve(&vars(&[("HOME", "/nonexistent")]), &flags).unwrap();
+        assert_eq!((c.preset(), c.number("reflectivity")), ("full", Some(0.5)));
     }
 
     #[test]

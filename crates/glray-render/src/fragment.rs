@@ -6,7 +6,7 @@
 use glam::{DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
 use glray_capture::camera::Camera;
 use glray_capture::frame::{Frame, Triangle, NO_LIGHTING};
-use glray_capture::lighting::light_vertex;
+use glray_capture::lighting::{light_vertex, Light};
 use glray_capture::texture::{GL_ALPHA, GL_RGB};
 
 const GL_REPLACE: u32 = 0x1E01;
@@ -91,23 +91,34 @@ fn lod(t: &Triangle, camera: &Camera, texels: f64) -> f32 {
     (0.5 * (tex / screen).log2()) as f32
 }
 
+/// Which lights reach a point (shadows), when that is asked.
+pub type Visibility<'a> = Option<&'a dyn Fn(&Light) -> bool>;
+
 /// The fragment of `triangle` at eye-space point `p`. With `per_pixel`, lit triangles run the
 /// lighting equation at the point with the interpolated normal (Phong shading) instead of
-/// interpolating the colours lit at the corners (Gouraud, what GL does).
-pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: bool) -> Fragment {
+/// interpolating the colours lit at the corners (Gouraud, what GL does). With `visible`, they
+/// are lit per pixel by the lights that reach the point only (shadows).
+pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: bool, visible: Visibility) -> Fragment {
     let surface = &frame.surfaces[t.surface as usize];
     let b = weights(t, camera, p).as_vec3();
     let mix4 = |v: [Vec4; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix3 = |v: [Vec3; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix2 = |v: [Vec2; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     // Triangles carried in from another camera have no lighting left (Frame::unified).
-    let lit_here = per_pixel && t.lighting != NO_LIGHTING;
+    let lit_here = (per_pixel || visible.is_some()) && t.lighting != NO_LIGHTING;
     let (mut c, sec) = if lit_here {
         let l = &frame.lightings[t.lighting as usize];
         let mats = l.materials(mix4(t.base_colors).as_dvec4());
         let n = mix3(t.normals).as_dvec3().normalize_or_zero();
         let m = &mats[t.back as usize];
-        let (primary, secondary) = light_vertex(p, n, m, &l.lights, &l.model);
+        let (primary, secondary) = match visible {
+            Some(reaches) => {
+                let lights: Vec<Light> =
+                    l.lights.iter().map(|x| Light { enabled: x.enabled && reaches(x), ..*x }).collect();
+                light_vertex(p, n, m, &lights, &l.model)
+            }
+            None => light_vertex(p, n, m, &l.lights, &l.model),
+        };
         (primary.as_vec4(), secondary.truncate().as_vec3())
     } else {
         (mix4(t.colors), mix3(t.secondary))

@@ -6,11 +6,21 @@
 //!   fog, window depth (the GL look);
 //! - `resolve`: per pixel, which fragments survive GL's depth test, alpha test and blending,
 //!   in drawing order;
-//! - `render`: the camera's rays over the image, in rayon row tiles, deterministic.
+//! - `effects`: ambient occlusion, shadows, reflections, samples per pixel, and the presets;
+//! - `sampling`: deterministic random numbers (a function of pixel and sample) and directions;
+//! - `tracer`: one pixel's samples, resolved as the rasterizer would, with the effects;
+//! - `render`: the image in rayon row tiles, deterministic; progressive refinement over frames
+//!   that show the same scene (`signature`), statistics, progress on a terminal (`progress`).
 
+pub mod effects;
 pub mod fragment;
+mod progress;
 pub mod render;
 pub mod resolve;
+pub mod sampling;
 pub mod scene;
+mod signature;
+mod tracer;
 
-pub use render::{render, Options, Rendered, Renderer};
+pub use effects::Effects;
+pub use render::{render, Options, Rendered, Renderer, Stats};

@@ -1,16 +1,22 @@
-//! Rendering a captured frame: one ray per pixel centre inside the viewport (the GL look
-//! samples where the rasterizer does), rows in parallel on rayon. Every pixel depends only on
-//! the frame, so the image is the same for any number of threads.
+//! Rendering a captured frame: rays through the pixels inside the viewport (the first sample of
+//! a pixel at its centre, where the rasterizer samples; more, jittered, with the effects that
+//! ask for them), rows in parallel on rayon. Every sample depends only on the frame and on
+//! where it is taken, so the image is the same for any number of threads.
+
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
 
 use glam::Vec4;
 use glray_capture::camera::Camera;
 use glray_capture::frame::Frame;
-use obvhs::ray::Ray;
 use rayon::prelude::*;
 
-use crate::fragment::{shade, Fragment};
-use crate::resolve::{closest_hit_suffices, in_drawing_order, opaque};
-use crate::scene::{Hit, Meshes, Scene};
+use crate::effects::{Effects, MAX_PASSES};
+use crate::progress::Progress;
+use crate::resolve::closest_hit_suffices;
+use crate::scene::{Meshes, Scene};
+use crate::signature::signature;
+use crate::tracer::{Scratch, Tracer};
 
 /// A rendered frame, laid out as GL's framebuffer: rows bottom-up.
 #[derive(Debug, Clone, PartialEq)]
@@ -28,30 +34,134 @@ fn to_u8(c: Vec4) -> [u8; 4] {
     c.to_array().map(|x| (x.clamp(0.0, 1.0) * 255.0).round_ties_even() as u8)
 }
 
+fn from_u8(c: &[u8]) -> Vec4 {
+    Vec4::from_array(std::array::from_fn(|i| c[i] as f32 / 255.0))
+}
+
 /// How to render.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Options {
     /// Evaluate lighting per pixel instead of interpolating per-vertex colours.
     pub per_pixel_lighting: bool,
+    pub effects: Effects,
 }
 
-/// Renders frames, keeping what outlives a frame: the BVHs of display-list meshes.
+impl Options {
+    /// The options the settings ask for: the preset's effects, each overridden by its own
+    /// setting when that is set. None for preset `off` (nothing is ray traced).
+    pub fn from_config(config: &glray_core::config::Config) -> Option<Options> {
+        let mut e = Effects::preset(config.preset())?;
+        let int = |key: &str, v: &mut u32| {
+            if let Some(x) = config.number(key) {
+                *v = x as u32;
+            }
+        };
+        let float = |key: &str, v: &mut f32| {
+            if let Some(x) = config.number(key) {
+                *v = x as f32;
+            }
+        };
+        int("ao_samples", &mut e.ao_samples);
+        float("ao_distance", &mut e.ao_distance);
+        float("ao_intensity", &mut e.ao_intensity);
+        int("reflections", &mut e.reflections);
+        float("reflectivity", &mut e.reflectivity);
+        int("samples", &mut e.samples);
+        if let Some(on) = config.flag("shadows") {
+            e.shadows = on;
+        }
+        e.progressive = config.flag("progressive").unwrap_or(true);
+        Some(Options { per_pixel_lighting: config.per_pixel_lighting(), effects: e })
+    }
+}
+
+/// What rendering a frame took.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Stats {
+    /// Building the frame's BVHs (new meshes' included).
+    pub build: Duration,
+    pub trace: Duration,
+    /// Rays traced: camera rays and secondary ones.
+    pub rays: u64,
+    pub triangles: u64,
+    /// Samples per pixel accumulated so far (progressive refinement).
+    pub samples: u32,
+}
+
+/// Samples added up over frames that show the same scene.
+struct Accumulation {
+    key: u64,
+    passes: u32,
+    sum: Vec<Vec4>,
+    last: Rendered,
+}
+
+/// Renders frames, keeping what outlives a frame: the BVHs of display-list meshes, and the
+/// samples of a scene that has not changed.
 #[derive(Default)]
 pub struct Renderer {
     pub options: Options,
+    /// Show the progress of renders that take long on standard error.
+    pub progress: bool,
     meshes: Meshes,
+    accumulation: Option<Accumulation>,
+    stats: Stats,
 }
 
 impl Renderer {
     pub fn new(options: Options) -> Renderer {
-        Renderer { options, meshes: Meshes::default() }
+        Renderer { options, ..Renderer::default() }
     }
 
     /// Renders `frame` into a `width` x `height` image. A frame that did not clear the colour
     /// buffer is drawn over `previous` (the last frame of the same drawable), as GL would.
     pub fn render(&mut self, frame: &Frame, width: u32, height: u32, previous: Option<&Rendered>) -> Rendered {
         self.meshes.prune();
-        render_with(frame, width, height, previous, &self.options, &mut self.meshes)
+        let effects = self.options.effects;
+        // Only a cleared frame is all its own: one drawn over the last depends on it.
+        let key = (effects.progressive && effects.beyond_gl() && frame.cleared)
+            .then(|| signature(frame, width, height, &self.options));
+        let pass = match (&self.accumulation, key) {
+            (Some(a), Some(k)) if a.key == k => a.passes,
+            _ => 0,
+        };
+        if pass >= MAX_PASSES {
+            let a = self.accumulation.as_ref().expect("accumulated");
+            self.stats = Stats { samples: a.passes * effects.samples.max(1), ..Stats::default() };
+            return a.last.clone();
+        }
+        let mut job = Job { frame, width, height, previous, options: &self.options, pass, progress: self.progress };
+        let (mut rendered, linear, stats) = job.run(&mut self.meshes, key.is_some());
+        self.stats = stats;
+        match (key, linear) {
+            (Some(key), Some(linear)) => {
+                let a = match self.accumulation.take() {
+                    Some(mut a) if a.key == key => {
+                        for (s, c) in a.sum.iter_mut().zip(&linear) {
+                            *s += *c;
+                        }
+                        a.passes += 1;
+                        a
+                    }
+                    _ => Accumulation { key, passes: 1, sum: linear, last: rendered.clone() },
+                };
+                for (px, s) in rendered.rgba.chunks_mut(4).zip(&a.sum) {
+                    px.copy_from_slice(&to_u8(*s / a.passes as f32));
+                }
+                self.stats.samples = a.passes * effects.samples.max(1);
+                self.accumulation = Some(Accumulation { last: rendered.clone(), ..a });
+            }
+            _ => {
+                self.accumulation = None;
+                self.stats.samples = effects.samples.max(1);
+            }
+        }
+        rendered
+    }
+
+    /// What the last `render` took.
+    pub fn stats(&self) -> Stats {
+        self.stats
     }
 
     /// The display-list meshes whose BVHs are kept.
@@ -62,91 +172,102 @@ impl Renderer {
 
 /// Renders one frame with nothing kept for the next (see `Renderer`).
 pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered>, options: &Options) -> Rendered {
-    render_with(frame, width, height, previous, options, &mut Meshes::default())
+    Renderer::new(*options).render(frame, width, height, previous)
 }
 
-fn render_with(
-    frame: &Frame,
+/// One frame to render.
+struct Job<'a> {
+    frame: &'a Frame,
     width: u32,
     height: u32,
-    previous: Option<&Rendered>,
-    options: &Options,
-    meshes: &mut Meshes,
-) -> Rendered {
-    let unified;
-    let frame = if frame.cameras.len() > 1 {
-        unified = frame.unified();
-        &unified
-    } else {
-        frame
-    };
-    let (w, h) = (width as usize, height as usize);
-    let clear = to_u8(frame.clear_color);
-    let (mut rgba, mut depth) = match previous {
-        Some(p) if !frame.cleared && (p.width, p.height) == (width, height) => {
-            let depth = if frame.depth_cleared { vec![1.0f32; w * h] } else { p.depth.clone() };
-            (p.rgba.clone(), depth)
-        }
-        _ => (clear.repeat(w * h), vec![1.0f32; w * h]),
-    };
-    let camera = match (frame.projection, frame.viewport) {
-        (Some(p), Some(v)) if !frame.is_empty() => Camera::new(p, v, frame.depth_range),
-        _ => None,
-    };
-    let Some(camera) = camera else {
-        return Rendered { width, height, rgba, depth };
-    };
-    let scene = Scene::build(frame, meshes);
-    let simple = closest_hit_suffices(frame);
-    let per_pixel = options.per_pixel_lighting;
-    let v = camera.viewport;
-    let x0 = v.x.max(0) as usize;
-    let x1 = ((v.x as i64 + v.width as i64).max(0) as usize).min(w);
-    rgba.par_chunks_mut(4 * w).zip(depth.par_chunks_mut(w)).enumerate().for_each(|(y, (row, drow))| {
-        if (y as i64) < v.y as i64 || (y as i64) >= v.y as i64 + v.height as i64 {
-            return;
-        }
-        let mut hits: Vec<Hit> = Vec::new();
-        let mut frags: Vec<(Hit, Fragment)> = Vec::new();
-        for x in x0..x1 {
-            let r = camera.ray(x as f64 + 0.5, y as f64 + 0.5);
-            // GL keeps what lies exactly on the near and far planes (backgrounds are often drawn
-            // at z = 1): a hair of slack keeps float rounding from dropping them.
-            let slack = (r.t_max * 1e-4) as f32;
-            let ray = Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack);
-            let at = |hit: &Hit| r.origin + r.direction * hit.t as f64;
-            let (color, d) = if simple {
-                let Some(hit) = scene.closest(ray) else { continue };
-                let Some(t) = frame.triangle(hit.id) else { continue };
-                let f = shade(frame, &camera, &t, at(&hit), per_pixel);
-                // Over the last frame (no clear), the depth it left still tests.
-                if !frame.cleared && f.depth >= drow[x] as f64 {
-                    continue;
+    previous: Option<&'a Rendered>,
+    options: &'a Options,
+    /// Which pass of progressive refinement: the samples taken are the pass's.
+    pass: u32,
+    progress: bool,
+}
+
+impl Job<'_> {
+    /// The image, its colours before rounding (when asked), and what it took.
+    fn run(&mut self, meshes: &mut Meshes, linear: bool) -> (Rendered, Option<Vec<Vec4>>, Stats) {
+        let unified;
+        let frame = if self.frame.cameras.len() > 1 {
+            unified = self.frame.unified();
+            &unified
+        } else {
+            self.frame
+        };
+        let (width, height) = (self.width, self.height);
+        let (w, h) = (width as usize, height as usize);
+        let clear = to_u8(frame.clear_color);
+        let (mut rgba, mut depth) = match self.previous {
+            Some(p) if !frame.cleared && (p.width, p.height) == (width, height) => {
+                let depth = if frame.depth_cleared { vec![1.0f32; w * h] } else { p.depth.clone() };
+                (p.rgba.clone(), depth)
+            }
+            _ => (clear.repeat(w * h), vec![1.0f32; w * h]),
+        };
+        let mut colors = linear.then(|| vec![frame.clear_color; w * h]);
+        let mut stats = Stats { triangles: frame.triangle_count() as u64, ..Stats::default() };
+        let camera = match (frame.projection, frame.viewport) {
+            (Some(p), Some(v)) if !frame.is_empty() => Camera::new(p, v, frame.depth_range),
+            _ => None,
+        };
+        let Some(camera) = camera else {
+            return (Rendered { width, height, rgba, depth }, colors, stats);
+        };
+        let start = Instant::now();
+        let scene = Scene::build(frame, meshes);
+        stats.build = start.elapsed();
+        let start = Instant::now();
+        let diagonal = scene.diagonal().max(1e-6);
+        let tracer = Tracer {
+            frame,
+            camera: &camera,
+            scene: &scene,
+            options: self.options,
+            simple: closest_hit_suffices(frame),
+            eps: diagonal * 1e-4,
+            ao_distance: diagonal * self.options.effects.ao_distance,
+            pass: self.pass,
+        };
+        let rays = AtomicU64::new(0);
+        let v = camera.viewport;
+        let x0 = v.x.max(0) as usize;
+        let x1 = ((v.x as i64 + v.width as i64).max(0) as usize).min(w);
+        let rows_done = AtomicUsize::new(0);
+        let progress = Progress::new(self.progress, h);
+        let process = |y: usize, row: &mut [u8], drow: &mut [f32], mut crow: Option<&mut [Vec4]>| {
+            if (y as i64) >= v.y as i64 && (y as i64) < v.y as i64 + v.height as i64 {
+                let mut scratch = Scratch::default();
+                for x in x0..x1 {
+                    let under = from_u8(&row[4 * x..4 * x + 4]);
+                    if let Some((color, d)) = tracer.pixel(x, y, under, drow[x] as f64, &mut scratch) {
+                        row[4 * x..4 * x + 4].copy_from_slice(&to_u8(color));
+                        if let Some(c) = crow.as_deref_mut() {
+                            c[x] = color.clamp(Vec4::ZERO, Vec4::ONE);
+                        }
+                        if let Some(d) = d {
+                            drow[x] = d as f32;
+                        }
+                    }
                 }
-                (opaque(&f), f.depth)
-            } else {
-                scene.all(ray, &mut hits);
-                if hits.is_empty() {
-                    continue;
-                }
-                // A ray through a shared edge hits both triangles; the rasterizer's fill rule
-                // gives the pixel to one of them, so one hit per draw and depth is kept.
-                hits.sort_by(|a, b| a.sequence.cmp(&b.sequence).then(a.t.total_cmp(&b.t)).then(a.id.cmp(&b.id)));
-                hits.dedup_by(|b, a| a.sequence == b.sequence && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1e-3));
-                frags.clear();
-                frags.extend(hits.iter().filter_map(|hit| {
-                    let t = frame.triangle(hit.id)?;
-                    Some((*hit, shade(frame, &camera, &t, at(hit), per_pixel)))
-                }));
-                let under = &row[4 * x..4 * x + 4];
-                let under = Vec4::from_array(std::array::from_fn(|i| under[i] as f32 / 255.0));
-                in_drawing_order(frame, &mut frags, under, drow[x] as f64)
-            };
-            row[4 * x..4 * x + 4].copy_from_slice(&to_u8(color));
-            drow[x] = d as f32;
+                rays.fetch_add(scratch.rays.get(), Ordering::Relaxed);
+            }
+            progress.row_done(rows_done.fetch_add(1, Ordering::Relaxed) + 1);
+        };
+        let rows = rgba.par_chunks_mut(4 * w).zip(depth.par_chunks_mut(w)).enumerate();
+        match colors.as_mut() {
+            Some(c) => {
+                rows.zip(c.par_chunks_mut(w)).for_each(|((y, (row, drow)), crow)| process(y, row, drow, Some(crow)))
+            }
+            None => rows.for_each(|(y, (row, drow))| process(y, row, drow, None)),
         }
-    });
-    Rendered { width, height, rgba, depth }
+        progress.finish();
+        stats.trace = start.elapsed();
+        stats.rays = rays.load(Ordering::Relaxed);
+        (Rendered { width, height, rgba, depth }, colors, stats)
+    }
 }
 
 #[cfg(test)]
@@ -290,7 +411,7 @@ mod tests {
         f.lightings = vec![lighting];
         // The camera sees only the middle of the quad.
         let vertex = render(&f, 8, 8, None, &Options::default());
-        let pixel = render(&f, 8, 8, None, &Options { per_pixel_lighting: true });
+        let pixel = render(&f, 8, 8, None, &Options { per_pixel_lighting: true, ..Options::default() });
         assert_eq!(pixel_of(&vertex, 4, 4)[..3], [0, 0, 0], "the interpolated corner colours");
         assert!(pixel_of(&pixel, 4, 4)[0] > 180, "{:?}", pixel_of(&pixel, 4, 4));
     }

@@ -66,29 +66,39 @@ pub struct Hit {
     pub sequence: u32,
 }
 
+/// A mesh's BVH, and its triangles laid out in the BVH's leaf order: a leaf's triangles are
+/// read from one place instead of gathered through the mesh's vertex indices.
+pub struct MeshBvh {
+    bvh: CwBvh,
+    tris: Vec<Triangle>,
+}
+
+impl MeshBvh {
+    fn build(mesh: &Mesh) -> MeshBvh {
+        let tris: Vec<Triangle> = (0..mesh.triangles.len()).map(|i| triangle(mesh.corners(i))).collect();
+        let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Duration::default());
+        let tris = bvh.primitive_indices.iter().map(|&i| tris[i as usize]).collect();
+        MeshBvh { bvh, tris }
+    }
+}
+
 /// The BVHs of display-list meshes, kept across frames for as long as a list holds the mesh.
 #[derive(Default)]
 pub struct Meshes {
-    built: HashMap<u64, (Weak<Mesh>, Arc<CwBvh>)>,
+    built: HashMap<u64, (Weak<Mesh>, Arc<MeshBvh>)>,
 }
 
 impl Meshes {
     /// The BVH of each of the frame's instances' meshes: built (in parallel) for meshes not
     /// seen before; those of meshes no list holds any more are dropped.
-    fn prepare(&mut self, frame: &Frame) -> Vec<Arc<CwBvh>> {
+    fn prepare(&mut self, frame: &Frame) -> Vec<Arc<MeshBvh>> {
         self.prune();
         let mut new: Vec<&Arc<Mesh>> =
             frame.instances.iter().map(|i| &i.mesh).filter(|m| !self.built.contains_key(&m.id)).collect();
         new.sort_by_key(|m| m.id);
         new.dedup_by_key(|m| m.id);
-        let bvhs: Vec<(u64, Weak<Mesh>, Arc<CwBvh>)> = new
-            .par_iter()
-            .map(|m| {
-                let tris: Vec<Triangle> = (0..m.triangles.len()).map(|i| triangle(m.corners(i))).collect();
-                let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Duration::default());
-                (m.id, Arc::downgrade(m), Arc::new(bvh))
-            })
-            .collect();
+        let bvhs: Vec<(u64, Weak<Mesh>, Arc<MeshBvh>)> =
+            new.par_iter().map(|m| (m.id, Arc::downgrade(m), Arc::new(MeshBvh::build(m)))).collect();
         for (id, mesh, bvh) in bvhs {
             self.built.insert(id, (mesh, bvh));
         }
@@ -113,7 +123,7 @@ impl Meshes {
 /// An instance ready to trace: its mesh's BVH and the way into its object space.
 struct Placed<'f> {
     instance: &'f Instance,
-    bvh: Arc<CwBvh>,
+    bvh: Arc<MeshBvh>,
     to_object: Affine3A,
 }
 
@@ -127,12 +137,17 @@ impl Placed<'_> {
 
     /// The hit with the mesh's triangle in BVH slot `slot`, if the triangle is drawn at all.
     fn intersect(&self, ray: &Ray, slot: usize) -> (u32, f32) {
-        let index = self.bvh.primitive_indices[slot] as usize;
-        let t = intersect(&triangle(self.instance.mesh.corners(index)), ray);
-        if t.is_finite() && !self.instance.keeps(index) {
-            return (index as u32, f32::INFINITY);
+        let index = self.bvh.bvh.primitive_indices[slot];
+        let t = intersect(&self.bvh.tris[slot], ray);
+        if t.is_finite() && !self.instance.keeps(index as usize) {
+            return (index, f32::INFINITY);
         }
-        (index as u32, t)
+        (index, t)
+    }
+
+    /// Whether the mesh's triangle in BVH slot `slot` lies along the ray (drawn or not).
+    fn blocks(&self, ray: &Ray, slot: usize) -> f32 {
+        intersect(&self.bvh.tris[slot], ray)
     }
 }
 
@@ -142,6 +157,8 @@ pub struct Scene<'f> {
     bvh: Option<CwBvh>,
     placed: Vec<Placed<'f>>,
     top: Option<CwBvh>,
+    /// Eye-space bounds of everything.
+    bounds: Aabb,
 }
 
 impl<'f> Scene<'f> {
@@ -163,7 +180,47 @@ impl<'f> Scene<'f> {
         let bounds: Vec<Aabb> = placed.iter().map(|p| eye_bounds(&p.instance.mesh, &p.instance.modelview)).collect();
         let top =
             (!bounds.is_empty()).then(|| build_cwbvh(&bounds, BvhBuildParams::fast_build(), &mut Duration::default()));
-        Scene { frame, tris, bvh, placed, top }
+        let mut all = Aabb::INVALID;
+        for t in &tris {
+            for v in [t.v0, t.v1, t.v2] {
+                all.extend(v);
+            }
+        }
+        for b in &bounds {
+            all.extend(b.min);
+            all.extend(b.max);
+        }
+        Scene { frame, tris, bvh, placed, top, bounds: all }
+    }
+
+    /// The length of the eye-space diagonal of everything (0 for an empty scene).
+    pub fn diagonal(&self) -> f32 {
+        if self.bounds.min.x > self.bounds.max.x {
+            return 0.0;
+        }
+        (self.bounds.max - self.bounds.min).length()
+    }
+
+    /// Whether anything lies along the ray in [tmin, tmax] (culled faces too: they are still
+    /// there to cast shadows and occlude).
+    pub fn occluded(&self, ray: Ray) -> bool {
+        if let Some(bvh) = &self.bvh {
+            let hit =
+                !bvh.ray_traverse_miss(ray, |r, slot| intersect(&self.tris[bvh.primitive_indices[slot] as usize], r));
+            if hit {
+                return true;
+            }
+        }
+        let Some(top) = &self.top else { return false };
+        !top.ray_traverse_miss(ray, |r, slot| {
+            let p = &self.placed[top.primitive_indices[slot] as usize];
+            let inside = p.bvh.bvh.ray_traverse_miss(p.ray(r), |r, slot| p.blocks(r, slot));
+            if inside {
+                f32::INFINITY
+            } else {
+                r.tmin
+            }
+        })
     }
 
     /// The closest hit in [tmin, tmax].
@@ -186,7 +243,7 @@ impl<'f> Scene<'f> {
                 let p = &self.placed[k];
                 let mut inner = RayHit::none();
                 let mut index = 0;
-                if p.bvh.ray_traverse(p.ray(r), &mut inner, |r, slot| {
+                if p.bvh.bvh.ray_traverse(p.ray(r), &mut inner, |r, slot| {
                     let (i, t) = p.intersect(r, slot);
                     if t < r.tmax {
                         index = i;
@@ -220,7 +277,7 @@ impl<'f> Scene<'f> {
             top.ray_traverse_anyhit(ray, |r, slot| {
                 let k = top.primitive_indices[slot] as usize;
                 let p = &self.placed[k];
-                p.bvh.ray_traverse_anyhit(p.ray(r), |r, slot| {
+                p.bvh.bvh.ray_traverse_anyhit(p.ray(r), |r, slot| {
                     let (index, t) = p.intersect(r, slot);
                     if t >= r.tmin && t <= r.tmax {
                         out.push(Hit {

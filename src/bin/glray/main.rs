@@ -12,6 +12,7 @@ use glray_core::config::{env_name, Config, Kind, SETTINGS};
 use glray_core::reallib::{self, FileId, RealKind};
 
 mod apitrace;
+mod bench;
 #[allow(dead_code)]
 #[path = "../../commands.rs"]
 mod commands;
@@ -104,6 +105,35 @@ enum Command {
         #[arg(long)]
         readpixels: bool,
     },
+    /// Benchmark the tracer on an anchors mesh (../shared/anchors: meshgen's ISOMESH1 files),
+    /// with the anchors' camera and light: BVH build, primary and ambient-occlusion frames,
+    /// peak memory, in embree_bench's terms.
+    Bench {
+        #[arg(long, value_name = "FILE")]
+        mesh: PathBuf,
+        #[arg(long, default_value_t = 1280)]
+        width: u32,
+        #[arg(long, default_value_t = 720)]
+        height: u32,
+        /// Ambient-occlusion rays per hit in the AO frames.
+        #[arg(long, default_value_t = 16)]
+        ao: u32,
+        /// Threads (default: one per core).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Timed frames of each kind, after one warm-up.
+        #[arg(long, default_value_t = 5)]
+        frames: u32,
+        /// Timed BVH builds.
+        #[arg(long, default_value_t = 3)]
+        builds: u32,
+        /// Print one JSON object instead of RESULT lines.
+        #[arg(long)]
+        json: bool,
+        /// Write the last AO frame here (PNG).
+        #[arg(long, value_name = "PNG")]
+        out: Option<PathBuf>,
+    },
     /// Print a trace's events, one per line.
     Dump {
         trace: PathBuf,
@@ -137,6 +167,17 @@ fn main() -> ExitCode {
             replay(&trace, renderer, &out, frames, readpixels)
         }
         Command::Dump { trace, calls } => dump(&trace, calls),
+        Command::Bench { mesh, width, height, ao, threads, frames, builds, json, out } => bench::run(&bench::Args {
+            mesh: &mesh,
+            width,
+            height,
+            ao,
+            threads,
+            frames,
+            builds,
+            json,
+            out: out.as_deref(),
+        }),
         Command::DropinDir { library } => {
             find_library(library).and_then(|lib| dropin_dir(&lib)).map(|d| println!("{}", d.display()))
         }
@@ -199,7 +240,8 @@ fn replay_glray(
     readpixels: bool,
     config: &Config,
 ) -> Result<(), String> {
-    let options = glray_render::Options { per_pixel_lighting: config.per_pixel_lighting() };
+    // The preset and effect settings in force; `off` (nothing ray traced live) replays the GL look.
+    let options = glray_render::Options::from_config(config).unwrap_or_default();
     let s = raytrace::run(data, out, frames, readpixels, &options).map_err(|e| format!("{}: {e}", trace.display()))?;
     println!(
         "ray traced {} calls: {} frames ({} triangles) written to {}{}",

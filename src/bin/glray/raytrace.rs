@@ -55,6 +55,8 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options
     let mut read_pixels: Vec<bool> = Vec::new();
     let mut last: HashMap<u32, Rendered> = HashMap::new();
     let mut renderer = Renderer::new(*options);
+    // Offline renders with many samples take long: show how far they are on a terminal.
+    renderer.progress = std::io::IsTerminal::is_terminal(&std::io::stderr());
     while let Some(event) = reader.next_event().map_err(|e| e.to_string())? {
         if let Event::Name { number } = event {
             read_pixels.resize(number + 1, false);

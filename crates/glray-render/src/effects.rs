@@ -1,0 +1,303 @@
+//! What a ray tracer adds to the GL look: ambient occlusion, hard shadows from the GL lights,
+//! reflections, several jittered samples per pixel, and the presets that combine them.
+
+use glam::{DVec3, Vec3};
+use glray_capture::lighting::Light;
+
+use crate::sampling::{cosine_hemisphere, Sampler};
+use crate::scene::Scene;
+use obvhs::ray::Ray;
+
+/// The effects a frame is rendered with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Effects {
+    /// Ambient-occlusion rays per visible point (0: none).
+    pub ao_samples: u32,
+    /// How far an occluder counts, as a fraction of the scene's diagonal.
+    pub ao_distance: f32,
+    /// How dark a fully occluded point becomes: its colour times 1 - intensity.
+    pub ao_intensity: f32,
+    /// Hard shadows from every enabled GL light (lit surfaces are then lit per pixel).
+    pub shadows: bool,
+    /// Reflection bounces (0: none), and how much of each surface is mirror.
+    pub reflections: u32,
+    pub reflectivity: f32,
+    /// Samples per pixel: the first at the pixel centre (where GL samples), the others jittered
+    /// over the pixel (antialiasing).
+    pub samples: u32,
+    /// While the scene and camera stay the same from frame to frame, each frame adds `samples`
+    /// more to the ones before (up to `MAX_PASSES` frames): the picture converges.
+    pub progressive: bool,
+}
+
+/// The frames progressive refinement keeps adding samples for.
+pub const MAX_PASSES: u32 = 64;
+
+impl Effects {
+    /// The GL look alone: one sample at the pixel centre, what the rasterizer shows.
+    pub const GL: Effects = Effects {
+        ao_samples: 0,
+        ao_distance: 0.1,
+        ao_intensity: 1.0,
+        shadows: false,
+        reflections: 0,
+        reflectivity: 0.2,
+        samples: 1,
+        progressive: true,
+    };
+
+    /// A preset by name: `gl`; `ao`, the GL look times ambient occlusion; `full`, the advanced
+    /// look of the GLuRay paper (36 AO rays, shadows, one reflection, 4 samples per pixel).
+    pub fn preset(name: &str) -> Option<Effects> {
+        Some(match name {
+            "gl" => Effects::GL,
+            "ao" => Effects { ao_samples: 16, ..Effects::GL },
+            "full" => Effects { ao_samples: 36, shadows: true, reflections: 1, samples: 4, ..Effects::GL },
+            _ => return None,
+        })
+    }
+
+    /// Whether pixels depend on more than the GL look (random samples, secondary rays).
+    pub fn beyond_gl(&self) -> bool {
+        self.ao_samples > 0 || self.shadows || self.reflections > 0 || self.samples > 1
+    }
+}
+
+impl Default for Effects {
+    fn default() -> Self {
+        Effects::GL
+    }
+}
+
+/// A ray from `p` along `d` that starts past the surface it leaves.
+pub(crate) fn leaving(p: Vec3, n: Vec3, d: Vec3, eps: f32, tmax: f32) -> Ray {
+    let o = p + n * eps * n.dot(d).signum();
+    Ray::new(o.into(), d.into(), 0.0, tmax)
+}
+
+/// The fraction of the hemisphere above `p` (facing `n`) that geometry closer than `distance`
+/// hides, from `count` cosine-weighted rays.
+pub(crate) fn occlusion(scene: &Scene, p: Vec3, n: Vec3, count: u32, distance: f32, eps: f32, s: &mut Sampler) -> f32 {
+    if count == 0 {
+        return 0.0;
+    }
+    let hidden = (0..count)
+        .filter(|_| {
+            let d = cosine_hemisphere(n, s.next2());
+            scene.occluded(leaving(p, n, d, eps, distance))
+        })
+        .count();
+    hidden as f32 / count as f32
+}
+
+/// Whether `light` reaches eye-space point `p` on a surface with normal `n`.
+pub(crate) fn lit_by(scene: &Scene, p: DVec3, n: Vec3, light: &Light, eps: f32) -> bool {
+    let (dir, tmax) = if light.position.w != 0.0 {
+        let to = light.position.truncate() / light.position.w - p;
+        let len = to.length();
+        if len == 0.0 {
+            return true;
+        }
+        (to / len, len as f32 - eps)
+    } else {
+        (light.position.truncate().normalize_or_zero(), f32::INFINITY)
+    };
+    if dir == DVec3::ZERO {
+        return true;
+    }
+    !scene.occluded(leaving(p.as_vec3(), n, dir.as_vec3(), eps, tmax))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::{render, Options, Rendered, Renderer};
+    use glam::{DMat4, DVec4};
+    use glray_capture::camera::{Camera, Viewport};
+    use glray_capture::context::Context;
+    use glray_capture::frame::Frame;
+    use glray_core::trace::Value::{self, Int, F64};
+
+    const SIZE: u32 = 64;
+
+    /// A context with a perspective camera at the origin looking down -z and depth testing.
+    fn context() -> Context {
+        let mut c = Context::default();
+        c.set_drawable(SIZE, SIZE);
+        call(&mut c, "glMatrixMode", &[Int(0x1701)]);
+        call(&mut c, "glFrustum", &[-0.5, 0.5, -0.5, 0.5, 1.0, 30.0].map(F64));
+        call(&mut c, "glMatrixMode", &[Int(0x1700)]);
+        call(&mut c, "glEnable", &[Int(0x0B71)]); // GL_DEPTH_TEST
+        call(&mut c, "glClear", &[Int(0x4100)]); // colour and depth
+        c
+    }
+
+    fn call(c: &mut Context, name: &str, args: &[Value]) {
+        let (op, ty) = glray_capture::ops::op_for(name).unwrap();
+        c.call(op, ty, args);
+    }
+
+    /// A quad with a colour and a normal.
+    fn quad(c: &mut Context, corners: [[f64; 3]; 4], color: [f64; 3], normal: [f64; 3]) {
+        call(c, "glColor3f", &color.map(F64));
+        call(c, "glNormal3f", &normal.map(F64));
+        call(c, "glBegin", &[Int(7)]);
+        for v in corners {
+            call(c, "glVertex3f", &v.map(F64));
+        }
+        call(c, "glEnd", &[]);
+    }
+
+    /// A white floor at y = -1 from z = -2 to -12.
+    fn floor(c: &mut Context) {
+        let f = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, -1.0, -12.0], [-4.0, -1.0, -12.0]];
+        quad(c, f, [1.0, 1.0, 1.0], [0.0, 1.0, 0.0]);
+    }
+
+    /// The pixel an eye-space point lands on.
+    fn pixel_at(frame: &Frame, r: &Rendered, p: [f64; 3]) -> [u8; 4] {
+        let camera = Camera::new(frame.projection.unwrap(), frame.viewport.unwrap(), (0.0, 1.0)).unwrap();
+        let (x, y) = camera.window_position(glam::DVec3::from_array(p));
+        let i = 4 * (y as usize * SIZE as usize + x as usize);
+        r.rgba[i..i + 4].try_into().unwrap()
+    }
+
+    fn with(effects: Effects) -> Options {
+        Options { effects, ..Options::default() }
+    }
+
+    /// A floor meeting a wall at z = -7: the crease between them.
+    fn crease() -> Frame {
+        let mut c = context();
+        floor(&mut c);
+        let wall = [[-4.0, -1.0, -7.0], [4.0, -1.0, -7.0], [4.0, 3.0, -7.0], [-4.0, 3.0, -7.0]];
+        quad(&mut c, wall, [1.0, 1.0, 1.0], [0.0, 0.0, 1.0]);
+        c.take_frame()
+    }
+
+    #[test]
+    fn ambient_occlusion_darkens_creases_and_not_open_planes() {
+        let frame = crease();
+        let ao = with(Effects { ao_samples: 64, ..Effects::GL });
+        let gl = render(&frame, SIZE, SIZE, None, &with(Effects::GL));
+        let r = render(&frame, SIZE, SIZE, None, &ao);
+        let open = [0.0, -1.0, -3.0];
+        let near_crease = [0.0, -1.0, -6.9];
+        assert_eq!(pixel_at(&frame, &gl, open)[0], 255, "unlit white");
+        assert_eq!(pixel_at(&frame, &r, open)[0], 255, "nothing within reach of an open floor");
+        assert_eq!(pixel_at(&frame, &gl, near_crease)[0], 255);
+        let dark = pixel_at(&frame, &r, near_crease)[0];
+        assert!(dark < 200, "the crease is darkened: {dark}");
+        let half = Effects { ao_samples: 64, ao_intensity: 0.5, ..Effects::GL };
+        let lighter = pixel_at(&frame, &render(&frame, SIZE, SIZE, None, &with(half)), near_crease)[0];
+        assert!(lighter > dark && lighter < 255, "intensity scales it: {lighter} vs {dark}");
+    }
+
+    #[test]
+    fn shadows_fall_only_where_an_occluder_hides_the_light() {
+        let mut c = context();
+        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
+        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
+        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
+        let up: Vec<u8> = [0.0f32, 1.0, 0.0, 0.0].iter().flat_map(|x| x.to_ne_bytes()).collect();
+        call(&mut c, "glLightfv", &[Int(0x4000), Int(0x1203), Value::Blob(&up)]); // from above
+        let grey = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, -1.0, -12.0], [-4.0, -1.0, -12.0]];
+        quad(&mut c, grey, [0.5, 0.5, 0.5], [0.0, 1.0, 0.0]);
+        // A board over the floor (above the camera's height: the camera sees its underside).
+        let board = [[-1.0, 0.5, -4.0], [1.0, 0.5, -4.0], [1.0, 0.5, -6.0], [-1.0, 0.5, -6.0]];
+        quad(&mut c, board, [0.5, 0.5, 0.5], [0.0, 1.0, 0.0]);
+        let frame = c.take_frame();
+        let plain = render(&frame, SIZE, SIZE, None, &with(Effects::GL));
+        let shadowed = render(&frame, SIZE, SIZE, None, &with(Effects { shadows: true, ..Effects::GL }));
+        let (under, beside) = ([0.0, -1.0, -5.0], [2.5, -1.0, -5.0]);
+        // Colour material: 0.5 x 0.2 ambient, plus 0.5 diffuse where the light reaches.
+        let value = |r: &Rendered, p| pixel_at(&frame, r, p)[0];
+        assert_eq!(value(&plain, under), 153, "no shadows in the GL look");
+        assert_eq!(value(&shadowed, beside), 153, "lit beside the board");
+        let dark = value(&shadowed, under);
+        assert!((25..=26).contains(&dark), "only ambient under it: {dark}");
+    }
+
+    #[test]
+    fn a_mirror_shows_the_reflected_object() {
+        let mut c = context();
+        floor(&mut c);
+        let red = [[-1.0, -1.0, -6.0], [1.0, -1.0, -6.0], [1.0, 1.0, -6.0], [-1.0, 1.0, -6.0]];
+        quad(&mut c, red, [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+        let frame = c.take_frame();
+        let mirror = Effects { reflections: 1, reflectivity: 1.0, ..Effects::GL };
+        let plain = render(&frame, SIZE, SIZE, None, &with(Effects::GL));
+        let r = render(&frame, SIZE, SIZE, None, &with(mirror));
+        // The camera ray to (0, -1, -4) leaves the floor towards (0, 1, -4): it meets the red
+        // quad at (0, -0.5, -6). Further out, the reflection sees the black background.
+        let (on, off) = ([0.0, -1.0, -4.0], [1.2, -1.0, -3.0]);
+        assert_eq!(pixel_at(&frame, &plain, on), [255, 255, 255, 255]);
+        assert_eq!(pixel_at(&frame, &r, on)[..3], [255, 0, 0], "the red quad, reflected");
+        assert_eq!(pixel_at(&frame, &r, off)[..3], [0, 0, 0], "the background, reflected");
+        let half = Effects { reflectivity: 0.5, ..mirror };
+        let p = pixel_at(&frame, &render(&frame, SIZE, SIZE, None, &with(half)), on);
+        assert_eq!(p[..3], [255, 128, 128], "half mirror, half white: {p:?}");
+    }
+
+    #[test]
+    fn samples_per_pixel_antialias_edges() {
+        let frame = crease();
+        let one = render(&frame, SIZE, SIZE, None, &with(Effects::GL));
+        let many = render(&frame, SIZE, SIZE, None, &with(Effects { samples: 16, ..Effects::GL }));
+        let between = |r: &Rendered| r.rgba.chunks(4).filter(|p| p[0] > 0 && p[0] < 255).count();
+        assert_eq!(between(&one), 0, "one sample: every pixel is floor or background");
+        assert!(between(&many) > 20, "edge pixels are mixed: {}", between(&many));
+        assert_eq!(one.depth, many.depth, "depth stays the pixel centre's");
+    }
+
+    #[test]
+    fn effects_images_do_not_depend_on_the_thread_count() {
+        let frame = crease();
+        let full = with(Effects::preset("full").unwrap());
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| render(&frame, SIZE, SIZE, None, &full))
+        };
+        let one = run(1);
+        assert_eq!(one, run(2));
+        assert_eq!(one, run(8));
+    }
+
+    #[test]
+    fn progressive_refinement_adds_samples_while_the_scene_stays() {
+        let frame = crease();
+        let mut renderer = Renderer::new(with(Effects { ao_samples: 4, ..Effects::GL }));
+        let first = renderer.render(&frame, SIZE, SIZE, None);
+        assert_eq!(renderer.stats().samples, 1);
+        let second = renderer.render(&frame, SIZE, SIZE, None);
+        assert_eq!(renderer.stats().samples, 2);
+        assert_ne!(first.rgba, second.rgba, "new samples change the noisy pixels");
+        for _ in 2..MAX_PASSES + 3 {
+            renderer.render(&frame, SIZE, SIZE, None);
+        }
+        assert_eq!(renderer.stats().samples, MAX_PASSES, "it stops when converged");
+        // A different camera starts again.
+        let mut moved = frame.clone();
+        moved.projection =
+            Some(moved.projection.unwrap() * DMat4::from_translation(DVec4::new(0.1, 0.0, 0.0, 0.0).truncate()));
+        renderer.render(&moved, SIZE, SIZE, None);
+        assert_eq!(renderer.stats().samples, 1);
+        let _ = Viewport { x: 0, y: 0, width: 1, height: 1 };
+    }
+
+    #[test]
+    fn presets_are_named_and_gl_is_only_the_gl_look() {
+        assert!(!Effects::preset("gl").unwrap().beyond_gl());
+        assert_eq!(Effects::preset("ao").unwrap().ao_samples, 16);
+        let full = Effects::preset("full").unwrap();
+        assert_eq!((full.ao_samples, full.shadows, full.reflections, full.samples), (36, true, 1, 4));
+        assert!(Effects::preset("fancy").is_none());
+        // Every preset the settings accept but `off` (no ray tracing) has its effects.
+        for name in glray_core::config::PRESETS {
+            assert_eq!(Effects::preset(name).is_some(), *name != "off", "{name}");
+        }
+    }
+}

@@ -1,0 +1,171 @@
+//! The work of one pixel: its samples, each a camera ray resolved the way the rasterizer would
+//! (the closest hit, or every hit in drawing order when blending, alpha or depth state asks for
+//! it), and at each surface the effects: shadows, ambient occlusion, reflections.
+
+use std::cell::Cell;
+
+use glam::{DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
+use glray_capture::camera::Camera;
+use glray_capture::frame::{Frame, Triangle};
+use glray_capture::lighting::Light;
+use obvhs::ray::Ray;
+
+use crate::effects::{leaving, lit_by, occlusion};
+use crate::fragment::{shade, Fragment};
+use crate::render::Options;
+use crate::resolve::{in_drawing_order, opaque};
+use crate::sampling::{stratified, Sampler};
+use crate::scene::{Hit, Scene};
+
+/// What a frame's pixels share.
+pub(crate) struct Tracer<'a> {
+    pub frame: &'a Frame,
+    pub camera: &'a Camera,
+    pub scene: &'a Scene<'a>,
+    pub options: &'a Options,
+    /// The closest hit decides every pixel (no blending, alpha test or unusual depth state).
+    pub simple: bool,
+    /// How far secondary rays start off a surface, and how far occluders count.
+    pub eps: f32,
+    pub ao_distance: f32,
+    /// The progressive-refinement pass: which samples this frame takes.
+    pub pass: u32,
+}
+
+/// Per-thread buffers, reused from pixel to pixel, and the rays traced (for the statistics).
+#[derive(Default)]
+pub(crate) struct Scratch {
+    hits: Vec<Hit>,
+    frags: Vec<(Hit, Fragment)>,
+    pub rays: Cell<u64>,
+}
+
+fn count(rays: &Cell<u64>, n: u64) {
+    rays.set(rays.get() + n);
+}
+
+impl Tracer<'_> {
+    /// Pixel (x, y) over what it held (`under`, `depth_under`): its colour and, when a surface
+    /// covers its centre, its depth; None when no sample hit anything (it keeps what it held).
+    pub fn pixel(
+        &self,
+        x: usize,
+        y: usize,
+        under: Vec4,
+        depth_under: f64,
+        s: &mut Scratch,
+    ) -> Option<(Vec4, Option<f64>)> {
+        let n = self.options.effects.samples.max(1);
+        let mut sum = Vec4::ZERO;
+        let mut depth = None;
+        let mut any = false;
+        for i in 0..n {
+            let k = self.pass * n + i;
+            let mut sampler = Sampler::new(&[x as u32, y as u32, k]);
+            // The first sample of all at the pixel centre: exactly where GL samples.
+            let at = if k == 0 { Vec2::splat(0.5) } else { stratified(i, n, sampler.next2()) };
+            match self.sample(x as f64 + at.x as f64, y as f64 + at.y as f64, under, depth_under, &mut sampler, s) {
+                Some((c, d)) => {
+                    any = true;
+                    sum += c;
+                    if i == 0 {
+                        depth = Some(d);
+                    }
+                }
+                None => sum += under,
+            }
+        }
+        any.then(|| (sum / n as f32, depth))
+    }
+
+    /// One camera ray through window position (px, py).
+    fn sample(
+        &self,
+        px: f64,
+        py: f64,
+        under: Vec4,
+        depth_under: f64,
+        sampler: &mut Sampler,
+        s: &mut Scratch,
+    ) -> Option<(Vec4, f64)> {
+        let r = self.camera.ray(px, py);
+        // GL keeps what lies exactly on the near and far planes (backgrounds are often drawn at
+        // z = 1): a hair of slack keeps float rounding from dropping them.
+        let slack = (r.t_max * 1e-4) as f32;
+        let ray = Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack);
+        count(&s.rays, 1);
+        let at = |hit: &Hit| r.origin + r.direction * hit.t as f64;
+        if self.simple {
+            let hit = self.scene.closest(ray)?;
+            let t = self.frame.triangle(hit.id)?;
+            let f = self.surface(&t, at(&hit), r.direction, sampler, &s.rays, 0);
+            // Over the last frame (no clear), the depth it left still tests.
+            if !self.frame.cleared && f.depth >= depth_under {
+                return None;
+            }
+            return Some((opaque(&f), f.depth));
+        }
+        self.scene.all(ray, &mut s.hits);
+        if s.hits.is_empty() {
+            return None;
+        }
+        // A ray through a shared edge hits both triangles; the rasterizer's fill rule gives the
+        // pixel to one of them, so one hit per draw and depth is kept.
+        s.hits.sort_by(|a, b| a.sequence.cmp(&b.sequence).then(a.t.total_cmp(&b.t)).then(a.id.cmp(&b.id)));
+        s.hits.dedup_by(|b, a| a.sequence == b.sequence && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1e-3));
+        s.frags.clear();
+        for hit in &s.hits {
+            if let Some(t) = self.frame.triangle(hit.id) {
+                s.frags.push((*hit, self.surface(&t, at(hit), r.direction, sampler, &s.rays, 0)));
+            }
+        }
+        Some(in_drawing_order(self.frame, &mut s.frags, under, depth_under))
+    }
+
+    /// The fragment of triangle `t` at eye-space point `p`, reached along `dir`, with the
+    /// effects: shadows, ambient occlusion (first surfaces only), reflections up to the depth.
+    fn surface(
+        &self,
+        t: &Triangle,
+        p: DVec3,
+        dir: DVec3,
+        sampler: &mut Sampler,
+        rays: &Cell<u64>,
+        bounce: u32,
+    ) -> Fragment {
+        let e = &self.options.effects;
+        let [a, b, c] = t.positions;
+        let mut n = (b - a).cross(c - a).normalize_or_zero();
+        if n.dot(dir.as_vec3()) > 0.0 {
+            n = -n;
+        }
+        let reaches = |light: &Light| {
+            count(rays, 1);
+            lit_by(self.scene, p, n, light, self.eps)
+        };
+        let visible: Option<&dyn Fn(&Light) -> bool> = if e.shadows { Some(&reaches) } else { None };
+        let mut f = shade(self.frame, self.camera, t, p, self.options.per_pixel_lighting, visible);
+        if e.ao_samples > 0 && bounce == 0 {
+            count(rays, e.ao_samples as u64);
+            let hidden = occlusion(self.scene, p.as_vec3(), n, e.ao_samples, self.ao_distance, self.eps, sampler);
+            let keep = 1.0 - e.ao_intensity * hidden;
+            f.color = (f.color.xyz() * keep).extend(f.color.w);
+        }
+        if bounce < e.reflections && e.reflectivity > 0.0 {
+            let d = dir.as_vec3().normalize_or_zero();
+            let reflected = d - 2.0 * d.dot(n) * n;
+            let ray = leaving(p.as_vec3(), n, reflected, self.eps, f32::INFINITY);
+            count(rays, 1);
+            let seen = match self.scene.closest(ray).and_then(|h| Some((h, self.frame.triangle(h.id)?))) {
+                Some((hit, t2)) => {
+                    let p2 = (Vec3::from(ray.origin) + reflected * hit.t).as_dvec3();
+                    self.surface(&t2, p2, reflected.as_dvec3(), sampler, rays, bounce + 1).color
+                }
+                None => self.frame.clear_color,
+            };
+            let r = e.reflectivity;
+            f.color = (f.color.xyz() * (1.0 - r) + seen.xyz() * r).extend(f.color.w);
+        }
+        f
+    }
+}

@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""The table scripts/bench writes into docs/performance.md: glray and the anchors side by side
+per mesh, with ratios (above 1: glray is faster or smaller).
+usage: bench-table.py RESULTS_DIR N [N...]"""
+import json
+import sys
+
+
+def results(path):
+    """RESULT and RUNINFO lines as (kind, what, {key: value})."""
+    out = []
+    for line in open(path, errors="replace"):
+        words = line.split()
+        if words and words[0] in ("RESULT", "RUNINFO"):
+            what = words[1] if words[0] == "RESULT" else "info"
+            fields = dict(w.split("=", 1) for w in words[1:] if "=" in w)
+            out.append((words[0], what, fields))
+    return out
+
+
+def pick(rows, what, **match):
+    for kind, w, f in rows:
+        if w == what and all(f.get(k) == v for k, v in match.items()):
+            return f
+    return {}
+
+
+def num(d, key):
+    try:
+        return float(d[key])
+    except (KeyError, ValueError):
+        return float("nan")
+
+
+def ratio(theirs, ours):
+    return f"{theirs / ours:.2f}x" if ours and ours == ours and theirs == theirs else "-"
+
+
+def main():
+    d, ns = sys.argv[1], sys.argv[2:]
+    print("| mesh | measure | glray | anchor | anchor / glray |")
+    print("|---|---|---:|---:|---:|")
+    for n in ns:
+        g = json.load(open(f"{d}/mesh_{n}.glray.json"))
+        e = results(f"{d}/mesh_{n}.embree.txt")
+        tris = g["triangles"]
+        name = f"{tris / 1e6:.1f}M" if tris >= 1e6 else f"{tris / 1e3:.0f}K"
+        build = pick(e, "build")
+        single = pick(e, "primary", mode="single", threads="2")
+        pkt16 = pick(e, "primary", mode="pkt16", threads="2")
+        ao1 = pick(e, "ao", mode="ao1", threads="2")
+        info = pick(e, "info")
+        rows = [
+            ("BVH build, s (Embree medium)", g["build_s_min"], num(build, "min_s")),
+            ("primary frame, ms (Embree single rays)", g["primary_ms_min"], num(single, "frame_ms_min")),
+            ("primary frame, ms (Embree 16-wide packets)", g["primary_ms_min"], num(pkt16, "frame_ms_min")),
+            ("AO frame, 16 rays/hit, ms (Embree rtcOccluded1)", g["ao_ms_min"], num(ao1, "ao_pass_ms_min")),
+            ("peak memory, MB (Embree medium)", g["peak_mb"], num(info, "maxrss_kb") / 1024),
+        ]
+        for m in ("dl", "vbo"):
+            ll = pick(results(f"{d}/mesh_{n}.osmesa-{m}.txt"), "osmesa")
+            gr = pick(results(f"{d}/mesh_{n}.glray-osmesa-{m}.txt"), "osmesa")
+            rows.append((f"osmesa_bench {m} frame, ms (llvmpipe; glray: same program ray traced)",
+                         num(gr, "frame_ms_median"), num(ll, "frame_ms_median")))
+        for what, ours, theirs in rows:
+            print(f"| {name} | {what} | {ours:.3g} | {theirs:.3g} | {ratio(theirs, ours)} |")
+    print()
+    print(f"Hits (pixels on the surface): glray {g['hits']}; {g['threads']} threads; "
+          "ratios above 1 mean glray is faster (or smaller).")
+
+
+main()

@@ -1,0 +1,87 @@
+//! GLRAY_STATS: per-frame statistics, like VirtualGL's profiling output: what capturing the
+//! frame's calls, building its BVHs, tracing and presenting took, the rays and triangles, as
+//! a line on standard error or a JSON line appended to a file.
+
+use std::fs::File;
+use std::io::Write;
+use std::time::Duration;
+
+pub enum Sink {
+    Stderr,
+    File(File),
+}
+
+/// One presented frame.
+pub struct FrameStats {
+    pub frame: u64,
+    pub thread: u32,
+    pub width: u32,
+    pub height: u32,
+    /// Following the frame's calls in capture (since the last present).
+    pub capture: Duration,
+    pub render: glray_render::Stats,
+    pub present: Duration,
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+impl Sink {
+    /// `stderr`, or a file to append to.
+    pub fn open(spec: &str) -> Result<Sink, String> {
+        if spec == "stderr" {
+            return Ok(Sink::Stderr);
+        }
+        let f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(spec)
+            .map_err(|e| format!("stats: {spec}: {e}"))?;
+        Ok(Sink::File(f))
+    }
+
+    pub fn write(&mut self, s: &FrameStats) {
+        let r = &s.render;
+        let trace = r.trace.as_secs_f64();
+        let mrays = if trace > 0.0 { r.rays as f64 / trace / 1e6 } else { 0.0 };
+        let result = match self {
+            Sink::Stderr => writeln!(
+                std::io::stderr(),
+                "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
+                 present {:.2} ms; {} triangles, {} samples per pixel",
+                s.frame,
+                s.width,
+                s.height,
+                ms(s.capture),
+                ms(r.build),
+                ms(r.trace),
+                r.rays,
+                mrays,
+                ms(s.present),
+                r.triangles,
+                r.samples
+            ),
+            Sink::File(f) => writeln!(
+                f,
+                "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
+                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{}}}",
+                s.frame,
+                s.thread,
+                s.width,
+                s.height,
+                ms(s.capture),
+                ms(r.build),
+                ms(r.trace),
+                ms(s.present),
+                r.rays,
+                mrays,
+                r.triangles,
+                r.samples
+            ),
+        };
+        if let Err(e) = result {
+            glray_core::warn!("stats: {e}");
+        }
+    }
+}
