@@ -63,6 +63,7 @@ impl Camera {
 
     /// The ray through window position (x, y): (x + 0.5, y + 0.5) is a pixel's centre, y up as
     /// in GL's window coordinates.
+    #[inline]
     pub fn ray(&self, x: f64, y: f64) -> Ray {
         let v = self.viewport;
         let ndc_x = 2.0 * (x - v.x as f64) / v.width as f64 - 1.0;
@@ -76,6 +77,7 @@ impl Camera {
     }
 
     /// The window depth of an eye-space point: what the depth buffer would hold for it.
+    #[inline]
     pub fn window_depth(&self, eye: DVec3) -> f64 {
         let clip = self.projection * eye.extend(1.0);
         let ndc_z = clip.z / clip.w;
@@ -84,6 +86,7 @@ impl Camera {
     }
 
     /// The window position (x, y) an eye-space point lands on.
+    #[inline]
     pub fn window_position(&self, eye: DVec3) -> (f64, f64) {
         let clip = self.projection * eye.extend(1.0);
         let v = self.viewport;

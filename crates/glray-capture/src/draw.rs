@@ -27,6 +27,7 @@ struct Setup {
 /// Whether a triangle with these clip-space corners faces front, from its window-space winding
 /// (from clip coordinates: exact even for triangles that cross the near plane, which clipping
 /// keeps on the same plane); None for one with no area on the screen.
+#[inline]
 pub(crate) fn window_facing(clip: [DVec4; 3], front_ccw: bool) -> Option<bool> {
     let [a, b, c] = clip;
     let det =
@@ -35,6 +36,7 @@ pub(crate) fn window_facing(clip: [DVec4; 3], front_ccw: bool) -> Option<bool> {
 }
 
 /// Whether glCullFace's `cull` (when GL_CULL_FACE is on) removes a triangle of this facing.
+#[inline]
 pub(crate) fn culled(cull: Option<u32>, front: bool) -> bool {
     match cull {
         Some(GL_FRONT_AND_BACK) => true,

@@ -186,6 +186,7 @@ impl Frame {
 
     /// A triangle as the rasterizer would have drawn it; None for an instance's triangle that
     /// is culled or has no area on the screen.
+    #[inline]
     pub fn triangle(&self, id: TriangleId) -> Option<Triangle> {
         if id.instance == TriangleId::FLAT {
             return self.triangles.get(id.index as usize).copied();

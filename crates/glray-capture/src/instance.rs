@@ -45,12 +45,14 @@ pub struct Instance {
 
 impl Instance {
     /// Clip coordinates of triangle `index`'s corners.
+    #[inline]
     fn clip(&self, index: usize) -> [DVec4; 3] {
         let m = &self.mesh;
         m.triangles[index].map(|i| self.object_to_clip * m.position(i))
     }
 
     /// Whether triangle `index` is drawn at all (not culled).
+    #[inline]
     pub fn keeps(&self, index: usize) -> bool {
         // Without culling every triangle is (the common case: no clip transform per hit).
         self.cull.is_none() || !culled(self.cull, self.front(index))
@@ -58,11 +60,13 @@ impl Instance {
 
     /// Whether triangle `index` faces front on the screen (one with no area there, which a
     /// ray can only graze, counts as front).
+    #[inline]
     fn front(&self, index: usize) -> bool {
         window_facing(self.clip(index), self.front_ccw).unwrap_or(true)
     }
 
     /// Triangle `index` as the rasterizer would have drawn it; None if culled.
+    #[inline]
     pub fn triangle(&self, index: usize, lightings: &[Lighting]) -> Option<Triangle> {
         let m = &self.mesh;
         let clip = self.clip(index);

@@ -92,6 +92,7 @@ impl Default for LightModel {
 /// The lit colour of a vertex at `position` (eye coordinates) with unit `normal` (eye
 /// coordinates, already flipped for a back face): the primary colour and the secondary
 /// (specular) colour, both clamped to [0, 1]. The alpha is the material's diffuse alpha.
+#[inline]
 pub fn light_vertex(
     position: DVec3,
     normal: DVec3,
@@ -151,6 +152,7 @@ pub fn light_vertex(
 /// The lit colours (primary, secondary) of one face of a vertex: the front with `materials[0]`,
 /// or, for face 1 with two-sided lighting, the back with the reversed normal and
 /// `materials[1]` (one-sided lighting gives the back face the front's colours).
+#[inline]
 pub fn light_face(
     position: DVec3,
     normal: DVec3,

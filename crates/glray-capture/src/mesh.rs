@@ -27,6 +27,7 @@ pub struct Attribute<T> {
 
 impl<T: Copy> Attribute<T> {
     /// Vertex `i`'s own value; None when it takes the value current at the call.
+    #[inline]
     pub fn at(&self, i: u32) -> Option<T> {
         i.checked_sub(self.first).and_then(|k| self.values.get(k as usize).copied())
     }
@@ -112,11 +113,13 @@ impl Mesh {
     }
 
     /// The object-space corners of triangle `index`.
+    #[inline]
     pub fn corners(&self, index: usize) -> [Vec3; 3] {
         self.triangles[index].map(|i| self.positions[i as usize])
     }
 
     /// Position `i` with its w.
+    #[inline]
     pub fn position(&self, i: u32) -> DVec4 {
         let w = self.ws.as_ref().map_or(1.0, |ws| ws[i as usize]);
         self.positions[i as usize].as_dvec3().extend(w as f64)

@@ -74,6 +74,7 @@ pub(crate) fn decode_attribute(f: AttrForm, a: &[Value]) -> GlResult<Given> {
 
 /// An object-space normal in eye coordinates, as lighting uses it: through the normal matrix,
 /// then GL_NORMALIZE (to unit length) or GL_RESCALE_NORMAL (by the modelview's scale).
+#[inline]
 pub(crate) fn eye_normal(nm: &DMat3, n: DVec3, normalize: bool, rescale: bool) -> DVec3 {
     let n = *nm * n;
     if normalize {

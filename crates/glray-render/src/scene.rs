@@ -156,10 +156,16 @@ pub struct Scene<'f> {
     tris: Vec<Triangle>,
     bvh: Option<CwBvh>,
     placed: Vec<Placed<'f>>,
+    /// The instances' eye-space boxes, and a BVH over them when there are many.
+    boxes: Vec<Aabb>,
     top: Option<CwBvh>,
     /// Eye-space bounds of everything.
     bounds: Aabb,
 }
+
+/// Up to this many instances are tried one box after the other: cheaper than a top-level
+/// traversal (a big mesh drawn once is the common case).
+const FEW_INSTANCES: usize = 8;
 
 impl<'f> Scene<'f> {
     pub fn build(frame: &'f Frame, meshes: &mut Meshes) -> Scene<'f> {
@@ -178,8 +184,8 @@ impl<'f> Scene<'f> {
             })
             .collect();
         let bounds: Vec<Aabb> = placed.iter().map(|p| eye_bounds(&p.instance.mesh, &p.instance.modelview)).collect();
-        let top =
-            (!bounds.is_empty()).then(|| build_cwbvh(&bounds, BvhBuildParams::fast_build(), &mut Duration::default()));
+        let top = (bounds.len() > FEW_INSTANCES)
+            .then(|| build_cwbvh(&bounds, BvhBuildParams::fast_build(), &mut Duration::default()));
         let mut all = Aabb::INVALID;
         for t in &tris {
             for v in [t.v0, t.v1, t.v2] {
@@ -190,7 +196,39 @@ impl<'f> Scene<'f> {
             all.extend(b.min);
             all.extend(b.max);
         }
-        Scene { frame, tris, bvh, placed, top, bounds: all }
+        Scene { frame, tris, bvh, placed, boxes: bounds, top, bounds: all }
+    }
+
+    /// Offers `visit` every instance whose box the ray meets (the top-level BVH's way when
+    /// there are many). `visit` returns where it hit (infinity: nowhere); a hit shortens the
+    /// ray for the instances after it; with `first`, the first hit ends the search. True if
+    /// anything was hit.
+    fn visit_instances(&self, ray: Ray, first: bool, mut visit: impl FnMut(&Ray, usize) -> f32) -> bool {
+        match &self.top {
+            Some(top) if first => !top.ray_traverse_miss(ray, |r, slot| visit(r, top.primitive_indices[slot] as usize)),
+            Some(top) => {
+                let mut hit = RayHit::none();
+                top.ray_traverse(ray, &mut hit, |r, slot| visit(r, top.primitive_indices[slot] as usize))
+            }
+            None => {
+                let mut r = ray;
+                let mut any = false;
+                for (k, b) in self.boxes.iter().enumerate() {
+                    if b.intersect_ray(&r) == f32::INFINITY {
+                        continue;
+                    }
+                    let t = visit(&r, k);
+                    if t < r.tmax {
+                        any = true;
+                        if first {
+                            break;
+                        }
+                        r.tmax = t;
+                    }
+                }
+                any
+            }
+        }
     }
 
     /// The length of the eye-space diagonal of everything (0 for an empty scene).
@@ -211,9 +249,8 @@ impl<'f> Scene<'f> {
                 return true;
             }
         }
-        let Some(top) = &self.top else { return false };
-        !top.ray_traverse_miss(ray, |r, slot| {
-            let p = &self.placed[top.primitive_indices[slot] as usize];
+        self.visit_instances(ray, true, |r, k| {
+            let p = &self.placed[k];
             let inside = p.bvh.bvh.ray_traverse_miss(p.ray(r), |r, slot| p.blocks(r, slot));
             if inside {
                 f32::INFINITY
@@ -236,10 +273,8 @@ impl<'f> Scene<'f> {
                 ray.tmax = hit.t;
             }
         }
-        if let Some(top) = &self.top {
-            let mut hit = RayHit::none();
-            top.ray_traverse(ray, &mut hit, |r, slot| {
-                let k = top.primitive_indices[slot] as usize;
+        {
+            self.visit_instances(ray, false, |r, k| {
                 let p = &self.placed[k];
                 let mut inner = RayHit::none();
                 let mut index = 0;
@@ -273,9 +308,8 @@ impl<'f> Scene<'f> {
                 }
             });
         }
-        if let Some(top) = &self.top {
-            top.ray_traverse_anyhit(ray, |r, slot| {
-                let k = top.primitive_indices[slot] as usize;
+        {
+            self.visit_instances(ray, false, |r, k| {
                 let p = &self.placed[k];
                 p.bvh.bvh.ray_traverse_anyhit(p.ray(r), |r, slot| {
                     let (index, t) = p.intersect(r, slot);
@@ -287,6 +321,7 @@ impl<'f> Scene<'f> {
                         });
                     }
                 });
+                f32::INFINITY
             });
         }
     }
