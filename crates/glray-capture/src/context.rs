@@ -57,18 +57,7 @@ const MAX_BUFFER_DRAWS: usize = 256;
 fn fetched_mesh(mode: u32, verts: &[Fetched]) -> Mesh {
     let mut b = MeshBuilder::new(mode, true);
     for v in verts {
-        if let Some(n) = v.normal {
-            b.normal(n);
-        }
-        if let Some(c) = v.color {
-            b.color(c);
-        }
-        if let Some(t) = v.tex {
-            b.texcoord(t);
-        }
-        if let Some(p) = v.position {
-            b.vertex(p);
-        }
+        b.give(v);
     }
     b.finish()
 }
@@ -299,19 +288,7 @@ impl Context {
                 Op::ArrayElement if args::int(a, 0) >= 0 => {
                     // Client data is copied at compile time: the element's values now.
                     let v = self.element(args::int(a, 0) as u64);
-                    let b = self.building.as_mut().expect("building");
-                    if let Some(n) = v.normal {
-                        b.normal(n);
-                    }
-                    if let Some(c) = v.color {
-                        b.color(c);
-                    }
-                    if let Some(t) = v.tex {
-                        b.texcoord(t);
-                    }
-                    if let Some(p) = v.position {
-                        b.vertex(p);
-                    }
+                    self.building.as_mut().expect("building").give(&v);
                     return Vec::new();
                 }
                 _ => None,

@@ -61,29 +61,34 @@ pub struct Lighting {
 impl Lighting {
     /// The materials with `color` put in by glColorMaterial, as GL does at each vertex.
     pub fn materials(&self, color: DVec4) -> [Material; 2] {
-        let mut mats = self.materials;
-        if let Some((face, mode)) = self.color_material {
-            let faces: &[usize] = match face {
-                0x0404 => &[0],
-                0x0405 => &[1],
-                _ => &[0, 1],
-            };
-            for &f in faces {
-                let m = &mut mats[f];
-                match mode {
-                    0x1200 => m.ambient = color,
-                    0x1201 => m.diffuse = color,
-                    0x1202 => m.specular = color,
-                    0x1600 => m.emission = color,
-                    _ => {
-                        m.ambient = color;
-                        m.diffuse = color;
-                    }
+        color_materials(self.materials, self.color_material, color)
+    }
+}
+
+/// Front and back `materials` with `color` put in by glColorMaterial's (face, mode), if on.
+pub fn color_materials(materials: [Material; 2], color_material: Option<(u32, u32)>, color: DVec4) -> [Material; 2] {
+    let mut mats = materials;
+    if let Some((face, mode)) = color_material {
+        let faces: &[usize] = match face {
+            0x0404 => &[0],
+            0x0405 => &[1],
+            _ => &[0, 1],
+        };
+        for &f in faces {
+            let m = &mut mats[f];
+            match mode {
+                0x1200 => m.ambient = color,
+                0x1201 => m.diffuse = color,
+                0x1202 => m.specular = color,
+                0x1600 => m.emission = color,
+                _ => {
+                    m.ambient = color;
+                    m.diffuse = color;
                 }
             }
         }
-        mats
     }
+    mats
 }
 
 /// A projection and viewport draws were made with.
@@ -139,6 +144,23 @@ pub struct TriangleId {
 
 impl TriangleId {
     pub const FLAT: u32 = u32::MAX;
+}
+
+impl Surface {
+    /// An opaque, depth-tested (GL_LESS, writing depth) surface with nothing else on: what a
+    /// program that only enables GL_DEPTH_TEST draws with.
+    pub fn depth_tested() -> Surface {
+        Surface {
+            texturing: None,
+            fog: None,
+            depth_test: true,
+            depth_func: 0x0201,
+            depth_mask: true,
+            blend: None,
+            alpha_test: None,
+            clip_planes: Vec::new(),
+        }
+    }
 }
 
 /// A captured frame.

@@ -156,6 +156,22 @@ impl MeshBuilder {
         self.texcoord = Some(t);
     }
 
+    /// A vertex as an array gives it: the attributes of the enabled arrays, then the position.
+    pub(crate) fn give(&mut self, v: &crate::context::Fetched) {
+        if let Some(n) = v.normal {
+            self.normal(n);
+        }
+        if let Some(c) = v.color {
+            self.color(c);
+        }
+        if let Some(t) = v.tex {
+            self.texcoord(t);
+        }
+        if let Some(p) = v.position {
+            self.vertex(p);
+        }
+    }
+
     /// A vertex: it takes the attributes given so far.
     pub fn vertex(&mut self, p: DVec4) {
         let m = &mut self.mesh;

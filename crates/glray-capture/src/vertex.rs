@@ -8,7 +8,7 @@ use glray_core::trace::Value;
 use crate::args;
 use crate::context::{Context, Out};
 use crate::error::{GlError, GlResult};
-use crate::frame::Lighting;
+use crate::frame::{color_materials, Lighting};
 use crate::gl::*;
 use crate::immediate::TEXCOORD_UNITS;
 use crate::lighting::light_face;
@@ -169,7 +169,9 @@ impl Context {
             let nm = self.normal_matrix(&mv);
             let s = &self.s;
             normal = eye_normal(&nm, cur.normal, s.normalize, s.rescale_normal);
-            let mats = self.lighting_state().materials(cur.color);
+            // (Not `lighting_state()`: that copies the lights, at every vertex.)
+            let color_material = s.color_material.then_some((s.color_material_face, s.color_material_mode));
+            let mats = color_materials(s.materials, color_material, cur.color);
             let s = &self.s;
             let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
             let (f0, f1) = light_face(p, normal, &mats, &s.lights, &s.model, 0);

@@ -278,16 +278,7 @@ mod tests {
     use glray_capture::frame::{Fog, Surface, Triangle};
 
     fn surface() -> Surface {
-        Surface {
-            texturing: None,
-            fog: None,
-            depth_test: true,
-            depth_func: 0x0201,
-            depth_mask: true,
-            blend: None,
-            alpha_test: None,
-            clip_planes: Vec::new(),
-        }
+        Surface::depth_tested()
     }
 
     fn quad(z: f32, color: Vec4, surface: u32, sequence: u32) -> [Triangle; 2] {

@@ -112,16 +112,7 @@ mod tests {
     #[test]
     fn comparisons_and_blending() {
         assert!(passes(GL_LESS, 0.2, 0.5) && !passes(GL_LESS, 0.5, 0.5) && passes(GL_LEQUAL, 0.5, 0.5));
-        let s = Surface {
-            texturing: None,
-            fog: None,
-            depth_test: true,
-            depth_func: GL_LESS,
-            depth_mask: true,
-            blend: Some((0x0302, 0x0303)),
-            alpha_test: None,
-            clip_planes: Vec::new(),
-        };
+        let s = Surface { blend: Some((0x0302, 0x0303)), ..Surface::depth_tested() };
         let c = blend(&s, Vec4::new(1.0, 0.0, 0.0, 0.25), Vec4::new(0.0, 0.0, 1.0, 1.0));
         assert!((c - Vec4::new(0.25, 0.0, 0.75, 0.8125)).length() < 1e-6, "{c}");
     }

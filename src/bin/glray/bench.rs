@@ -114,16 +114,7 @@ pub fn frame(mesh: Mesh, width: u32, height: u32) -> Frame {
     };
     Frame {
         instances: vec![instance],
-        surfaces: vec![Surface {
-            texturing: None,
-            fog: None,
-            depth_test: true,
-            depth_func: 0x0201,
-            depth_mask: true,
-            blend: None,
-            alpha_test: None,
-            clip_planes: Vec::new(),
-        }],
+        surfaces: vec![Surface::depth_tested()],
         projection: Some(projection),
         viewport: Some(viewport),
         depth_range: (0.0, 1.0),
