@@ -597,6 +597,7 @@ impl Context {
                     self.frame.unsupported_draws = 0;
                     self.frame.triangles.clear();
                     self.frame.instances.clear();
+                    self.frame.solids.clear();
                     self.frame.surfaces.clear();
                     self.frame.lightings.clear();
                     self.frame.projection = None;
@@ -1260,6 +1261,28 @@ mod tests {
         }
         call(&mut c, "glEnd", &[]);
         assert_eq!(c.frame().triangles.len(), 8, "four edges, two triangles each");
+    }
+
+    #[test]
+    pub(crate) fn lines_and_points_are_also_solids_as_thick_as_on_the_screen() {
+        // 100 pixels over 2 eye units: a pixel is 0.02.
+        let mut c = context();
+        call(&mut c, "glLineWidth", &[f(4.0)]);
+        call(&mut c, "glBegin", &[i(1)]); // GL_LINES
+        call(&mut c, "glVertex2f", &[f(-0.5), f(0.0)]);
+        call(&mut c, "glVertex2f", &[f(0.5), f(0.0)]);
+        call(&mut c, "glEnd", &[]);
+        call(&mut c, "glPointSize", &[f(6.0)]);
+        call(&mut c, "glBegin", &[i(0)]); // GL_POINTS
+        call(&mut c, "glVertex2f", &[f(0.25), f(0.5)]);
+        call(&mut c, "glEnd", &[]);
+        let s = &c.frame().solids;
+        assert_eq!(s.len(), 2);
+        assert_eq!((s[0].a, s[0].b), (Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0)));
+        assert!((s[0].radius - 0.04).abs() < 1e-6, "two pixels: {}", s[0].radius);
+        assert_eq!((s[1].a, s[1].b), (Vec3::new(0.25, 0.5, 0.0), Vec3::new(0.25, 0.5, 0.0)));
+        assert!((s[1].radius - 0.06).abs() < 1e-6, "three pixels: {}", s[1].radius);
+        assert_ne!(s[0].sequence, s[1].sequence);
     }
 
     #[test]

@@ -8,7 +8,7 @@ use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
 
 use crate::camera::Viewport;
 use crate::context::{vec4, Context, Out};
-use crate::frame::{Surface, Texturing, Triangle, View, NO_LIGHTING};
+use crate::frame::{Solid, Surface, Texturing, Triangle, View, NO_LIGHTING};
 use crate::gl::*;
 use crate::instance::Instance;
 use crate::mesh::Mesh;
@@ -270,6 +270,7 @@ impl Context {
             }
             Some(out)
         };
+        let mut solids = Vec::new();
         let line_half = self.s.line_width / 2.0;
         for &([i, j], provoking) in &lines {
             let (ca, cb) = (clip[i as usize], clip[j as usize]);
@@ -279,6 +280,10 @@ impl Context {
             let d = DVec2::new((cb.x / cb.w - ca.x / ca.w) * hw, (cb.y / cb.w - ca.y / ca.w) * hh);
             let perp = DVec2::new(-d.y, d.x).normalize_or_zero() * line_half;
             let Some(q) = quad([(ca, -perp), (ca, perp), (cb, perp), (cb, -perp)]) else { continue };
+            // The solid shadows and occlusion see: the segment between the vertices, as thick
+            // as the line is on the screen (the quad's width at each end, averaged).
+            let radius = ((q[1] - q[0]).length() + (q[2] - q[3]).length()) / 4.0;
+            solids.push(Solid { a: eye3(&verts[i as usize]), b: eye3(&verts[j as usize]), radius, sequence, camera });
             let (va, vb, pv) = (&verts[i as usize], &verts[j as usize], &verts[provoking as usize]);
             let (c0, c1) = if flat { (color(pv, 0), color(pv, 0)) } else { (color(va, 0), color(vb, 0)) };
             let (t0, t1) = (tex(va), tex(vb));
@@ -307,6 +312,8 @@ impl Context {
             let corners = [(-h, -h), (h, -h), (h, h), (-h, h)].map(|(x, y)| (c, DVec2::new(x, y)));
             let Some(q) = quad(corners) else { continue };
             let v = &verts[i as usize];
+            let center = eye3(v);
+            solids.push(Solid { a: center, b: center, radius: (q[1] - q[0]).length() / 2.0, sequence, camera });
             for tri in [[0, 1, 2], [0, 2, 3]] {
                 tris.push(Triangle {
                     positions: tri.map(|k| q[k]),
@@ -325,5 +332,6 @@ impl Context {
             }
         }
         self.frame.triangles.extend(tris);
+        self.frame.solids.extend(solids);
     }
 }

@@ -43,6 +43,20 @@ pub struct Triangle {
     pub back: bool,
 }
 
+/// A line or point as the solid that casts shadows and occludes: a capsule around the segment
+/// from `a` to `b` (a ball when they are the same point), as thick as it is on the screen. Rays
+/// from the camera see the rasterizer's quad instead (the GL look); this is what secondary
+/// rays see.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Solid {
+    pub a: Vec3,
+    pub b: Vec3,
+    pub radius: f32,
+    /// The draw it belongs to (a point on the draw's own quads ignores its solids).
+    pub sequence: u32,
+    pub camera: u32,
+}
+
 /// `Triangle::lighting` of a triangle drawn without GL_LIGHTING.
 pub const NO_LIGHTING: u32 = u32::MAX;
 
@@ -171,6 +185,8 @@ pub struct Frame {
     pub triangles: Vec<Triangle>,
     /// Display-list meshes drawn this frame, each with the state of its call.
     pub instances: Vec<Instance>,
+    /// Lines and points as solids, for shadows and occlusion.
+    pub solids: Vec<Solid>,
     pub surfaces: Vec<Surface>,
     /// The projection and viewport of the frame's first 3D draw: the camera.
     pub projection: Option<DMat4>,
@@ -284,6 +300,8 @@ impl Frame {
         let (keep, carry): (Vec<Instance>, Vec<Instance>) =
             std::mem::take(&mut out.instances).into_iter().partition(|i| i.camera as usize == main);
         out.instances = keep;
+        // Lines and points of overlays and insets cast no shadows in the 3D scene.
+        out.solids.retain(|s| s.camera as usize == main);
         for i in &carry {
             out.triangles.extend(i.triangles(&self.lightings));
         }

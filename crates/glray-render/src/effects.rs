@@ -75,23 +75,32 @@ pub(crate) fn leaving(p: Vec3, n: Vec3, d: Vec3, eps: f32, tmax: f32) -> Ray {
     Ray::new(o.into(), d.into(), 0.0, tmax)
 }
 
-/// The fraction of the hemisphere above `p` (facing `n`) that geometry closer than `distance`
-/// hides, from `count` cosine-weighted rays.
-pub(crate) fn occlusion(scene: &Scene, p: Vec3, n: Vec3, count: u32, distance: f32, eps: f32, s: &mut Sampler) -> f32 {
+/// Where a secondary ray starts: the point, its surface's normal, and the draw it is on (whose
+/// own line and point solids do not count).
+pub(crate) struct Origin {
+    pub p: Vec3,
+    pub n: Vec3,
+    pub draw: u32,
+}
+
+/// The fraction of the hemisphere above `at` that geometry closer than `distance` hides, from
+/// `count` cosine-weighted rays.
+pub(crate) fn occlusion(scene: &Scene, at: &Origin, count: u32, distance: f32, eps: f32, s: &mut Sampler) -> f32 {
     if count == 0 {
         return 0.0;
     }
     let hidden = (0..count)
         .filter(|_| {
-            let d = cosine_hemisphere(n, s.next2());
-            scene.occluded(leaving(p, n, d, eps, distance))
+            let d = cosine_hemisphere(at.n, s.next2());
+            scene.occluded(leaving(at.p, at.n, d, eps, distance), Some(at.draw))
         })
         .count();
     hidden as f32 / count as f32
 }
 
-/// Whether `light` reaches eye-space point `p` on a surface with normal `n`.
-pub(crate) fn lit_by(scene: &Scene, p: DVec3, n: Vec3, light: &Light, eps: f32) -> bool {
+/// Whether `light` reaches the point.
+pub(crate) fn lit_by(scene: &Scene, at: &Origin, light: &Light, eps: f32) -> bool {
+    let p = at.p.as_dvec3();
     let (dir, tmax) = if light.position.w != 0.0 {
         let to = light.position.truncate() / light.position.w - p;
         let len = to.length();
@@ -105,7 +114,7 @@ pub(crate) fn lit_by(scene: &Scene, p: DVec3, n: Vec3, light: &Light, eps: f32) 
     if dir == DVec3::ZERO {
         return true;
     }
-    !scene.occluded(leaving(p.as_vec3(), n, dir.as_vec3(), eps, tmax))
+    !scene.occluded(leaving(at.p, at.n, dir.as_vec3(), eps, tmax), Some(at.draw))
 }
 
 #[cfg(test)]
@@ -216,6 +225,37 @@ mod tests {
         assert_eq!(value(&shadowed, beside), 153, "lit beside the board");
         let dark = value(&shadowed, under);
         assert!((25..=26).contains(&dark), "only ambient under it: {dark}");
+    }
+
+    #[test]
+    fn thick_lines_cast_shadows_as_the_cylinders_they_look_like() {
+        let mut c = context();
+        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
+        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
+        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
+        let up: Vec<u8> = [0.0f32, 1.0, 0.0, 0.0].iter().flat_map(|x| x.to_ne_bytes()).collect();
+        call(&mut c, "glLightfv", &[Int(0x4000), Int(0x1203), Value::Blob(&up)]);
+        let grey = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, -1.0, -12.0], [-4.0, -1.0, -12.0]];
+        quad(&mut c, grey, [0.5, 0.5, 0.5], [0.0, 1.0, 0.0]);
+        // A 16-pixel line across the view at y = 0.5, z = -5: a pixel there is 5/64 wide, so
+        // the line is a cylinder of radius 0.625 (z from -4.375 to -5.625).
+        call(&mut c, "glDisable", &[Int(0x0B50)]);
+        call(&mut c, "glColor3f", &[F64(1.0), F64(1.0), F64(1.0)]);
+        call(&mut c, "glLineWidth", &[F64(16.0)]);
+        call(&mut c, "glBegin", &[Int(1)]);
+        call(&mut c, "glVertex3f", &[F64(-1.5), F64(0.5), F64(-5.0)]);
+        call(&mut c, "glVertex3f", &[F64(1.5), F64(0.5), F64(-5.0)]);
+        call(&mut c, "glEnd", &[]);
+        let frame = c.take_frame();
+        assert_eq!(frame.solids.len(), 1);
+        let r = render(&frame, SIZE, SIZE, None, &with(Effects { shadows: true, ao_samples: 16, ..Effects::GL }));
+        let value = |p| pixel_at(&frame, &r, p)[0];
+        // Under the cylinder but beside the flat quad the camera sees: in its shadow.
+        assert!(value([0.0, -1.0, -5.4]) < 40, "in the line's shadow: {}", value([0.0, -1.0, -5.4]));
+        assert!(value([0.0, -1.0, -3.0]) > 140, "lit in front of it: {}", value([0.0, -1.0, -3.0]));
+        // The line itself is not darkened by its own solid.
+        let line = pixel_at(&frame, &r, [0.0, 0.5, -5.0]);
+        assert_eq!(line[..3], [255, 255, 255], "the white line, unoccluded: {line:?}");
     }
 
     #[test]

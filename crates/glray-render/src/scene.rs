@@ -11,7 +11,7 @@ use std::sync::{Arc, Weak};
 use std::time::Duration;
 
 use glam::{Affine3A, DMat4, Vec3, Vec3A};
-use glray_capture::frame::{Frame, TriangleId};
+use glray_capture::frame::{Frame, Solid, TriangleId};
 use glray_capture::instance::Instance;
 use glray_capture::mesh::Mesh;
 use obvhs::aabb::Aabb;
@@ -56,6 +56,52 @@ fn intersect(tri: &Triangle, ray: &Ray) -> f32 {
 fn triangle(corners: [Vec3; 3]) -> Triangle {
     let [v0, v1, v2] = corners.map(Vec3A::from);
     Triangle { v0, v1, v2 }
+}
+
+/// Where a ray (unit direction) enters a capsule around the segment from `a` to `b` (a ball when
+/// they meet), or infinity (Quilez's capsule test: the cylinder, then the cap it came in by).
+fn capsule(s: &Solid, ray: &Ray) -> f32 {
+    let (ro, rd) = (Vec3::from(ray.origin), Vec3::from(ray.direction));
+    let r2 = s.radius * s.radius;
+    let sphere = |c: Vec3| {
+        let oc = ro - c;
+        let b = rd.dot(oc);
+        let h = b * b - (oc.dot(oc) - r2);
+        if h < 0.0 {
+            f32::INFINITY
+        } else {
+            -b - h.sqrt()
+        }
+    };
+    let ba = s.b - s.a;
+    let oa = ro - s.a;
+    let baba = ba.dot(ba);
+    let t = if baba == 0.0 {
+        sphere(s.a)
+    } else {
+        let (bard, baoa) = (ba.dot(rd), ba.dot(oa));
+        let a = baba - bard * bard;
+        let b = baba * rd.dot(oa) - baoa * bard;
+        let c = baba * oa.dot(oa) - baoa * baoa - r2 * baba;
+        let h = b * b - a * c;
+        if h < 0.0 || a == 0.0 {
+            // Misses the infinite cylinder, or runs along the axis: only a cap can be met.
+            sphere(if baoa <= 0.0 { s.a } else { s.b }).min(sphere(s.b)).min(sphere(s.a))
+        } else {
+            let t = (-b - h.sqrt()) / a;
+            let y = baoa + t * bard;
+            if y > 0.0 && y < baba {
+                t
+            } else {
+                sphere(if y <= 0.0 { s.a } else { s.b })
+            }
+        }
+    };
+    if t >= ray.tmin && t <= ray.tmax {
+        t
+    } else {
+        f32::INFINITY
+    }
 }
 
 /// A ray's hit: which triangle, where along the ray, and its draw's place in drawing order.
@@ -161,6 +207,9 @@ pub struct Scene<'f> {
     top: Option<CwBvh>,
     /// Eye-space bounds of everything.
     bounds: Aabb,
+    /// Lines and points as solids, for secondary rays, and their BVH.
+    solids: &'f [Solid],
+    solid_bvh: Option<CwBvh>,
 }
 
 /// Up to this many instances are tried one box after the other: cheaper than a top-level
@@ -196,7 +245,14 @@ impl<'f> Scene<'f> {
             all.extend(b.min);
             all.extend(b.max);
         }
-        Scene { frame, tris, bvh, placed, boxes: bounds, top, bounds: all }
+        let solid_boxes: Vec<Aabb> = frame
+            .solids
+            .iter()
+            .map(|s| Aabb::new((s.a.min(s.b) - s.radius).into(), (s.a.max(s.b) + s.radius).into()))
+            .collect();
+        let solid_bvh = (!solid_boxes.is_empty())
+            .then(|| build_cwbvh(&solid_boxes, BvhBuildParams::fast_build(), &mut Duration::default()));
+        Scene { frame, tris, bvh, placed, boxes: bounds, top, bounds: all, solids: &frame.solids, solid_bvh }
     }
 
     /// Offers `visit` every instance whose box the ray meets (the top-level BVH's way when
@@ -240,8 +296,22 @@ impl<'f> Scene<'f> {
     }
 
     /// Whether anything lies along the ray in [tmin, tmax] (culled faces too: they are still
-    /// there to cast shadows and occlude).
-    pub fn occluded(&self, ray: Ray) -> bool {
+    /// there to cast shadows and occlude; lines and points as solids, but those of draw
+    /// `own`, where the ray starts).
+    pub fn occluded(&self, ray: Ray, own: Option<u32>) -> bool {
+        if let Some(bvh) = &self.solid_bvh {
+            let hit = !bvh.ray_traverse_miss(ray, |r, slot| {
+                let s = &self.solids[bvh.primitive_indices[slot] as usize];
+                if Some(s.sequence) == own {
+                    f32::INFINITY
+                } else {
+                    capsule(s, r)
+                }
+            });
+            if hit {
+                return true;
+            }
+        }
         if let Some(bvh) = &self.bvh {
             let hit =
                 !bvh.ray_traverse_miss(ray, |r, slot| intersect(&self.tris[bvh.primitive_indices[slot] as usize], r));
@@ -348,4 +418,31 @@ fn eye_bounds(mesh: &Mesh, modelview: &DMat4) -> Aabb {
         b.extend(Vec3A::from(modelview.transform_point3(c).as_vec3()));
     }
     b
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ray(o: [f32; 3], d: [f32; 3]) -> Ray {
+        Ray::new(Vec3A::from_array(o), Vec3::from_array(d).normalize().into(), 0.0, f32::INFINITY)
+    }
+
+    #[test]
+    fn capsules_are_met_on_their_side_and_caps_and_balls_all_round() {
+        let s =
+            Solid { a: Vec3::new(-1.0, 0.0, 0.0), b: Vec3::new(1.0, 0.0, 0.0), radius: 0.5, sequence: 0, camera: 0 };
+        // The side, from above.
+        assert!((capsule(&s, &ray([0.0, 5.0, 0.0], [0.0, -1.0, 0.0])) - 4.5).abs() < 1e-5);
+        // A cap, along the axis.
+        assert!((capsule(&s, &ray([5.0, 0.0, 0.0], [-1.0, 0.0, 0.0])) - 3.5).abs() < 1e-5);
+        // Past the end, the rounded cap: at x = 1.3 it is sqrt(0.25 - 0.09) = 0.4 high.
+        assert!((capsule(&s, &ray([1.3, 5.0, 0.0], [0.0, -1.0, 0.0])) - 4.6).abs() < 1e-5);
+        assert_eq!(capsule(&s, &ray([1.6, 5.0, 0.0], [0.0, -1.0, 0.0])), f32::INFINITY, "beyond the cap");
+        assert_eq!(capsule(&s, &ray([0.0, 5.0, 0.0], [0.0, 1.0, 0.0])), f32::INFINITY, "pointing away");
+        let ball = Solid { b: s.a, ..s };
+        assert!((capsule(&ball, &ray([-1.0, 0.0, 3.0], [0.0, 0.0, -1.0])) - 2.5).abs() < 1e-5);
+        let short = Ray { tmax: 2.0, ..ray([-1.0, 0.0, 3.0], [0.0, 0.0, -1.0]) };
+        assert_eq!(capsule(&ball, &short), f32::INFINITY, "beyond the ray's reach");
+    }
 }

@@ -10,7 +10,7 @@ use glray_capture::frame::{Frame, Triangle};
 use glray_capture::lighting::Light;
 use obvhs::ray::Ray;
 
-use crate::effects::{leaving, lit_by, occlusion};
+use crate::effects::{leaving, lit_by, occlusion, Origin};
 use crate::fragment::{shade, Fragment};
 use crate::render::Options;
 use crate::resolve::{in_drawing_order, opaque};
@@ -139,15 +139,16 @@ impl Tracer<'_> {
         if n.dot(dir.as_vec3()) > 0.0 {
             n = -n;
         }
+        let from = Origin { p: p.as_vec3(), n, draw: t.sequence };
         let reaches = |light: &Light| {
             count(rays, 1);
-            lit_by(self.scene, p, n, light, self.eps)
+            lit_by(self.scene, &from, light, self.eps)
         };
         let visible: Option<&dyn Fn(&Light) -> bool> = if e.shadows { Some(&reaches) } else { None };
         let mut f = shade(self.frame, self.camera, t, p, self.options.per_pixel_lighting, visible);
         if e.ao_samples > 0 && bounce == 0 {
             count(rays, e.ao_samples as u64);
-            let hidden = occlusion(self.scene, p.as_vec3(), n, e.ao_samples, self.ao_distance, self.eps, sampler);
+            let hidden = occlusion(self.scene, &from, e.ao_samples, self.ao_distance, self.eps, sampler);
             let keep = 1.0 - e.ao_intensity * hidden;
             f.color = (f.color.xyz() * keep).extend(f.color.w);
         }
