@@ -84,37 +84,37 @@ pub(crate) struct Origin {
 }
 
 /// The fraction of the hemisphere above `at` that geometry closer than `distance` hides, from
-/// `count` cosine-weighted rays.
+/// `count` cosine-weighted rays (translucent surfaces hide their alpha's share).
 pub(crate) fn occlusion(scene: &Scene, at: &Origin, count: u32, distance: f32, eps: f32, s: &mut Sampler) -> f32 {
     if count == 0 {
         return 0.0;
     }
-    let hidden = (0..count)
-        .filter(|_| {
+    let hidden: f32 = (0..count)
+        .map(|_| {
             let d = cosine_hemisphere(at.n, s.next2());
-            scene.occluded(leaving(at.p, at.n, d, eps, distance), Some(at.draw))
+            1.0 - scene.transmittance(leaving(at.p, at.n, d, eps, distance), Some(at.draw))
         })
-        .count();
-    hidden as f32 / count as f32
+        .sum();
+    hidden / count as f32
 }
 
-/// Whether `light` reaches the point.
-pub(crate) fn lit_by(scene: &Scene, at: &Origin, light: &Light, eps: f32) -> bool {
+/// How much of `light` reaches the point (0 to 1).
+pub(crate) fn lit_by(scene: &Scene, at: &Origin, light: &Light, eps: f32) -> f32 {
     let p = at.p.as_dvec3();
     let (dir, tmax) = if light.position.w != 0.0 {
         let to = light.position.truncate() / light.position.w - p;
         let len = to.length();
         if len == 0.0 {
-            return true;
+            return 1.0;
         }
         (to / len, len as f32 - eps)
     } else {
         (light.position.truncate().normalize_or_zero(), f32::INFINITY)
     };
     if dir == DVec3::ZERO {
-        return true;
+        return 1.0;
     }
-    !scene.occluded(leaving(at.p, at.n, dir.as_vec3(), eps, tmax), Some(at.draw))
+    scene.transmittance(leaving(at.p, at.n, dir.as_vec3(), eps, tmax), Some(at.draw))
 }
 
 #[cfg(test)]
@@ -225,6 +225,47 @@ mod tests {
         assert_eq!(value(&shadowed, beside), 153, "lit beside the board");
         let dark = value(&shadowed, under);
         assert!((25..=26).contains(&dark), "only ambient under it: {dark}");
+    }
+
+    #[test]
+    fn translucent_surfaces_let_their_share_of_light_through() {
+        let mut c = context();
+        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
+        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
+        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
+        let up: Vec<u8> = [0.0f32, 1.0, 0.0, 0.0].iter().flat_map(|x| x.to_ne_bytes()).collect();
+        call(&mut c, "glLightfv", &[Int(0x4000), Int(0x1203), Value::Blob(&up)]);
+        let grey = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, -1.0, -12.0], [-4.0, -1.0, -12.0]];
+        quad(&mut c, grey, [0.5, 0.5, 0.5], [0.0, 1.0, 0.0]);
+        // Left: a half-transparent board, blended. Right: a board the alpha test discards.
+        call(&mut c, "glEnable", &[Int(0x0BE2)]); // GL_BLEND
+        call(&mut c, "glBlendFunc", &[Int(0x0302), Int(0x0303)]);
+        call(&mut c, "glColor4f", &[F64(0.5), F64(0.5), F64(0.5), F64(0.5)]);
+        let left = [[-2.0, 0.5, -4.0], [-0.5, 0.5, -4.0], [-0.5, 0.5, -6.0], [-2.0, 0.5, -6.0]];
+        corners_only(&mut c, left);
+        call(&mut c, "glDisable", &[Int(0x0BE2)]);
+        call(&mut c, "glEnable", &[Int(0x0BC0)]); // GL_ALPHA_TEST
+        call(&mut c, "glAlphaFunc", &[Int(0x0204), F64(0.5)]); // GL_GREATER 0.5
+        call(&mut c, "glColor4f", &[F64(0.5), F64(0.5), F64(0.5), F64(0.2)]);
+        let right = [[0.5, 0.5, -4.0], [2.0, 0.5, -4.0], [2.0, 0.5, -6.0], [0.5, 0.5, -6.0]];
+        corners_only(&mut c, right);
+        let frame = c.take_frame();
+        let r = render(&frame, SIZE, SIZE, None, &with(Effects { shadows: true, ..Effects::GL }));
+        let value = |p| pixel_at(&frame, &r, p)[0];
+        // Ambient 0.1 plus half of the 0.5 diffuse: 0.35.
+        let half = value([-1.25, -1.0, -5.0]);
+        assert!((88..=90).contains(&half), "half the light through the blended board: {half}");
+        assert_eq!(value([1.25, -1.0, -5.0]), 153, "the discarded board casts nothing");
+    }
+
+    /// A quad of the current colour, normal up.
+    fn corners_only(c: &mut Context, corners: [[f64; 3]; 4]) {
+        call(c, "glNormal3f", &[F64(0.0), F64(1.0), F64(0.0)]);
+        call(c, "glBegin", &[Int(7)]);
+        for v in corners {
+            call(c, "glVertex3f", &v.map(F64));
+        }
+        call(c, "glEnd", &[]);
     }
 
     #[test]

@@ -91,13 +91,15 @@ fn lod(t: &Triangle, camera: &Camera, texels: f64) -> f32 {
     (0.5 * (tex / screen).log2()) as f32
 }
 
-/// Which lights reach a point (shadows), when that is asked.
-pub type Visibility<'a> = Option<&'a dyn Fn(&Light) -> bool>;
+/// How much of each light reaches a point (shadows: 0 blocked, 1 unobstructed, between
+/// through translucent surfaces), when that is asked.
+pub type Visibility<'a> = Option<&'a dyn Fn(&Light) -> f32>;
 
 /// The fragment of `triangle` at eye-space point `p`. With `per_pixel`, lit triangles run the
 /// lighting equation at the point with the interpolated normal (Phong shading) instead of
 /// interpolating the colours lit at the corners (Gouraud, what GL does). With `visible`, they
-/// are lit per pixel by the lights that reach the point only (shadows).
+/// are lit per pixel, each light's diffuse and specular terms scaled by how much of it reaches
+/// the point (shadows; its ambient term stays, as GL's ambient is not directional).
 pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: bool, visible: Visibility) -> Fragment {
     let surface = &frame.surfaces[t.surface as usize];
     let b = weights(t, camera, p).as_vec3();
@@ -113,8 +115,14 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
         let m = &mats[t.back as usize];
         let (primary, secondary) = match visible {
             Some(reaches) => {
-                let lights: Vec<Light> =
-                    l.lights.iter().map(|x| Light { enabled: x.enabled && reaches(x), ..*x }).collect();
+                let lights: Vec<Light> = l
+                    .lights
+                    .iter()
+                    .map(|x| {
+                        let v = reaches(x) as f64;
+                        Light { diffuse: x.diffuse * v, specular: x.specular * v, ..*x }
+                    })
+                    .collect();
                 light_vertex(p, n, m, &lights, &l.model)
             }
             None => light_vertex(p, n, m, &l.lights, &l.model),

@@ -31,7 +31,7 @@ pub fn closest_hit_suffices(frame: &Frame) -> bool {
 }
 
 /// A comparison function of glDepthFunc and glAlphaFunc.
-fn passes(func: u32, value: f64, reference: f64) -> bool {
+pub(crate) fn passes(func: u32, value: f64, reference: f64) -> bool {
     match func {
         GL_NEVER => false,
         GL_LESS => value < reference,

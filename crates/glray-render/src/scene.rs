@@ -210,6 +210,8 @@ pub struct Scene<'f> {
     /// Lines and points as solids, for secondary rays, and their BVH.
     solids: &'f [Solid],
     solid_bvh: Option<CwBvh>,
+    /// Some surface is drawn with blending or the alpha test: light may pass through it.
+    translucent: bool,
 }
 
 /// Up to this many instances are tried one box after the other: cheaper than a top-level
@@ -252,7 +254,19 @@ impl<'f> Scene<'f> {
             .collect();
         let solid_bvh = (!solid_boxes.is_empty())
             .then(|| build_cwbvh(&solid_boxes, BvhBuildParams::fast_build(), &mut Duration::default()));
-        Scene { frame, tris, bvh, placed, boxes: bounds, top, bounds: all, solids: &frame.solids, solid_bvh }
+        let translucent = frame.surfaces.iter().any(|s| s.blend.is_some() || s.alpha_test.is_some());
+        Scene {
+            frame,
+            tris,
+            bvh,
+            placed,
+            boxes: bounds,
+            top,
+            bounds: all,
+            solids: &frame.solids,
+            solid_bvh,
+            translucent,
+        }
     }
 
     /// Offers `visit` every instance whose box the ray meets (the top-level BVH's way when
@@ -330,6 +344,51 @@ impl<'f> Scene<'f> {
         })
     }
 
+    /// How much light gets through along the ray (a unit direction), from 0 to 1: opaque
+    /// geometry blocks it; a surface drawn with blending lets 1 - alpha through (its colours'
+    /// alpha where the ray crosses it), one with the alpha test all or nothing, as GL would
+    /// draw that fragment. Solids of draw `own` do not count, as for `occluded`.
+    pub fn transmittance(&self, ray: Ray, own: Option<u32>) -> f32 {
+        if !self.translucent {
+            return if self.occluded(ray, own) { 0.0 } else { 1.0 };
+        }
+        let solid = self.solid_bvh.as_ref().is_some_and(|bvh| {
+            !bvh.ray_traverse_miss(ray, |r, slot| {
+                let s = &self.solids[bvh.primitive_indices[slot] as usize];
+                if Some(s.sequence) == own {
+                    f32::INFINITY
+                } else {
+                    capsule(s, r)
+                }
+            })
+        });
+        if solid {
+            return 0.0;
+        }
+        let mut hits = Vec::new();
+        self.all(ray, &mut hits);
+        let mut through = 1.0f32;
+        for h in hits {
+            let Some(t) = self.frame.triangle(h.id) else { continue };
+            let s = &self.frame.surfaces[t.surface as usize];
+            if s.blend.is_none() && s.alpha_test.is_none() {
+                return 0.0;
+            }
+            let p = Vec3::from(ray.origin) + Vec3::from(ray.direction) * h.t;
+            let alpha = corner_weights(&t.positions, p).dot(Vec3::new(t.colors[0].w, t.colors[1].w, t.colors[2].w));
+            let alpha = match s.alpha_test {
+                Some((func, reference)) if !crate::resolve::passes(func, alpha as f64, reference as f64) => 0.0,
+                Some(_) if s.blend.is_none() => 1.0,
+                _ => alpha.clamp(0.0, 1.0),
+            };
+            through *= 1.0 - alpha;
+            if through <= 1e-3 {
+                return 0.0;
+            }
+        }
+        through
+    }
+
     /// The closest hit in [tmin, tmax].
     pub fn closest(&self, ray: Ray) -> Option<Hit> {
         let mut best: Option<(TriangleId, f32)> = None;
@@ -372,7 +431,7 @@ impl<'f> Scene<'f> {
             bvh.ray_traverse_anyhit(ray, |r, slot| {
                 let index = bvh.primitive_indices[slot];
                 let t = intersect(&self.tris[index as usize], r);
-                if t >= r.tmin && t <= r.tmax {
+                if t.is_finite() && t >= r.tmin && t <= r.tmax {
                     let id = TriangleId { instance: TriangleId::FLAT, index };
                     out.push(Hit { id, t, sequence: self.sequence(id) });
                 }
@@ -383,7 +442,7 @@ impl<'f> Scene<'f> {
                 let p = &self.placed[k];
                 p.bvh.bvh.ray_traverse_anyhit(p.ray(r), |r, slot| {
                     let (index, t) = p.intersect(r, slot);
-                    if t >= r.tmin && t <= r.tmax {
+                    if t.is_finite() && t >= r.tmin && t <= r.tmax {
                         out.push(Hit {
                             id: TriangleId { instance: k as u32, index },
                             t,
@@ -403,6 +462,19 @@ impl<'f> Scene<'f> {
             self.placed[id.instance as usize].instance.sequence
         }
     }
+}
+
+/// Barycentric weights of `p` (in the triangle's plane) for its corners.
+fn corner_weights(c: &[Vec3; 3], p: Vec3) -> Vec3 {
+    let (e1, e2, d) = (c[1] - c[0], c[2] - c[0], p - c[0]);
+    let (d11, d12, d22, d1, d2) = (e1.dot(e1), e1.dot(e2), e2.dot(e2), d.dot(e1), d.dot(e2));
+    let det = d11 * d22 - d12 * d12;
+    if det == 0.0 {
+        return Vec3::splat(1.0 / 3.0);
+    }
+    let v = (d22 * d1 - d12 * d2) / det;
+    let w = (d11 * d2 - d12 * d1) / det;
+    Vec3::new(1.0 - v - w, v, w)
 }
 
 /// The eye-space box around a mesh drawn with `modelview`.

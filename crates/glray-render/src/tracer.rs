@@ -144,7 +144,7 @@ impl Tracer<'_> {
             count(rays, 1);
             lit_by(self.scene, &from, light, self.eps)
         };
-        let visible: Option<&dyn Fn(&Light) -> bool> = if e.shadows { Some(&reaches) } else { None };
+        let visible: Option<&dyn Fn(&Light) -> f32> = if e.shadows { Some(&reaches) } else { None };
         let mut f = shade(self.frame, self.camera, t, p, self.options.per_pixel_lighting, visible);
         if e.ao_samples > 0 && bounce == 0 {
             count(rays, e.ao_samples as u64);
