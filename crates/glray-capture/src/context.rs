@@ -21,7 +21,7 @@ use crate::lists::{DisplayLists, MAX_NESTING};
 use crate::matrix::{from_gl, Matrices};
 use crate::mesh::{Mesh, MeshBuilder};
 use crate::ops::{Attr, AttrForm, Op};
-use crate::primitive::GL_POLYGON;
+use crate::primitive::{GL_POLYGON, GL_TRIANGLES};
 use crate::state::State;
 use crate::texture::{self, Level, Texture, Unpack};
 use crate::vertex::{decode_attribute, Given};
@@ -55,7 +55,8 @@ const MAX_BUFFER_DRAWS: usize = 256;
 
 /// An array draw's fetched vertices as a mesh.
 fn fetched_mesh(mode: u32, verts: &[Fetched]) -> Mesh {
-    let mut b = MeshBuilder::new(mode, true);
+    let mut b = MeshBuilder::new(true);
+    b.begin(mode);
     for v in verts {
         b.give(v);
     }
@@ -269,62 +270,96 @@ impl Context {
         self.raise(r);
     }
 
-    /// What the open list keeps of a call. A glBegin/glEnd of vertex attributes becomes one
-    /// mesh (glMaterial or a nested glCallList inside it, which a mesh cannot keep, turn it
-    /// back into calls); array draws become meshes of the vertices they fetch now.
+    /// What the open list keeps of a call. Consecutive glBegin/glEnd of vertex attributes, and
+    /// attributes given between them, become one mesh (glMaterial or a nested glCallList inside
+    /// a glBegin, which a mesh cannot keep, turn that glBegin back into calls); array draws
+    /// become meshes of the vertices they fetch now.
     fn compile_items(&mut self, op: Op, ty: u32, a: &[Value]) -> Vec<Item> {
-        if matches!(
+        let draw = matches!(
             op,
             Op::DrawArrays | Op::DrawElements | Op::DrawRangeElements | Op::MultiDrawArrays | Op::MultiDrawElements
-        ) && self.building.is_none()
-        {
-            // Client data is copied at compile time: keep the vertices the draw would fetch.
-            let runs = self.fetch_draw(op, a).unwrap_or_default();
-            return runs.into_iter().map(|(mode, verts)| Item::Mesh(Arc::new(fetched_mesh(mode, &verts)))).collect();
-        }
+        );
+        let mut items = Vec::new();
+        // glArrayElement's client data is copied at compile time: the element's values now.
+        let element = (op == Op::ArrayElement && args::int(a, 0) >= 0).then(|| self.element(args::int(a, 0) as u64));
         if let Some(b) = self.building.as_mut() {
             let given = match op {
                 Op::Attr(f) => decode_attribute(f, a).ok(),
-                Op::ArrayElement if args::int(a, 0) >= 0 => {
-                    // Client data is copied at compile time: the element's values now.
-                    let v = self.element(args::int(a, 0) as u64);
-                    self.building.as_mut().expect("building").give(&v);
-                    return Vec::new();
-                }
                 _ => None,
             };
-            match given {
-                Some(Given::Vertex(p)) => b.vertex(p),
-                Some(Given::Normal(n)) => b.normal(n),
-                Some(Given::Color(c)) => b.color(c),
-                Some(Given::TexCoord(0, t)) => b.texcoord(t),
-                Some(Given::SecondaryColor) => {}
-                _ if op == Op::End => {
-                    let mesh = self.building.take().map(|b| b.finish());
-                    return mesh.map(|m| Item::Mesh(Arc::new(m))).into_iter().collect();
+            let open = b.is_open();
+            let kept = match (op, given) {
+                (Op::Attr(_), Some(Given::Normal(n))) => {
+                    b.normal(n);
+                    true
                 }
-                _ => {
-                    let mut items = self.spill();
-                    items.push(Item::Call(op, ty, a.iter().map(keep).collect()));
-                    return items;
+                (Op::Attr(_), Some(Given::Color(c))) => {
+                    b.color(c);
+                    true
                 }
+                (Op::Attr(_), Some(Given::TexCoord(0, t))) => {
+                    b.texcoord(t);
+                    true
+                }
+                (Op::Attr(_), Some(Given::Vertex(p))) => {
+                    // (Outside glBegin a vertex does nothing: the builder ignores it.)
+                    b.vertex(p);
+                    true
+                }
+                (Op::Attr(_), Some(Given::SecondaryColor)) => true,
+                (Op::End, _) if open => {
+                    b.end();
+                    true
+                }
+                (Op::Begin, _) if !open && args::uint(a, 0) <= GL_POLYGON => {
+                    b.begin(args::uint(a, 0));
+                    true
+                }
+                (Op::ArrayElement, _) if open && element.is_some() => {
+                    b.give(&element.expect("fetched"));
+                    true
+                }
+                _ => false,
+            };
+            if kept {
+                return items;
             }
-            return Vec::new();
+            items = self.spill();
+            if open {
+                // Inside glBegin, a call a mesh cannot keep: the glBegin stays calls.
+                items.push(Item::Call(op, ty, a.iter().map(keep).collect()));
+                return items;
+            }
+        }
+        if draw {
+            // Client data is copied at compile time: keep the vertices the draw would fetch.
+            let runs = self.fetch_draw(op, a).unwrap_or_default();
+            items.extend(runs.into_iter().map(|(mode, verts)| Item::Mesh(Arc::new(fetched_mesh(mode, &verts)))));
+            return items;
         }
         if op == Op::Begin && args::uint(a, 0) <= GL_POLYGON {
-            self.building = Some(MeshBuilder::new(args::uint(a, 0), false));
-            return Vec::new();
+            let mut b = MeshBuilder::new(false);
+            b.begin(args::uint(a, 0));
+            self.building = Some(b);
+            return items;
         }
-        vec![Item::Call(op, ty, a.iter().map(keep).collect())]
+        items.push(Item::Call(op, ty, a.iter().map(keep).collect()));
+        items
     }
 
-    /// The glBegin/glEnd being compiled, back as the calls that made it.
+    /// Ends the mesh being compiled: its closed glBegin/glEnd as a mesh, an open one back as
+    /// the calls that made it.
     fn spill(&mut self) -> Vec<Item> {
         let Some(b) = self.building.take() else { return Vec::new() };
+        if !b.is_open() {
+            return vec![Item::Mesh(Arc::new(b.finish()))];
+        }
+        let (closed, mode, given) = b.split_open();
         let attr = |attr, n| Op::Attr(AttrForm { attr, n, ty: GL_DOUBLE, vector: false });
         let call = |op, v: &[f64]| Item::Call(op, GL_DOUBLE, v.iter().map(|x| Kept::Float(*x)).collect());
-        let mut items = vec![Item::Call(Op::Begin, GL_FLOAT, vec![Kept::Int(b.mode() as i64)])];
-        items.extend(b.given().into_iter().map(|g| match g {
+        let mut items: Vec<Item> = closed.map(|m| Item::Mesh(Arc::new(m))).into_iter().collect();
+        items.push(Item::Call(Op::Begin, GL_FLOAT, vec![Kept::Int(mode as i64)]));
+        items.extend(given.into_iter().map(|g| match g {
             Given::Vertex(p) => call(attr(Attr::Vertex, 4), &p.to_array()),
             Given::Normal(n) => call(attr(Attr::Normal, 3), &n.to_array()),
             Given::Color(c) => call(attr(Attr::Color, 4), &c.to_array()),
@@ -384,7 +419,14 @@ impl Context {
                 }
                 outs.push(self.vertex_stage(mesh.position(i)));
             }
-            self.draw(mesh.mode, &outs);
+            if mesh.runs.is_empty() {
+                // An indexed mesh: its triangles.
+                let corners: Vec<Out> = mesh.triangles.iter().flatten().map(|&i| outs[i as usize]).collect();
+                self.draw(GL_TRIANGLES, &corners);
+            }
+            for r in &mesh.runs {
+                self.draw(r.mode, &outs[r.start as usize..(r.start + r.count) as usize]);
+            }
         }
         // GL leaves the current values of enabled arrays undefined after a draw; Mesa keeps
         // the last one of a colour array only.
@@ -609,7 +651,7 @@ impl Context {
             }
             Op::NewList => self.shared.lists.new_list(args::uint(a, 0), args::uint(a, 1))?,
             Op::EndList => {
-                // A glBegin left open in the list stays calls.
+                // The mesh being compiled ends; a glBegin left open stays calls.
                 for item in self.spill() {
                     self.shared.lists.compile(item);
                 }
@@ -1214,8 +1256,8 @@ mod tests {
         call(&mut c, "glEnable", &[i(GL_CULL_FACE as i64)]);
         call(&mut c, "glCallList", &[i(1)]);
         let frame = c.take_frame();
-        assert_eq!(frame.instances.len(), 2);
-        let id = |instance| TriangleId { instance, index: 0 };
+        assert_eq!(frame.instances.len(), 1, "the list's two glBegin/glEnd make one mesh");
+        let id = |index| TriangleId { instance: 0, index };
         assert!(frame.triangle(id(0)).is_some() && frame.triangle(id(1)).is_none(), "the back one is culled");
         assert_eq!(frame.all_triangles().len(), 1);
         // Outlines are screen-space quads: the list's vertices go through the vertex stage.

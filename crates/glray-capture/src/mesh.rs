@@ -32,6 +32,11 @@ impl<T: Copy> Attribute<T> {
         i.checked_sub(self.first).and_then(|k| self.values.get(k as usize).copied())
     }
 
+    /// Keeps the values of the first `n` vertices.
+    fn truncate(&mut self, n: u32) {
+        self.values.truncate(n.saturating_sub(self.first) as usize);
+    }
+
     /// Appends vertex `index`'s value (None: not given yet).
     fn push(&mut self, index: u32, value: Option<T>) {
         match value {
@@ -46,12 +51,22 @@ impl<T: Copy> Attribute<T> {
     }
 }
 
+/// One glBegin/glEnd of a mesh: its mode and its vertices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Run {
+    pub mode: u32,
+    pub start: u32,
+    pub count: u32,
+}
+
 /// A compiled draw in object coordinates.
 #[derive(Debug, Default)]
 pub struct Mesh {
     /// Unique for the life of the process: the tracer keys its BVHs by it.
     pub id: u64,
-    pub mode: u32,
+    /// The glBegin/glEnd (or array draws) it was made of, in order, each a run of vertices
+    /// (empty for an indexed mesh).
+    pub runs: Vec<Run>,
     pub positions: Vec<Vec3>,
     /// w of every position when one is not 1 (such a mesh is never instanced).
     pub ws: Option<Vec<f32>>,
@@ -59,10 +74,10 @@ pub struct Mesh {
     pub colors: Attribute<Vec4>,
     /// Texture unit 0's coordinates.
     pub texcoords: Attribute<Vec4>,
-    /// The mode's triangles (vertex indices) and each one's provoking vertex.
+    /// The runs' triangles (vertex indices) and each one's provoking vertex.
     pub triangles: Vec<[u32; 3]>,
     pub provoking: Vec<u32>,
-    /// The mode draws lines or points, which depend on the screen: never instanced.
+    /// A run draws lines or points, which depend on the screen: never instanced.
     pub lines_or_points: bool,
     /// An array draw (GL leaves current values as Mesa does: only a colour array changes
     /// them) rather than glBegin/glEnd (the last values given stay current).
@@ -95,7 +110,6 @@ impl Mesh {
         let max = positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
         Some(Mesh {
             id: next_id(),
-            mode: crate::primitive::GL_TRIANGLES,
             provoking: triangles.iter().map(|t| t[2]).collect(),
             triangles,
             positions,
@@ -133,15 +147,49 @@ pub struct MeshBuilder {
     normal: Option<DVec3>,
     color: Option<DVec4>,
     texcoord: Option<DVec4>,
+    /// The open glBegin's mode and first vertex.
+    open: Option<(u32, u32)>,
 }
 
 impl MeshBuilder {
-    pub fn new(mode: u32, from_arrays: bool) -> MeshBuilder {
-        MeshBuilder { mesh: Mesh { mode, from_arrays, ..Mesh::default() }, normal: None, color: None, texcoord: None }
+    /// A mesh of glBegin/glEnd runs (`from_arrays`: of array draws).
+    pub fn new(from_arrays: bool) -> MeshBuilder {
+        MeshBuilder {
+            mesh: Mesh { from_arrays, ..Mesh::default() },
+            normal: None,
+            color: None,
+            texcoord: None,
+            open: None,
+        }
     }
 
-    pub fn mode(&self) -> u32 {
-        self.mesh.mode
+    /// A glBegin: the vertices that follow make a run of `mode`.
+    pub fn begin(&mut self, mode: u32) {
+        self.end();
+        self.open = Some((mode, self.mesh.positions.len() as u32));
+    }
+
+    /// A glEnd: the open run's vertices are assembled into triangles.
+    pub fn end(&mut self) {
+        let Some((mode, start)) = self.open.take() else { return };
+        let m = &mut self.mesh;
+        let count = m.positions.len() as u32 - start;
+        if let Ok(asm) = assemble(mode, count as usize) {
+            m.lines_or_points |= !asm.lines.is_empty() || !asm.points.is_empty();
+            m.triangles.extend(asm.triangles.iter().map(|(t, _)| t.map(|i| i + start)));
+            m.provoking.extend(asm.triangles.iter().map(|(_, p)| p + start));
+        }
+        m.runs.push(Run { mode, start, count });
+    }
+
+    /// Whether a glBegin is open.
+    pub fn is_open(&self) -> bool {
+        self.open.is_some()
+    }
+
+    /// Whether it holds any run.
+    pub fn is_empty(&self) -> bool {
+        self.mesh.runs.is_empty() && self.open.is_none()
     }
 
     pub fn normal(&mut self, n: DVec3) {
@@ -172,8 +220,11 @@ impl MeshBuilder {
         }
     }
 
-    /// A vertex: it takes the attributes given so far.
+    /// A vertex: it takes the attributes given so far (outside a glBegin it does nothing).
     pub fn vertex(&mut self, p: DVec4) {
+        if self.open.is_none() {
+            return;
+        }
         let m = &mut self.mesh;
         let i = m.positions.len() as u32;
         m.positions.push(p.truncate().as_vec3());
@@ -185,8 +236,9 @@ impl MeshBuilder {
         m.texcoords.push(i, self.texcoord.map(|t| t.as_vec4()));
     }
 
-    /// The finished mesh, assembled into triangles.
-    pub fn finish(self) -> Mesh {
+    /// The finished mesh (an open glBegin is closed).
+    pub fn finish(mut self) -> Mesh {
+        self.end();
         let mut m = self.mesh;
         m.id = next_id();
         (m.end_normal, m.end_color, m.end_texcoord) = (self.normal, self.color, self.texcoord);
@@ -194,23 +246,36 @@ impl MeshBuilder {
         for a in [&mut m.normals.first, &mut m.colors.first, &mut m.texcoords.first] {
             *a = (*a).min(n);
         }
-        if let Ok(asm) = assemble(m.mode, m.positions.len()) {
-            m.lines_or_points = !asm.lines.is_empty() || !asm.points.is_empty();
-            m.triangles = asm.triangles.iter().map(|(t, _)| *t).collect();
-            m.provoking = asm.triangles.iter().map(|(_, p)| *p).collect();
-        }
         m.min = m.positions.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
         m.max = m.positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
         m
     }
 
-    /// What was given, in order, as commands (for a glBegin/glEnd the list cannot keep as a
-    /// mesh after all: one with glMaterial or glCallList inside).
-    pub(crate) fn given(&self) -> Vec<Given> {
+    /// Splits off the open glBegin, for a list that cannot keep it as a mesh after all (one
+    /// with glMaterial or glCallList inside): the runs before it as a mesh (None if there are
+    /// none), and the open one's mode with what was given in it, in order, as commands.
+    pub(crate) fn split_open(self) -> (Option<Mesh>, u32, Vec<Given>) {
+        let Some((mode, start)) = self.open else { return (Some(self.finish()), 0, Vec::new()) };
+        let given = self.given(start);
+        let mut closed = MeshBuilder { open: None, ..self };
+        let m = &mut closed.mesh;
+        m.positions.truncate(start as usize);
+        if let Some(ws) = m.ws.as_mut() {
+            ws.truncate(start as usize);
+        }
+        m.normals.truncate(start);
+        m.colors.truncate(start);
+        m.texcoords.truncate(start);
+        let mesh = (!closed.mesh.runs.is_empty()).then(|| closed.finish());
+        (mesh, mode, given)
+    }
+
+    /// What was given from vertex `from` on, in order, as commands.
+    fn given(&self, from: u32) -> Vec<Given> {
         let m = &self.mesh;
         let mut out = Vec::new();
         let (mut normal, mut color, mut texcoord) = (None, None, None);
-        for i in 0..m.positions.len() as u32 {
+        for i in from..m.positions.len() as u32 {
             if let Some(n) = m.normals.at(i).filter(|n| Some(*n) != normal) {
                 out.push(Given::Normal(n.as_dvec3()));
                 normal = Some(n);
@@ -239,17 +304,18 @@ impl MeshBuilder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::primitive::{GL_LINES, GL_QUADS, GL_TRIANGLES};
+    use crate::primitive::{GL_LINES, GL_QUADS, GL_TRIANGLES, GL_TRIANGLE_STRIP};
 
     #[test]
     fn attributes_start_where_the_list_gives_them() {
-        let mut b = MeshBuilder::new(GL_TRIANGLES, false);
+        let mut b = MeshBuilder::new(false);
+        b.begin(GL_TRIANGLES);
         b.vertex(DVec4::new(0.0, 0.0, 0.0, 1.0));
         b.normal(DVec3::X);
         b.vertex(DVec4::new(1.0, 0.0, 0.0, 1.0));
         b.vertex(DVec4::new(0.0, 1.0, 0.0, 1.0));
         b.color(DVec4::new(1.0, 0.0, 0.0, 1.0));
-        let given = b.given();
+        let given = b.given(0);
         let m = b.finish();
         assert_eq!(m.normals.at(0), None, "the first vertex takes the normal current at the call");
         assert_eq!(m.normals.at(1), Some(Vec3::X));
@@ -265,21 +331,55 @@ mod tests {
     }
 
     #[test]
-    fn modes_assemble_and_ids_differ() {
-        let quad = |mode| {
-            let mut b = MeshBuilder::new(mode, false);
-            for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
-                b.vertex(DVec4::new(x, y, 0.0, 1.0));
+    fn runs_assemble_into_one_mesh_and_ids_differ() {
+        let quad = |b: &mut MeshBuilder, mode, x: f64| {
+            b.begin(mode);
+            for (dx, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+                b.vertex(DVec4::new(x + dx, y, 0.0, 1.0));
             }
-            b.finish()
+            b.end();
         };
-        let (a, b) = (quad(GL_QUADS), quad(GL_LINES));
-        assert_eq!(a.triangles.len(), 2);
-        assert_eq!(a.provoking, vec![3, 3]);
-        assert!(b.lines_or_points && b.triangles.is_empty());
-        assert_ne!(a.id, b.id);
-        let mut h = MeshBuilder::new(GL_TRIANGLES, false);
+        let mut b = MeshBuilder::new(false);
+        quad(&mut b, GL_QUADS, 0.0);
+        b.vertex(DVec4::ONE); // outside glBegin: nothing
+        quad(&mut b, GL_TRIANGLE_STRIP, 2.0);
+        let a = b.finish();
+        assert_eq!(
+            a.runs,
+            vec![Run { mode: GL_QUADS, start: 0, count: 4 }, Run { mode: GL_TRIANGLE_STRIP, start: 4, count: 4 }]
+        );
+        assert_eq!(a.triangles.len(), 4);
+        assert_eq!(a.triangles[2], [4, 5, 6], "the second run's indices follow the first's");
+        assert_eq!(a.provoking[..2], [3, 3]);
+        let mut l = MeshBuilder::new(false);
+        quad(&mut l, GL_LINES, 0.0);
+        let l = l.finish();
+        assert!(l.lines_or_points && l.triangles.is_empty());
+        assert_ne!(a.id, l.id);
+        let mut h = MeshBuilder::new(false);
+        h.begin(GL_TRIANGLES);
         h.vertex(DVec4::new(0.0, 0.0, 0.0, 2.0));
         assert_eq!(h.finish().position(0).w, 2.0);
+    }
+
+    #[test]
+    fn an_open_glbegin_splits_off_with_what_was_given_in_it() {
+        let mut b = MeshBuilder::new(false);
+        b.begin(GL_TRIANGLES);
+        for x in [0.0, 1.0, 2.0] {
+            b.vertex(DVec4::new(x, 0.0, 0.0, 1.0));
+        }
+        b.end();
+        b.color(DVec4::new(0.0, 1.0, 0.0, 1.0));
+        b.begin(GL_QUADS);
+        b.vertex(DVec4::new(5.0, 0.0, 0.0, 1.0));
+        let (closed, mode, given) = b.split_open();
+        let closed = closed.unwrap();
+        assert_eq!((closed.positions.len(), closed.triangles.len(), mode), (3, 1, GL_QUADS));
+        assert_eq!(closed.colors.at(2), None);
+        assert_eq!(
+            given,
+            vec![Given::Color(DVec4::new(0.0, 1.0, 0.0, 1.0)), Given::Vertex(DVec4::new(5.0, 0.0, 0.0, 1.0))]
+        );
     }
 }
