@@ -1269,6 +1269,55 @@ mod tests {
     }
 
     #[test]
+    pub(crate) fn the_facing_a_ray_sees_is_the_facing_on_the_window() {
+        // Triangles of both windings at several places, under modelviews that rotate and mirror,
+        // with either front face: the one dot product a camera ray gives must cull as the
+        // window winding does.
+        for (mv, front) in [("glRotatef", GL_CCW), ("glScalef", GL_CCW), ("glScalef", GL_CW), ("glRotatef", GL_CW)] {
+            let mut c = Context::default();
+            c.set_drawable(64, 64);
+            call(&mut c, "glMatrixMode", &[i(0x1701)]);
+            call(&mut c, "glFrustum", &[f(-0.5), f(0.5), f(-0.5), f(0.5), f(1.0), f(20.0)]);
+            call(&mut c, "glMatrixMode", &[i(0x1700)]);
+            call(&mut c, "glNewList", &[i(1), i(0x1300)]);
+            call(&mut c, "glBegin", &[i(4)]);
+            for k in 0..8 {
+                let (x, z) = ((k % 4) as f64 - 1.5, -3.0 - (k / 4) as f64);
+                let pts = if k % 2 == 0 {
+                    [(0.0, 0.0), (0.5, 0.0), (0.0, 0.5)]
+                } else {
+                    [(0.0, 0.0), (0.0, 0.5), (0.5, 0.2)]
+                };
+                for (dx, dy) in pts {
+                    call(&mut c, "glVertex3f", &[f(x + dx), f(dy - 0.2), f(z + dx * 0.7)]);
+                }
+            }
+            call(&mut c, "glEnd", &[]);
+            call(&mut c, "glEndList", &[]);
+            call(&mut c, "glFrontFace", &[i(front as i64)]);
+            call(&mut c, "glEnable", &[i(GL_CULL_FACE as i64)]);
+            call(&mut c, "glTranslatef", &[f(0.0), f(0.0), f(-2.0)]);
+            match mv {
+                "glScalef" => call(&mut c, "glScalef", &[f(-1.0), f(1.0), f(1.0)]),
+                _ => call(&mut c, "glRotatef", &[f(35.0), f(0.3), f(1.0), f(0.2)]),
+            }
+            call(&mut c, "glTranslatef", &[f(0.0), f(0.0), f(2.0)]);
+            call(&mut c, "glCallList", &[i(1)]);
+            let frame = c.take_frame();
+            let inst = &frame.instances[0];
+            let eye = inst.modelview.inverse() * DVec4::new(0.0, 0.0, 0.0, 1.0);
+            for (k, t) in inst.mesh.triangles.iter().enumerate() {
+                let p = t.map(|v| inst.mesh.positions[v as usize].as_dvec3());
+                let normal = (p[1] - p[0]).cross(p[2] - p[0]);
+                let toward = (p[0] + p[1] + p[2]) / 3.0 - eye.truncate() / eye.w;
+                assert_eq!(inst.keeps_seen(normal.dot(toward) as f32), inst.keeps(k), "{mv} {front:#x} triangle {k}");
+            }
+            let kept = (0..8).filter(|&k| inst.keeps(k)).count();
+            assert!(kept > 0 && kept < 8, "{mv} {front:#x}: both facings present ({kept} kept)");
+        }
+    }
+
+    #[test]
     pub(crate) fn a_glbegin_a_mesh_cannot_keep_stays_calls() {
         let mut c = context();
         call(&mut c, "glEnable", &[i(GL_LIGHTING as i64)]);

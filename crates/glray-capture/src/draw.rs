@@ -10,7 +10,7 @@ use crate::camera::Viewport;
 use crate::context::{vec4, Context, Out};
 use crate::frame::{Solid, Surface, Texturing, Triangle, View, NO_LIGHTING};
 use crate::gl::*;
-use crate::instance::Instance;
+use crate::instance::{facing_flip, Instance};
 use crate::mesh::Mesh;
 use crate::primitive::{assemble, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
 
@@ -168,6 +168,7 @@ impl Context {
             flat: s.flat,
             front_ccw: s.front_ccw,
             cull: s.cull.then_some(s.cull_face),
+            mirrored: facing_flip(&modelview, &setup.projection),
         });
     }
 

@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use glam::{DMat3, DMat4, DVec3, DVec4, Vec2};
+use glam::{DMat3, DMat4, DVec3, DVec4, Vec2, Vec3, Vec4};
 
 use crate::context::vec4;
 use crate::draw::{culled, window_facing};
@@ -41,6 +41,20 @@ pub struct Instance {
     pub front_ccw: bool,
     /// glCullFace's face when GL_CULL_FACE is on.
     pub cull: Option<u32>,
+    /// Whether the window winding is the opposite of the object-space one as seen along the
+    /// view (a mirroring modelview or projection): see `facing_flip`.
+    pub mirrored: bool,
+}
+
+/// Whether `modelview` and `projection` together turn a triangle's winding around on the
+/// window, compared with how it winds seen from the eye in object space. With it, a ray from
+/// the eye tells a triangle's facing from the sign of one dot product (`keeps_seen`).
+pub fn facing_flip(modelview: &DMat4, projection: &DMat4) -> bool {
+    // A counter-clockwise triangle facing the eye, in front of it: front unless the projection
+    // turns the window around.
+    let probe = [DVec4::new(0.0, 0.0, -1.0, 1.0), DVec4::new(0.1, 0.0, -1.0, 1.0), DVec4::new(0.0, 0.1, -1.0, 1.0)];
+    let projection_flips = window_facing(probe.map(|p| *projection * p), true) == Some(false);
+    (DMat3::from_mat4(*modelview).determinant() < 0.0) != projection_flips
 }
 
 impl Instance {
@@ -49,6 +63,16 @@ impl Instance {
     fn clip(&self, index: usize) -> [DVec4; 3] {
         let m = &self.mesh;
         m.triangles[index].map(|i| self.object_to_clip * m.position(i))
+    }
+
+    /// Whether a triangle a camera ray meets is drawn at all (not culled), from the dot product
+    /// of its object-space normal (right-handed from its winding) with the ray's direction.
+    #[inline]
+    pub fn keeps_seen(&self, normal_dot_ray: f32) -> bool {
+        let Some(cull) = self.cull else { return true };
+        let ccw_seen = normal_dot_ray < 0.0;
+        let front = (ccw_seen != self.mirrored) == self.front_ccw;
+        !culled(Some(cull), front)
     }
 
     /// Whether triangle `index` is drawn at all (not culled).
@@ -77,8 +101,9 @@ impl Instance {
         let face = usize::from(!front);
         let corners = m.triangles[index];
         let lighting = lightings.get(self.lighting as usize).filter(|_| self.lighting != NO_LIGHTING);
-        // What the vertex stage makes of vertex i: eye position, colours, normal, base colour.
-        let vertex = |i: u32| {
+        // What the vertex stage makes of vertex i: eye position, colours (when `lit`: flat
+        // shading lights only the provoking vertex), normal, base colour.
+        let vertex = |i: u32, lit: bool| {
             let eye = self.modelview * m.position(i);
             let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
             let color = m.colors.at(i).map_or(self.color, |c| c.as_dvec4());
@@ -86,6 +111,9 @@ impl Instance {
                 Some(l) => {
                     let object_normal = m.normals.at(i).map_or(self.normal, |n| n.as_dvec3());
                     let n = eye_normal(&self.normal_matrix, object_normal, self.normalize, self.rescale_normal);
+                    if !lit {
+                        return (p, Vec4::ZERO, Vec3::ZERO, n, vec4(color));
+                    }
                     let mats = l.materials(color);
                     let (a, b) = light_face(p, n, &mats, &l.lights, &l.model, face);
                     (a, b, n)
@@ -94,8 +122,8 @@ impl Instance {
             };
             (p, vec4(primary), vec4(secondary).truncate(), n, vec4(color))
         };
-        let vs = corners.map(vertex);
-        let pv = if self.flat { Some(vertex(m.provoking[index])) } else { None };
+        let vs = corners.map(|i| vertex(i, !self.flat));
+        let pv = if self.flat { Some(vertex(m.provoking[index], true)) } else { None };
         let pick = |k: usize| pv.unwrap_or(vs[k]);
         let tex = |i: u32| {
             let t = self.texture_matrix * m.texcoords.at(i).map_or(self.texcoord, |t| t.as_dvec4());

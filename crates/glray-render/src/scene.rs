@@ -184,9 +184,13 @@ impl Placed<'_> {
     /// The hit with the mesh's triangle in BVH slot `slot`, if the triangle is drawn at all.
     fn intersect(&self, ray: &Ray, slot: usize) -> (u32, f32) {
         let index = self.bvh.bvh.primitive_indices[slot];
-        let t = intersect(&self.bvh.tris[slot], ray);
-        if t.is_finite() && !self.instance.keeps(index as usize) {
-            return (index, f32::INFINITY);
+        let tri = &self.bvh.tris[slot];
+        let t = intersect(tri, ray);
+        if t.is_finite() && self.instance.cull.is_some() {
+            let normal = (tri.v1 - tri.v0).cross(tri.v2 - tri.v0);
+            if !self.instance.keeps_seen(normal.dot(ray.direction)) {
+                return (index, f32::INFINITY);
+            }
         }
         (index, t)
     }

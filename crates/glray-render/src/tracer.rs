@@ -6,7 +6,7 @@ use std::cell::Cell;
 
 use glam::{DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
 use glray_capture::camera::Camera;
-use glray_capture::frame::{Frame, Triangle};
+use glray_capture::frame::{Frame, Triangle, TriangleId};
 use glray_capture::lighting::Light;
 use obvhs::ray::Ray;
 
@@ -38,6 +38,22 @@ pub(crate) struct Scratch {
     hits: Vec<Hit>,
     frags: Vec<(Hit, Fragment)>,
     pub rays: Cell<u64>,
+    /// The triangle the last camera ray hit: neighbouring pixels mostly hit the same one, and
+    /// an instance's triangle is made (lit, faced) when it is needed.
+    last: Option<(TriangleId, Option<Triangle>)>,
+}
+
+impl Scratch {
+    fn triangle(&mut self, frame: &Frame, id: TriangleId) -> Option<Triangle> {
+        match self.last {
+            Some((last, t)) if last == id => t,
+            _ => {
+                let t = frame.triangle(id);
+                self.last = Some((id, t));
+                t
+            }
+        }
+    }
 }
 
 fn count(rays: &Cell<u64>, n: u64) {
@@ -97,7 +113,7 @@ impl Tracer<'_> {
         let at = |hit: &Hit| r.origin + r.direction * hit.t as f64;
         if self.simple {
             let hit = self.scene.closest(ray)?;
-            let t = self.frame.triangle(hit.id)?;
+            let t = s.triangle(self.frame, hit.id)?;
             let f = self.surface(&t, at(&hit), r.direction, sampler, &s.rays, 0);
             // Over the last frame (no clear), the depth it left still tests.
             if !self.frame.cleared && f.depth >= depth_under {

@@ -111,6 +111,7 @@ pub fn frame(mesh: Mesh, width: u32, height: u32) -> Frame {
         flat: false,
         front_ccw: true,
         cull: None,
+        mirrored: false,
     };
     Frame {
         instances: vec![instance],
