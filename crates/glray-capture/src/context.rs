@@ -1184,6 +1184,11 @@ mod tests {
         call(c, "glScalef", &[f(0.5), f(0.5), f(0.5)]);
     }
 
+    /// A client array of 2D float positions, as the trace's arrays event gives it.
+    fn positions_2d(floats: &[u8]) -> ArrayData<'_> {
+        ArrayData { kind: 0, index: 0, size: 2, gl_type: 0x1406, stride: 0, normalized: false, first: 0, bytes: floats }
+    }
+
     fn f32s(v: &[f32]) -> Vec<u8> {
         v.iter().flat_map(|x| x.to_ne_bytes()).collect()
     }
@@ -1389,16 +1394,7 @@ mod tests {
         assert_eq!(c.frame().all_triangles().len(), 1);
         // Client memory, as the trace's arrays event gives it, with client indices.
         call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(0)]);
-        c.set_arrays(&[ArrayData {
-            kind: 0,
-            index: 0,
-            size: 2,
-            gl_type: 0x1406,
-            stride: 0,
-            normalized: false,
-            first: 0,
-            bytes: &floats,
-        }]);
+        c.set_arrays(&[positions_2d(&floats)]);
         call(&mut c, "glDrawElements", &[i(4), i(3), i(0x1401), Value::Blob(&[2, 1, 0])]);
         let t = &c.frame().triangles;
         assert_eq!(t.len(), 1, "client memory: made this frame");
@@ -1482,16 +1478,7 @@ mod tests {
         let mut c = context();
         let floats = f32s(&[0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0]);
         call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
-        c.set_arrays(&[ArrayData {
-            kind: 0,
-            index: 0,
-            size: 2,
-            gl_type: 0x1406,
-            stride: 0,
-            normalized: false,
-            first: 0,
-            bytes: &floats,
-        }]);
+        c.set_arrays(&[positions_2d(&floats)]);
         let counts: Vec<u8> = [3i32, 3].iter().flat_map(|x| x.to_ne_bytes()).collect();
         let lists = Value::Strings(vec![&[0u8, 1, 2][..], &[0u8, 2, 3][..]]);
         call(&mut c, "glMultiDrawElements", &[i(4), Value::Blob(&counts), i(0x1401), lists, i(2)]);
@@ -1506,16 +1493,7 @@ mod tests {
             &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(6), Value::Blob(&[0, 1, 2, 0, 2, 3]), i(0x88E4)],
         );
         let offsets: Vec<u8> = [3usize].iter().flat_map(|x| x.to_ne_bytes()).collect();
-        c.set_arrays(&[ArrayData {
-            kind: 0,
-            index: 0,
-            size: 2,
-            gl_type: 0x1406,
-            stride: 0,
-            normalized: false,
-            first: 0,
-            bytes: &floats,
-        }]);
+        c.set_arrays(&[positions_2d(&floats)]);
         call(&mut c, "glMultiDrawElements", &[i(4), Value::Blob(&counts[..4]), i(0x1401), Value::Blob(&offsets), i(1)]);
         assert_eq!(c.frame().triangles[2].positions, t_positions(&floats, [0, 2, 3]));
         call(&mut c, "glMultiDrawElements", &[i(4), Value::Blob(&counts), i(0x1406), Value::Null, i(2)]);
@@ -1550,16 +1528,7 @@ mod tests {
         // Client memory is not kept: its draws stay per frame.
         call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(0)]);
         call(&mut c, "glVertexPointer", &[i(2), i(0x1406), i(0), Value::Opaque(64)]);
-        c.set_arrays(&[ArrayData {
-            kind: 0,
-            index: 0,
-            size: 2,
-            gl_type: 0x1406,
-            stride: 0,
-            normalized: false,
-            first: 0,
-            bytes: &floats,
-        }]);
+        c.set_arrays(&[positions_2d(&floats)]);
         draw(&mut c);
         let client = c.take_frame();
         assert_eq!((client.instances.len(), client.triangles.len()), (0, 1));

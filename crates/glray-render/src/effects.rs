@@ -157,6 +157,19 @@ mod tests {
         call(c, "glEnd", &[]);
     }
 
+    /// A grey floor at y = -1, lit from straight above by GL_LIGHT0, with colour material.
+    fn lit_floor() -> Context {
+        let mut c = context();
+        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
+        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
+        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
+        let up: Vec<u8> = [0.0f32, 1.0, 0.0, 0.0].iter().flat_map(|x| x.to_ne_bytes()).collect();
+        call(&mut c, "glLightfv", &[Int(0x4000), Int(0x1203), Value::Blob(&up)]);
+        let grey = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, -1.0, -12.0], [-4.0, -1.0, -12.0]];
+        quad(&mut c, grey, [0.5, 0.5, 0.5], [0.0, 1.0, 0.0]);
+        c
+    }
+
     /// A white floor at y = -1 from z = -2 to -12.
     fn floor(c: &mut Context) {
         let f = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, -1.0, -12.0], [-4.0, -1.0, -12.0]];
@@ -204,14 +217,7 @@ mod tests {
 
     #[test]
     fn shadows_fall_only_where_an_occluder_hides_the_light() {
-        let mut c = context();
-        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
-        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
-        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
-        let up: Vec<u8> = [0.0f32, 1.0, 0.0, 0.0].iter().flat_map(|x| x.to_ne_bytes()).collect();
-        call(&mut c, "glLightfv", &[Int(0x4000), Int(0x1203), Value::Blob(&up)]); // from above
-        let grey = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, -1.0, -12.0], [-4.0, -1.0, -12.0]];
-        quad(&mut c, grey, [0.5, 0.5, 0.5], [0.0, 1.0, 0.0]);
+        let mut c = lit_floor();
         // A board over the floor (above the camera's height: the camera sees its underside).
         let board = [[-1.0, 0.5, -4.0], [1.0, 0.5, -4.0], [1.0, 0.5, -6.0], [-1.0, 0.5, -6.0]];
         quad(&mut c, board, [0.5, 0.5, 0.5], [0.0, 1.0, 0.0]);
@@ -229,14 +235,7 @@ mod tests {
 
     #[test]
     fn translucent_surfaces_let_their_share_of_light_through() {
-        let mut c = context();
-        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
-        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
-        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
-        let up: Vec<u8> = [0.0f32, 1.0, 0.0, 0.0].iter().flat_map(|x| x.to_ne_bytes()).collect();
-        call(&mut c, "glLightfv", &[Int(0x4000), Int(0x1203), Value::Blob(&up)]);
-        let grey = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, -1.0, -12.0], [-4.0, -1.0, -12.0]];
-        quad(&mut c, grey, [0.5, 0.5, 0.5], [0.0, 1.0, 0.0]);
+        let mut c = lit_floor();
         // Left: a half-transparent board, blended. Right: a board the alpha test discards.
         call(&mut c, "glEnable", &[Int(0x0BE2)]); // GL_BLEND
         call(&mut c, "glBlendFunc", &[Int(0x0302), Int(0x0303)]);
@@ -270,14 +269,7 @@ mod tests {
 
     #[test]
     fn thick_lines_cast_shadows_as_the_cylinders_they_look_like() {
-        let mut c = context();
-        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
-        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
-        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
-        let up: Vec<u8> = [0.0f32, 1.0, 0.0, 0.0].iter().flat_map(|x| x.to_ne_bytes()).collect();
-        call(&mut c, "glLightfv", &[Int(0x4000), Int(0x1203), Value::Blob(&up)]);
-        let grey = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, -1.0, -12.0], [-4.0, -1.0, -12.0]];
-        quad(&mut c, grey, [0.5, 0.5, 0.5], [0.0, 1.0, 0.0]);
+        let mut c = lit_floor();
         // A 16-pixel line across the view at y = 0.5, z = -5: a pixel there is 5/64 wide, so
         // the line is a cylinder of radius 0.625 (z from -4.375 to -5.625).
         call(&mut c, "glDisable", &[Int(0x0B50)]);

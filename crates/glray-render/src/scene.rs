@@ -317,18 +317,8 @@ impl<'f> Scene<'f> {
     /// there to cast shadows and occlude; lines and points as solids, but those of draw
     /// `own`, where the ray starts).
     pub fn occluded(&self, ray: Ray, own: Option<u32>) -> bool {
-        if let Some(bvh) = &self.solid_bvh {
-            let hit = !bvh.ray_traverse_miss(ray, |r, slot| {
-                let s = &self.solids[bvh.primitive_indices[slot] as usize];
-                if Some(s.sequence) == own {
-                    f32::INFINITY
-                } else {
-                    capsule(s, r)
-                }
-            });
-            if hit {
-                return true;
-            }
+        if self.solid_blocks(ray, own) {
+            return true;
         }
         if let Some(bvh) = &self.bvh {
             let hit =
@@ -348,15 +338,9 @@ impl<'f> Scene<'f> {
         })
     }
 
-    /// How much light gets through along the ray (a unit direction), from 0 to 1: opaque
-    /// geometry blocks it; a surface drawn with blending lets 1 - alpha through (its colours'
-    /// alpha where the ray crosses it), one with the alpha test all or nothing, as GL would
-    /// draw that fragment. Solids of draw `own` do not count, as for `occluded`.
-    pub fn transmittance(&self, ray: Ray, own: Option<u32>) -> f32 {
-        if !self.translucent {
-            return if self.occluded(ray, own) { 0.0 } else { 1.0 };
-        }
-        let solid = self.solid_bvh.as_ref().is_some_and(|bvh| {
+    /// Whether a line or point solid lies along the ray (not those of draw `own`).
+    fn solid_blocks(&self, ray: Ray, own: Option<u32>) -> bool {
+        self.solid_bvh.as_ref().is_some_and(|bvh| {
             !bvh.ray_traverse_miss(ray, |r, slot| {
                 let s = &self.solids[bvh.primitive_indices[slot] as usize];
                 if Some(s.sequence) == own {
@@ -365,8 +349,18 @@ impl<'f> Scene<'f> {
                     capsule(s, r)
                 }
             })
-        });
-        if solid {
+        })
+    }
+
+    /// How much light gets through along the ray (a unit direction), from 0 to 1: opaque
+    /// geometry blocks it; a surface drawn with blending lets 1 - alpha through (its colours'
+    /// alpha where the ray crosses it), one with the alpha test all or nothing, as GL would
+    /// draw that fragment. Solids of draw `own` do not count, as for `occluded`.
+    pub fn transmittance(&self, ray: Ray, own: Option<u32>) -> f32 {
+        if !self.translucent {
+            return if self.occluded(ray, own) { 0.0 } else { 1.0 };
+        }
+        if self.solid_blocks(ray, own) {
             return 0.0;
         }
         let mut hits = Vec::new();
