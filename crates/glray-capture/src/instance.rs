@@ -75,20 +75,6 @@ impl Instance {
         !culled(Some(cull), front)
     }
 
-    /// Whether triangle `index` is drawn at all (not culled).
-    #[inline]
-    pub fn keeps(&self, index: usize) -> bool {
-        // Without culling every triangle is (the common case: no clip transform per hit).
-        self.cull.is_none() || !culled(self.cull, self.front(index))
-    }
-
-    /// Whether triangle `index` faces front on the screen (one with no area there, which a
-    /// ray can only graze, counts as front).
-    #[inline]
-    fn front(&self, index: usize) -> bool {
-        window_facing(self.clip(index), self.front_ccw).unwrap_or(true)
-    }
-
     /// Triangle `index` as the rasterizer would have drawn it; None if culled.
     #[inline]
     pub fn triangle(&self, index: usize, lightings: &[Lighting]) -> Option<Triangle> {
