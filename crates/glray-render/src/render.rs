@@ -159,21 +159,21 @@ impl Renderer {
         self.stats = stats;
         match (key, linear) {
             (Some(key), Some(linear)) => {
-                let a = match self.accumulation.take() {
-                    Some(mut a) if a.key == key => {
-                        for (s, c) in a.sum.iter_mut().zip(&linear) {
+                let (passes, sum) = match self.accumulation.take() {
+                    Some(a) if a.key == key => {
+                        let mut sum = a.sum;
+                        for (s, c) in sum.iter_mut().zip(&linear) {
                             *s += *c;
                         }
-                        a.passes += 1;
-                        a
+                        (a.passes + 1, sum)
                     }
-                    _ => Accumulation { key, passes: 1, sum: linear, last: rendered.clone() },
+                    _ => (1, linear),
                 };
-                for (px, s) in rendered.rgba.chunks_mut(4).zip(&a.sum) {
-                    px.copy_from_slice(&to_u8(*s / a.passes as f32));
+                for (px, s) in rendered.rgba.chunks_mut(4).zip(&sum) {
+                    px.copy_from_slice(&to_u8(*s / passes as f32));
                 }
-                self.stats.samples = a.passes * effects.samples.max(1);
-                self.accumulation = Some(Accumulation { last: rendered.clone(), ..a });
+                self.stats.samples = passes * effects.samples.max(1);
+                self.accumulation = Some(Accumulation { key, passes, sum, last: rendered.clone() });
             }
             _ => {
                 self.accumulation = None;

@@ -363,28 +363,33 @@ impl<'f> Scene<'f> {
         if self.solid_blocks(ray, own) {
             return 0.0;
         }
-        let mut hits = Vec::new();
-        self.all(ray, &mut hits);
-        let mut through = 1.0f32;
-        for h in hits {
-            let Some(t) = self.frame.triangle(h.id) else { continue };
-            let s = &self.frame.surfaces[t.surface as usize];
-            if s.blend.is_none() && s.alpha_test.is_none() {
-                return 0.0;
-            }
-            let p = Vec3::from(ray.origin) + Vec3::from(ray.direction) * h.t;
-            let alpha = corner_weights(&t.positions, p).dot(Vec3::new(t.colors[0].w, t.colors[1].w, t.colors[2].w));
-            let alpha = match s.alpha_test {
-                Some((func, reference)) if !crate::resolve::passes(func, alpha as f64, reference as f64) => 0.0,
-                Some(_) if s.blend.is_none() => 1.0,
-                _ => alpha.clamp(0.0, 1.0),
-            };
-            through *= 1.0 - alpha;
-            if through <= 1e-3 {
-                return 0.0;
-            }
+        // Secondary rays are many: one buffer per thread for their hits.
+        thread_local! {
+            static HITS: std::cell::RefCell<Vec<Hit>> = const { std::cell::RefCell::new(Vec::new()) };
         }
-        through
+        HITS.with_borrow_mut(|hits| {
+            self.all(ray, hits);
+            let mut through = 1.0f32;
+            for &h in hits.iter() {
+                let Some(t) = self.frame.triangle(h.id) else { continue };
+                let s = &self.frame.surfaces[t.surface as usize];
+                if s.blend.is_none() && s.alpha_test.is_none() {
+                    return 0.0;
+                }
+                let p = Vec3::from(ray.origin) + Vec3::from(ray.direction) * h.t;
+                let alpha = corner_weights(&t.positions, p).dot(Vec3::new(t.colors[0].w, t.colors[1].w, t.colors[2].w));
+                let alpha = match s.alpha_test {
+                    Some((func, reference)) if !crate::resolve::passes(func, alpha as f64, reference as f64) => 0.0,
+                    Some(_) if s.blend.is_none() => 1.0,
+                    _ => alpha.clamp(0.0, 1.0),
+                };
+                through *= 1.0 - alpha;
+                if through <= 1e-3 {
+                    return 0.0;
+                }
+            }
+            through
+        })
     }
 
     /// The closest hit in [tmin, tmax].
