@@ -77,7 +77,7 @@ pub(crate) fn leaving(p: Vec3, n: Vec3, d: Vec3, eps: f32, tmax: f32) -> Ray {
 
 /// Where a secondary ray starts: the point, its surface's normal, and the draw it is on (whose
 /// own line and point solids do not count).
-pub(crate) struct Origin {
+pub struct Origin {
     pub p: Vec3,
     pub n: Vec3,
     pub draw: u32,
@@ -85,7 +85,7 @@ pub(crate) struct Origin {
 
 /// The fraction of the hemisphere above `at` that geometry closer than `distance` hides, from
 /// `count` cosine-weighted rays (translucent surfaces hide their alpha's share).
-pub(crate) fn occlusion(scene: &Scene, at: &Origin, count: u32, distance: f32, eps: f32, s: &mut Sampler) -> f32 {
+pub fn occlusion(scene: &Scene, at: &Origin, count: u32, distance: f32, eps: f32, s: &mut Sampler) -> f32 {
     if count == 0 {
         return 0.0;
     }

@@ -1,7 +1,8 @@
 //! glray's ray tracer (DESIGN.md: "engine"): turns a captured `Frame` into pixels.
 //!
-//! - `scene`: the frame's geometry and its BVHs (obvhs), two levels: the frame's own triangles,
-//!   and display-list meshes kept across frames under a top level over their instances;
+//! - `bvh`: glray's own four-wide BVH over triangles (binned SAH build, SIMD traversal);
+//! - `scene`: the frame's geometry and its BVHs, two levels: the frame's own triangles, and
+//!   display-list meshes kept across frames under a top level (obvhs) over their instances;
 //! - `fragment`: a hit as the rasterizer would have produced it: interpolated colour, texture,
 //!   fog, window depth (the GL look);
 //! - `resolve`: per pixel, which fragments survive GL's depth test, alpha test and blending,
@@ -12,6 +13,7 @@
 //! - `render`: the image in rayon row tiles, deterministic; progressive refinement over frames
 //!   that show the same scene (`signature`), statistics, progress on a terminal (`progress`).
 
+pub mod bvh;
 pub mod effects;
 pub mod fragment;
 mod progress;

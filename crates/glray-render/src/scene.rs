@@ -1,4 +1,5 @@
-//! The frame's geometry and its BVHs (obvhs compressed-wide BVHs), in two levels:
+//! The frame's geometry and its BVHs (triangles: `bvh::TriBvh`; instances and solids: obvhs's
+//! CWBVH, few), in two levels:
 //! - the triangles made this frame (immediate mode, array draws, lines and points), already in
 //!   eye coordinates: one BVH, built per frame;
 //! - display-list meshes: one BVH each, in object coordinates, built the first time a frame
@@ -15,48 +16,14 @@ use glray_capture::frame::{Frame, Solid, TriangleId};
 use glray_capture::instance::Instance;
 use glray_capture::mesh::Mesh;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::builder::{build_cwbvh, build_cwbvh_from_tris};
+use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
-use obvhs::triangle::Triangle;
+pub use obvhs::ray::Ray;
+use obvhs::ray::RayHit;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
-/// Ray-triangle intersection (Moller-Trumbore) that accepts hits a hair outside the edges:
-/// a ray through a pixel centre that lies exactly on an edge two triangles share must hit one
-/// of them, as GL's fill rule guarantees; a strict test can miss both and leave a crack.
-fn intersect(tri: &Triangle, ray: &Ray) -> f32 {
-    const EPS: f32 = 1e-6;
-    let e1 = tri.v1 - tri.v0;
-    let e2 = tri.v2 - tri.v0;
-    let p = ray.direction.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 || !det.is_finite() {
-        return f32::INFINITY;
-    }
-    let inv = 1.0 / det;
-    let s = ray.origin - tri.v0;
-    let u = s.dot(p) * inv;
-    if !(-EPS..=1.0 + EPS).contains(&u) {
-        return f32::INFINITY;
-    }
-    let q = s.cross(e1);
-    let v = ray.direction.dot(q) * inv;
-    if v < -EPS || u + v > 1.0 + EPS {
-        return f32::INFINITY;
-    }
-    let t = e2.dot(q) * inv;
-    if t >= ray.tmin && t <= ray.tmax {
-        t
-    } else {
-        f32::INFINITY
-    }
-}
-
-fn triangle(corners: [Vec3; 3]) -> Triangle {
-    let [v0, v1, v2] = corners.map(Vec3A::from);
-    Triangle { v0, v1, v2 }
-}
+use crate::bvh::TriBvh;
 
 /// Where a ray (unit direction) enters a capsule around the segment from `a` to `b` (a ball when
 /// they meet), or infinity (Quilez's capsule test: the cylinder, then the cap it came in by).
@@ -112,19 +79,15 @@ pub struct Hit {
     pub sequence: u32,
 }
 
-/// A mesh's BVH, and its triangles laid out in the BVH's leaf order: a leaf's triangles are
-/// read from one place instead of gathered through the mesh's vertex indices.
+/// A mesh's BVH (its leaves hold their triangles' corners: a leaf is read from one place
+/// instead of gathered through the mesh's vertex indices).
 pub struct MeshBvh {
-    bvh: CwBvh,
-    tris: Vec<Triangle>,
+    bvh: TriBvh,
 }
 
 impl MeshBvh {
     fn build(mesh: &Mesh) -> MeshBvh {
-        let tris: Vec<Triangle> = (0..mesh.triangles.len()).map(|i| triangle(mesh.corners(i))).collect();
-        let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Duration::default());
-        let tris = bvh.primitive_indices.iter().map(|&i| tris[i as usize]).collect();
-        MeshBvh { bvh, tris }
+        MeshBvh { bvh: TriBvh::build(mesh.triangles.len(), |i| mesh.corners(i)) }
     }
 }
 
@@ -181,30 +144,17 @@ impl Placed<'_> {
         Ray::new(o, d, r.tmin, r.tmax)
     }
 
-    /// The hit with the mesh's triangle in BVH slot `slot`, if the triangle is drawn at all.
-    fn intersect(&self, ray: &Ray, slot: usize) -> (u32, f32) {
-        let index = self.bvh.bvh.primitive_indices[slot];
-        let tri = &self.bvh.tris[slot];
-        let t = intersect(tri, ray);
-        if t.is_finite() && self.instance.cull.is_some() {
-            let normal = (tri.v1 - tri.v0).cross(tri.v2 - tri.v0);
-            if !self.instance.keeps_seen(normal.dot(ray.direction)) {
-                return (index, f32::INFINITY);
-            }
-        }
-        (index, t)
-    }
-
-    /// Whether the mesh's triangle in BVH slot `slot` lies along the ray (drawn or not).
-    fn blocks(&self, ray: &Ray, slot: usize) -> f32 {
-        intersect(&self.bvh.tris[slot], ray)
+    /// Whether a hit (with determinant `det`, see `bvh`) is on a face the instance draws: the
+    /// geometric normal dotted with the object-space direction is -det.
+    #[inline(always)]
+    fn drawn(&self, det: f32) -> bool {
+        self.instance.cull.is_none() || self.instance.keeps_seen(-det)
     }
 }
 
 pub struct Scene<'f> {
     frame: &'f Frame,
-    tris: Vec<Triangle>,
-    bvh: Option<CwBvh>,
+    bvh: TriBvh,
     placed: Vec<Placed<'f>>,
     /// The instances' eye-space boxes, and a BVH over them when there are many.
     boxes: Vec<Aabb>,
@@ -224,9 +174,7 @@ const FEW_INSTANCES: usize = 8;
 
 impl<'f> Scene<'f> {
     pub fn build(frame: &'f Frame, meshes: &mut Meshes) -> Scene<'f> {
-        let tris: Vec<Triangle> = frame.triangles.iter().map(|t| triangle(t.positions)).collect();
-        let bvh = (!tris.is_empty())
-            .then(|| build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Duration::default()));
+        let bvh = TriBvh::build(frame.triangles.len(), |i| frame.triangles[i].positions);
         let bvhs = meshes.prepare(frame);
         let placed: Vec<Placed> = frame
             .instances
@@ -242,9 +190,9 @@ impl<'f> Scene<'f> {
         let top = (bounds.len() > FEW_INSTANCES)
             .then(|| build_cwbvh(&bounds, BvhBuildParams::fast_build(), &mut Duration::default()));
         let mut all = Aabb::INVALID;
-        for t in &tris {
-            for v in [t.v0, t.v1, t.v2] {
-                all.extend(v);
+        for t in &frame.triangles {
+            for v in t.positions {
+                all.extend(v.into());
             }
         }
         for b in &bounds {
@@ -259,18 +207,7 @@ impl<'f> Scene<'f> {
         let solid_bvh = (!solid_boxes.is_empty())
             .then(|| build_cwbvh(&solid_boxes, BvhBuildParams::fast_build(), &mut Duration::default()));
         let translucent = frame.surfaces.iter().any(|s| s.blend.is_some() || s.alpha_test.is_some());
-        Scene {
-            frame,
-            tris,
-            bvh,
-            placed,
-            boxes: bounds,
-            top,
-            bounds: all,
-            solids: &frame.solids,
-            solid_bvh,
-            translucent,
-        }
+        Scene { frame, bvh, placed, boxes: bounds, top, bounds: all, solids: &frame.solids, solid_bvh, translucent }
     }
 
     /// Offers `visit` every instance whose box the ray meets (the top-level BVH's way when
@@ -320,20 +257,15 @@ impl<'f> Scene<'f> {
         if self.solid_blocks(ray, own) {
             return true;
         }
-        if let Some(bvh) = &self.bvh {
-            let hit =
-                !bvh.ray_traverse_miss(ray, |r, slot| intersect(&self.tris[bvh.primitive_indices[slot] as usize], r));
-            if hit {
-                return true;
-            }
+        if self.bvh.occluded(&ray) {
+            return true;
         }
         self.visit_instances(ray, true, |r, k| {
             let p = &self.placed[k];
-            let inside = p.bvh.bvh.ray_traverse_miss(p.ray(r), |r, slot| p.blocks(r, slot));
-            if inside {
-                f32::INFINITY
-            } else {
+            if p.bvh.bvh.occluded(&p.ray(r)) {
                 r.tmin
+            } else {
+                f32::INFINITY
             }
         })
     }
@@ -396,66 +328,51 @@ impl<'f> Scene<'f> {
     pub fn closest(&self, ray: Ray) -> Option<Hit> {
         let mut best: Option<(TriangleId, f32)> = None;
         let mut ray = ray;
-        if let Some(bvh) = &self.bvh {
-            let mut hit = RayHit::none();
-            if bvh.ray_traverse(ray, &mut hit, |r, slot| intersect(&self.tris[bvh.primitive_indices[slot] as usize], r))
-            {
-                let index = bvh.primitive_indices[hit.primitive_id as usize];
-                best = Some((TriangleId { instance: TriangleId::FLAT, index }, hit.t));
-                ray.tmax = hit.t;
-            }
+        if let Some((index, t)) = self.bvh.closest(&ray, |_, _| true) {
+            best = Some((TriangleId { instance: TriangleId::FLAT, index }, t));
+            ray.tmax = t;
         }
-        {
-            self.visit_instances(ray, false, |r, k| {
-                let p = &self.placed[k];
-                let mut inner = RayHit::none();
-                let mut index = 0;
-                if p.bvh.bvh.ray_traverse(p.ray(r), &mut inner, |r, slot| {
-                    let (i, t) = p.intersect(r, slot);
-                    if t < r.tmax {
-                        index = i;
-                    }
+        self.visit_instances(ray, false, |r, k| {
+            let p = &self.placed[k];
+            match p.bvh.bvh.closest(&p.ray(r), |_, det| p.drawn(det)) {
+                Some((index, t)) => {
+                    best = Some((TriangleId { instance: k as u32, index }, t));
                     t
-                }) {
-                    best = Some((TriangleId { instance: k as u32, index }, inner.t));
-                    inner.t
-                } else {
-                    f32::INFINITY
                 }
-            });
-        }
+                None => f32::INFINITY,
+            }
+        });
         best.map(|(id, t)| Hit { id, t, sequence: self.sequence(id) })
     }
 
     /// Every hit in [tmin, tmax], in no particular order.
     pub fn all(&self, ray: Ray, out: &mut Vec<Hit>) {
         out.clear();
-        if let Some(bvh) = &self.bvh {
-            bvh.ray_traverse_anyhit(ray, |r, slot| {
-                let index = bvh.primitive_indices[slot];
-                let t = intersect(&self.tris[index as usize], r);
-                if t.is_finite() && t >= r.tmin && t <= r.tmax {
-                    let id = TriangleId { instance: TriangleId::FLAT, index };
-                    out.push(Hit { id, t, sequence: self.sequence(id) });
+        self.bvh.each_hit(&ray, |index, t, _| {
+            let id = TriangleId { instance: TriangleId::FLAT, index };
+            out.push(Hit { id, t, sequence: self.sequence(id) });
+        });
+        self.visit_instances(ray, false, |r, k| {
+            let p = &self.placed[k];
+            p.bvh.bvh.each_hit(&p.ray(r), |index, t, det| {
+                if p.drawn(det) {
+                    out.push(Hit { id: TriangleId { instance: k as u32, index }, t, sequence: p.instance.sequence });
                 }
             });
-        }
-        {
-            self.visit_instances(ray, false, |r, k| {
-                let p = &self.placed[k];
-                p.bvh.bvh.ray_traverse_anyhit(p.ray(r), |r, slot| {
-                    let (index, t) = p.intersect(r, slot);
-                    if t.is_finite() && t >= r.tmin && t <= r.tmax {
-                        out.push(Hit {
-                            id: TriangleId { instance: k as u32, index },
-                            t,
-                            sequence: p.instance.sequence,
-                        });
-                    }
-                });
-                f32::INFINITY
-            });
-        }
+            f32::INFINITY
+        });
+    }
+
+    /// The geometric normal (not normalised, in eye space, winding e1 x e2) of a hit's triangle.
+    pub fn geometric_normal(&self, id: TriangleId) -> Vec3 {
+        let [a, b, c] = if id.instance == TriangleId::FLAT {
+            self.frame.triangles[id.index as usize].positions
+        } else {
+            let p = &self.placed[id.instance as usize];
+            let m = p.instance.modelview;
+            p.instance.mesh.corners(id.index as usize).map(|v| m.transform_point3(v.as_dvec3()).as_vec3())
+        };
+        (b - a).cross(c - a)
     }
 
     fn sequence(&self, id: TriangleId) -> u32 {

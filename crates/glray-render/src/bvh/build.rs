@@ -1,0 +1,353 @@
+//! Building the four-wide BVH: top-down binned SAH (the surface area heuristic on 16 bins per
+//! axis, as Embree's "medium" build), splitting each node's range in two, then the larger child
+//! again, until it has four children; ranges of at most `LEAF_SIZE` triangles are leaves.
+//!
+//! Lean on purpose (issue 5: build time and peak memory): one 32-byte record per triangle
+//! (its box, the triangle's index in the box's spare lane) partitioned in place, no binary tree
+//! in between, and the top of the tree built on rayon in parallel.
+
+use glam::{Vec3, Vec3A, Vec4};
+use rayon::prelude::*;
+
+use super::{Node, Tri4, EMPTY, LEAF, LEAF_SIZE};
+
+/// A triangle's box; `lo.w` holds the triangle's index (as bits).
+#[derive(Clone, Copy)]
+struct Record {
+    lo: Vec4,
+    hi: Vec4,
+}
+
+impl Record {
+    fn index(&self) -> u32 {
+        self.lo.w.to_bits()
+    }
+
+    /// Twice the centroid (the halving cancels out of the binning).
+    fn centroid2(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo + self.hi)
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Bounds {
+    lo: Vec3A,
+    hi: Vec3A,
+}
+
+impl Bounds {
+    const EMPTY: Bounds = Bounds { lo: Vec3A::INFINITY, hi: Vec3A::NEG_INFINITY };
+
+    fn grow(&mut self, r: &Record) {
+        self.lo = self.lo.min(Vec3A::from_vec4(r.lo));
+        self.hi = self.hi.max(Vec3A::from_vec4(r.hi));
+    }
+
+    fn union(self, o: Bounds) -> Bounds {
+        Bounds { lo: self.lo.min(o.lo), hi: self.hi.max(o.hi) }
+    }
+
+    fn half_area(&self) -> f32 {
+        let d = (self.hi - self.lo).max(Vec3A::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+}
+
+const BINS: usize = 16;
+/// Ranges at least this long are binned in parallel, and their subtrees built in parallel.
+const PARALLEL: usize = 1 << 15;
+
+#[derive(Clone, Copy)]
+struct Bins {
+    bounds: [[Bounds; BINS]; 3],
+    count: [[u32; BINS]; 3],
+}
+
+impl Bins {
+    fn new() -> Bins {
+        Bins { bounds: [[Bounds::EMPTY; BINS]; 3], count: [[0; BINS]; 3] }
+    }
+
+    fn merge(mut self, o: &Bins) -> Bins {
+        for axis in 0..3 {
+            for b in 0..BINS {
+                self.bounds[axis][b] = self.bounds[axis][b].union(o.bounds[axis][b]);
+                self.count[axis][b] += o.count[axis][b];
+            }
+        }
+        self
+    }
+}
+
+/// Maps centroids to bins along each axis.
+#[derive(Clone, Copy)]
+struct Binning {
+    origin: Vec3A,
+    scale: Vec3A,
+}
+
+impl Binning {
+    fn bin(&self, r: &Record) -> [usize; 3] {
+        let b = ((r.centroid2() - self.origin) * self.scale).min(Vec3A::splat((BINS - 1) as f32)).max(Vec3A::ZERO);
+        [b.x as usize, b.y as usize, b.z as usize]
+    }
+
+    /// `bin(r)[axis]`, computed for that axis alone (the same arithmetic: the same answer).
+    fn bin_on(&self, r: &Record, axis: usize) -> usize {
+        let c = r.centroid2()[axis];
+        ((c - self.origin[axis]) * self.scale[axis]).min((BINS - 1) as f32).max(0.0) as usize
+    }
+}
+
+/// The box around the centroids (doubled, as `Record::centroid2`) of a range.
+#[derive(Clone, Copy)]
+struct Centroids {
+    lo: Vec3A,
+    hi: Vec3A,
+}
+
+impl Centroids {
+    const EMPTY: Centroids = Centroids { lo: Vec3A::INFINITY, hi: Vec3A::NEG_INFINITY };
+
+    fn of(records: &[Record]) -> Centroids {
+        let grow = |c: Centroids, r: &Record| Centroids { lo: c.lo.min(r.centroid2()), hi: c.hi.max(r.centroid2()) };
+        if records.len() >= PARALLEL {
+            records
+                .par_chunks(4096)
+                .map(|chunk| chunk.iter().fold(Centroids::EMPTY, grow))
+                .reduce(|| Centroids::EMPTY, |a, b| Centroids { lo: a.lo.min(b.lo), hi: a.hi.max(b.hi) })
+        } else {
+            records.iter().fold(Centroids::EMPTY, grow)
+        }
+    }
+}
+
+/// Leaves count in blocks of four triangles (one SIMD test each).
+fn blocks(n: u32) -> f32 {
+    n.div_ceil(LEAF_SIZE) as f32
+}
+
+/// One part of a split range: where it ends (the first part) or starts (the second), the box
+/// around its triangles, and the box around their centroids.
+type Part = (usize, Bounds, Centroids);
+
+/// Splits `records` (whose centroids `centroids` bounds) in two by binned SAH. Every split
+/// leaves both parts non-empty.
+fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
+    let extent = centroids.hi - centroids.lo;
+    let scale = Vec3A::select(extent.cmpgt(Vec3A::ZERO), Vec3A::splat(BINS as f32 * 0.9999) / extent, Vec3A::ZERO);
+    let binning = Binning { origin: centroids.lo, scale };
+    let fill = |bins: &mut Bins, chunk: &[Record]| {
+        for r in chunk {
+            for (axis, b) in binning.bin(r).into_iter().enumerate() {
+                bins.bounds[axis][b].grow(r);
+                bins.count[axis][b] += 1;
+            }
+        }
+    };
+    let bins = if records.len() >= PARALLEL {
+        records
+            .par_chunks(4096)
+            .map(|c| {
+                let mut b = Bins::new();
+                fill(&mut b, c);
+                b
+            })
+            .reduce(Bins::new, |a, b| a.merge(&b))
+    } else {
+        let mut b = Bins::new();
+        fill(&mut b, records);
+        b
+    };
+    // The cheapest plane over the three axes: A(left) * blocks(left) + A(right) * blocks(right).
+    let mut best: Option<(f32, usize, usize, Bounds, Bounds)> = None;
+    for axis in 0..3 {
+        if extent[axis] <= 0.0 {
+            continue;
+        }
+        let mut right = [(Bounds::EMPTY, 0u32); BINS];
+        let mut acc = (Bounds::EMPTY, 0u32);
+        for b in (1..BINS).rev() {
+            acc = (acc.0.union(bins.bounds[axis][b]), acc.1 + bins.count[axis][b]);
+            right[b] = acc;
+        }
+        let mut left = (Bounds::EMPTY, 0u32);
+        for (b, &(rb, rn)) in right.iter().enumerate().skip(1) {
+            left = (left.0.union(bins.bounds[axis][b - 1]), left.1 + bins.count[axis][b - 1]);
+            if left.1 == 0 || rn == 0 {
+                continue;
+            }
+            let cost = left.0.half_area() * blocks(left.1) + rb.half_area() * blocks(rn);
+            if best.is_none_or(|(c, ..)| cost < c) {
+                best = Some((cost, axis, b, left.0, rb));
+            }
+        }
+    }
+    let Some((_, axis, plane, lb, rb)) = best else {
+        // Every centroid in one place: halve by count.
+        let mid = records.len() / 2;
+        let bounds = |rs: &[Record]| {
+            rs.iter().fold(Bounds::EMPTY, |mut b, r| {
+                b.grow(r);
+                b
+            })
+        };
+        let (l, r) = records.split_at(mid);
+        return ((mid, bounds(l), Centroids::of(l)), (mid, bounds(r), Centroids::of(r)));
+    };
+    // Partition in place, records left of the plane first, noting each side's centroids.
+    let (mut i, mut j) = (0, records.len());
+    let (mut lc, mut rc) = (Centroids::EMPTY, Centroids::EMPTY);
+    while i < j {
+        let r = records[i];
+        let c = r.centroid2();
+        if binning.bin_on(&r, axis) < plane {
+            lc = Centroids { lo: lc.lo.min(c), hi: lc.hi.max(c) };
+            i += 1;
+        } else {
+            rc = Centroids { lo: rc.lo.min(c), hi: rc.hi.max(c) };
+            j -= 1;
+            records.swap(i, j);
+        }
+    }
+    ((i, lb, lc), (i, rb, rc))
+}
+
+/// The nodes under construction (or those of one subtree, built on another thread). While
+/// building, a leaf's reference is `LEAF | its first record` and `lens` holds its length; the
+/// leaves themselves are made at the end, when the records are in their final order.
+#[derive(Default)]
+struct Out {
+    nodes: Vec<Node>,
+    lens: Vec<[u8; 4]>,
+}
+
+impl Out {
+    /// Appends a subtree built elsewhere; returns its root's reference here.
+    fn append(&mut self, sub: Out, root: u32) -> u32 {
+        let n0 = self.nodes.len() as u32;
+        let moved = |c: u32| if c & LEAF != 0 { c } else { c + n0 };
+        self.nodes.extend(sub.nodes.into_iter().map(|mut n| {
+            n.child = n.child.map(moved);
+            n
+        }));
+        self.lens.extend(sub.lens);
+        moved(root)
+    }
+}
+
+/// Builds the subtree over `records` (starting at record `first` of all, whose centroids
+/// `centroids` bounds) into `out`: the reference of its root, an inner node.
+fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut Out) -> u32 {
+    // Children as (start, end, bounds, centroids) in `records`, in order; split the one with
+    // the largest surface (of those with more than a leaf's worth) until there are four.
+    let mut kids: Vec<(usize, usize, Bounds, Centroids)> = Vec::with_capacity(4);
+    let ((mid, lb, lc), (_, rb, rc)) = split(records, centroids);
+    kids.push((0, mid, lb, lc));
+    kids.push((mid, records.len(), rb, rc));
+    while kids.len() < 4 {
+        let Some((k, _)) = kids
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| (c.1 - c.0) as u32 > LEAF_SIZE)
+            .max_by(|a, b| a.1 .2.half_area().total_cmp(&b.1 .2.half_area()))
+        else {
+            break;
+        };
+        let (s, e, _, c) = kids[k];
+        let ((mid, lb, lc), (_, rb, rc)) = split(&mut records[s..e], c);
+        kids[k] = (s, s + mid, lb, lc);
+        kids.insert(k + 1, (s + mid, e, rb, rc));
+    }
+    let index = out.nodes.len();
+    let mut node = Node::EMPTY;
+    let mut lens = [0u8; 4];
+    for (lane, &(s, e, b, _)) in kids.iter().enumerate() {
+        for axis in 0..3 {
+            node.bounds[0][axis][lane] = b.lo[axis];
+            node.bounds[1][axis][lane] = b.hi[axis];
+        }
+        if (e - s) as u32 <= LEAF_SIZE {
+            node.child[lane] = LEAF | (first + s) as u32;
+            lens[lane] = (e - s) as u8;
+        }
+    }
+    out.nodes.push(node);
+    out.lens.push(lens);
+    // The inner children's ranges, as disjoint slices.
+    let mut parts: Vec<(usize, &mut [Record], usize, Centroids)> = Vec::with_capacity(4);
+    let mut rest = records;
+    let mut at = 0;
+    for (lane, &(s, e, _, c)) in kids.iter().enumerate() {
+        debug_assert_eq!(s, at);
+        let (part, tail) = rest.split_at_mut(e - at);
+        if lens[lane] == 0 {
+            parts.push((lane, part, first + s, c));
+        }
+        rest = tail;
+        at = e;
+    }
+    if at >= PARALLEL {
+        let subs: Vec<(usize, Out, u32)> = parts
+            .into_par_iter()
+            .map(|(lane, part, first, c)| {
+                let mut sub = Out::default();
+                let root = subtree(part, first, c, &mut sub);
+                (lane, sub, root)
+            })
+            .collect();
+        for (lane, sub, root) in subs {
+            out.nodes[index].child[lane] = out.append(sub, root);
+        }
+    } else {
+        for (lane, part, first, c) in parts {
+            out.nodes[index].child[lane] = subtree(part, first, c, out);
+        }
+    }
+    index as u32
+}
+
+/// The tree over `count` triangles whose corners `corners` gives: (nodes, leaves, root).
+pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> (Vec<Node>, Vec<Tri4>, u32) {
+    if count == 0 {
+        return (Vec::new(), Vec::new(), EMPTY);
+    }
+    if count as u32 <= LEAF_SIZE {
+        let ids: Vec<u32> = (0..count as u32).collect();
+        return (Vec::new(), vec![Tri4::new(&ids, |i| corners(i as usize))], LEAF);
+    }
+    let record = |i: usize| {
+        let [a, b, c] = corners(i);
+        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+        Record { lo: lo.extend(f32::from_bits(i as u32)), hi: hi.extend(0.0) }
+    };
+    let mut records: Vec<Record> = if count >= PARALLEL {
+        (0..count).into_par_iter().map(record).collect()
+    } else {
+        (0..count).map(record).collect()
+    };
+    let mut out = Out::default();
+    let centroids = Centroids::of(&records);
+    let root = subtree(&mut records, 0, centroids, &mut out);
+    // The leaves, numbered in node order, each as the triangles of its records; the records
+    // go before the leaves are made (peak memory).
+    let mut ids: Vec<([u32; 4], u8)> = Vec::new();
+    for (node, lens) in out.nodes.iter_mut().zip(&out.lens) {
+        for lane in 0..4 {
+            if lens[lane] > 0 {
+                let first = (node.child[lane] & !LEAF) as usize;
+                let mut leaf = [0u32; 4];
+                for (k, r) in records[first..first + lens[lane] as usize].iter().enumerate() {
+                    leaf[k] = r.index();
+                }
+                node.child[lane] = LEAF | ids.len() as u32;
+                ids.push((leaf, lens[lane]));
+            }
+        }
+    }
+    drop(records);
+    let make = |(leaf, n): &([u32; 4], u8)| Tri4::new(&leaf[..*n as usize], |i| corners(i as usize));
+    let leaves: Vec<Tri4> =
+        if ids.len() >= PARALLEL { ids.par_iter().map(make).collect() } else { ids.iter().map(make).collect() };
+    (out.nodes, leaves, root)
+}
