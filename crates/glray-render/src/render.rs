@@ -280,31 +280,49 @@ impl Job<'_> {
         let x1 = ((v.x as i64 + v.width as i64).max(0) as usize).min(w);
         let rows_done = AtomicUsize::new(0);
         let progress = Progress::new(self.progress, h);
-        let process = |y: usize, row: &mut [u8], drow: &mut [f32], mut crow: Option<&mut [Vec4]>| {
-            if (y as i64) >= v.y as i64 && (y as i64) < v.y as i64 + v.height as i64 {
+        let inside = |y: usize| (y as i64) >= v.y as i64 && (y as i64) < v.y as i64 + v.height as i64;
+        // Rows go in pairs, pixels in 2x2 quads: the camera rays of a quad are traced together.
+        let process = |pair: usize, rows: &mut [u8], drows: &mut [f32], mut crows: Option<&mut [Vec4]>| {
+            let y0 = 2 * pair;
+            let last = y0 + drows.len() / w - 1;
+            if (inside(y0) || inside(last)) && x0 < x1 {
                 let mut scratch = Scratch::default();
-                for x in x0..x1 {
-                    let under = from_u8(&row[4 * x..4 * x + 4]);
-                    if let Some((color, d)) = tracer.pixel(x, y, under, drow[x] as f64, &mut scratch) {
-                        row[4 * x..4 * x + 4].copy_from_slice(&to_u8(color));
-                        if let Some(c) = crow.as_deref_mut() {
-                            c[x] = color.clamp(Vec4::ZERO, Vec4::ONE);
+                for x in (x0..x1).step_by(2) {
+                    let right = (x + 1).min(x1 - 1);
+                    let pixels = [(x, y0), (right, y0), (x, last), (right, last)];
+                    let centers = tracer.centers(pixels);
+                    for (k, &(px, py)) in pixels.iter().enumerate() {
+                        // A quad cut by the image's last column or row repeats a pixel.
+                        let repeated = (k & 1 == 1 && px == x) || (k >= 2 && py == y0);
+                        if repeated || !inside(py) {
+                            continue;
                         }
-                        if let Some(d) = d {
-                            drow[x] = d as f32;
+                        let at = (py - y0) * w + px;
+                        let under = from_u8(&rows[4 * at..4 * at + 4]);
+                        let center = centers.map(|c| c[k]);
+                        if let Some((color, d)) = tracer.pixel(px, py, under, drows[at] as f64, center, &mut scratch) {
+                            rows[4 * at..4 * at + 4].copy_from_slice(&to_u8(color));
+                            if let Some(c) = crows.as_deref_mut() {
+                                c[at] = color.clamp(Vec4::ZERO, Vec4::ONE);
+                            }
+                            if let Some(d) = d {
+                                drows[at] = d as f32;
+                            }
                         }
                     }
                 }
                 rays.fetch_add(scratch.rays.get(), Ordering::Relaxed);
             }
-            progress.row_done(rows_done.fetch_add(1, Ordering::Relaxed) + 1);
-        };
-        let rows = rgba.par_chunks_mut(4 * w).zip(depth.par_chunks_mut(w)).enumerate();
-        match colors.as_mut() {
-            Some(c) => {
-                rows.zip(c.par_chunks_mut(w)).for_each(|((y, (row, drow)), crow)| process(y, row, drow, Some(crow)))
+            for _ in y0..=last {
+                progress.row_done(rows_done.fetch_add(1, Ordering::Relaxed) + 1);
             }
-            None => rows.for_each(|(y, (row, drow))| process(y, row, drow, None)),
+        };
+        let pairs = rgba.par_chunks_mut(8 * w).zip(depth.par_chunks_mut(2 * w)).enumerate();
+        match colors.as_mut() {
+            Some(c) => pairs
+                .zip(c.par_chunks_mut(2 * w))
+                .for_each(|((pair, (rows, drows)), crows)| process(pair, rows, drows, Some(crows))),
+            None => pairs.for_each(|(pair, (rows, drows))| process(pair, rows, drows, None)),
         }
         progress.finish();
         stats.trace = start.elapsed();

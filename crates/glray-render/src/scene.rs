@@ -345,6 +345,39 @@ impl<'f> Scene<'f> {
         best.map(|(id, t)| Hit { id, t, sequence: self.sequence(id) })
     }
 
+    /// The closest hits of four rays (coherent ones: a 2x2 quad of camera rays), as `closest`
+    /// finds each.
+    pub fn closest4(&self, rays: [Ray; 4]) -> [Option<Hit>; 4] {
+        if self.top.is_some() {
+            // Many instances: the top level is walked ray by ray.
+            return rays.map(|r| self.closest(r));
+        }
+        let mut best: [Option<(TriangleId, f32)>; 4] = [None; 4];
+        let mut rays = rays;
+        let keep = |best: &mut [Option<(TriangleId, f32)>; 4],
+                    rays: &mut [Ray; 4],
+                    hits: [Option<(u32, f32)>; 4],
+                    instance: u32| {
+            for (j, hit) in hits.into_iter().enumerate() {
+                if let Some((index, t)) = hit {
+                    best[j] = Some((TriangleId { instance, index }, t));
+                    rays[j].tmax = t;
+                }
+            }
+        };
+        let hits = self.bvh.closest4(&rays, |_, _| true);
+        keep(&mut best, &mut rays, hits, TriangleId::FLAT);
+        for (k, b) in self.boxes.iter().enumerate() {
+            if rays.iter().all(|r| b.intersect_ray(r) == f32::INFINITY) {
+                continue;
+            }
+            let p = &self.placed[k];
+            let hits = p.bvh.bvh.closest4(&rays.map(|r| p.ray(&r)), |_, det| p.drawn(det));
+            keep(&mut best, &mut rays, hits, k as u32);
+        }
+        best.map(|b| b.map(|(id, t)| Hit { id, t, sequence: self.sequence(id) }))
+    }
+
     /// Every hit in [tmin, tmax], in no particular order.
     pub fn all(&self, ray: Ray, out: &mut Vec<Hit>) {
         out.clear();

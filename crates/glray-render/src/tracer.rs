@@ -5,7 +5,7 @@
 use std::cell::Cell;
 
 use glam::{DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
-use glray_capture::camera::Camera;
+use glray_capture::camera::{Camera, Ray as EyeRay};
 use glray_capture::frame::{Frame, Triangle, TriangleId};
 use glray_capture::lighting::Light;
 use obvhs::ray::Ray;
@@ -63,12 +63,14 @@ fn count(rays: &Cell<u64>, n: u64) {
 impl Tracer<'_> {
     /// Pixel (x, y) over what it held (`under`, `depth_under`): its colour and, when a surface
     /// covers its centre, its depth; None when no sample hit anything (it keeps what it held).
+    /// `center`: the closest hit of the ray through the pixel's centre, when `centers` found it.
     pub fn pixel(
         &self,
         x: usize,
         y: usize,
         under: Vec4,
         depth_under: f64,
+        center: Option<Option<Hit>>,
         s: &mut Scratch,
     ) -> Option<(Vec4, Option<f64>)> {
         let n = self.options.effects.samples.max(1);
@@ -80,7 +82,16 @@ impl Tracer<'_> {
             let mut sampler = Sampler::new(&[x as u32, y as u32, k]);
             // The first sample of all at the pixel centre: exactly where GL samples.
             let at = if k == 0 { Vec2::splat(0.5) } else { stratified(i, n, sampler.next2()) };
-            match self.sample(x as f64 + at.x as f64, y as f64 + at.y as f64, under, depth_under, &mut sampler, s) {
+            let known = if k == 0 { center } else { None };
+            match self.sample(
+                x as f64 + at.x as f64,
+                y as f64 + at.y as f64,
+                under,
+                depth_under,
+                known,
+                &mut sampler,
+                s,
+            ) {
                 Some((c, d)) => {
                     any = true;
                     sum += c;
@@ -94,25 +105,47 @@ impl Tracer<'_> {
         any.then(|| (sum / n as f32, depth))
     }
 
-    /// One camera ray through window position (px, py).
+    /// The camera ray through window position (px, py): in double precision, and as traced.
+    fn camera_ray(&self, px: f64, py: f64) -> (EyeRay, Ray) {
+        let r = self.camera.ray(px, py);
+        // GL keeps what lies exactly on the near and far planes (backgrounds are often drawn at
+        // z = 1): a hair of slack keeps float rounding from dropping them.
+        let slack = (r.t_max * 1e-4) as f32;
+        let ray = Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack);
+        (r, ray)
+    }
+
+    /// The closest hits of the rays through the centres of four pixels (a 2x2 quad), traced
+    /// together, when the closest hit is what decides a pixel's first sample (None otherwise).
+    pub fn centers(&self, pixels: [(usize, usize); 4]) -> Option<[Option<Hit>; 4]> {
+        if !self.simple || self.pass != 0 {
+            return None;
+        }
+        let rays = pixels.map(|(x, y)| self.camera_ray(x as f64 + 0.5, y as f64 + 0.5).1);
+        Some(self.scene.closest4(rays))
+    }
+
+    /// One camera ray through window position (px, py); `known`, its closest hit if found
+    /// already.
+    #[allow(clippy::too_many_arguments)]
     fn sample(
         &self,
         px: f64,
         py: f64,
         under: Vec4,
         depth_under: f64,
+        known: Option<Option<Hit>>,
         sampler: &mut Sampler,
         s: &mut Scratch,
     ) -> Option<(Vec4, f64)> {
-        let r = self.camera.ray(px, py);
-        // GL keeps what lies exactly on the near and far planes (backgrounds are often drawn at
-        // z = 1): a hair of slack keeps float rounding from dropping them.
-        let slack = (r.t_max * 1e-4) as f32;
-        let ray = Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack);
+        let (r, ray) = self.camera_ray(px, py);
         count(&s.rays, 1);
         let at = |hit: &Hit| r.origin + r.direction * hit.t as f64;
         if self.simple {
-            let hit = self.scene.closest(ray)?;
+            let hit = match known {
+                Some(hit) => hit,
+                None => self.scene.closest(ray),
+            }?;
             let t = s.triangle(self.frame, hit.id)?;
             let f = self.surface(&t, at(&hit), r.direction, sampler, &s.rays, 0);
             // Over the last frame (no clear), the depth it left still tests.

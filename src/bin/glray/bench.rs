@@ -210,18 +210,36 @@ fn kernels(frame: &Frame, ao: u32, frames: u32) -> Kernels {
     .expect("an invertible projection");
     let (w, h) = (frame.width as usize, frame.height as usize);
     let mut records: Vec<Option<HitRecord>> = vec![None; w * h];
+    let record = |ray: &Ray, hit: Option<glray_render::scene::Hit>| {
+        hit.map(|hit| {
+            let d = Vec3::from(ray.direction);
+            let mut n = scene.geometric_normal(hit.id).normalize_or_zero();
+            if n.dot(d) > 0.0 {
+                n = -n;
+            }
+            HitRecord { p: Vec3::from(ray.origin) + d * hit.t, n }
+        })
+    };
+    let ray = |x: usize, y: usize| {
+        let r = camera.ray(x as f64 + 0.5, y as f64 + 0.5);
+        Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), 0.0, r.t_max as f32)
+    };
+    // In 2x2 quads of camera rays, as the renderer traces them.
     let trace = |records: &mut Vec<Option<HitRecord>>| {
-        records.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-            for (x, out) in row.iter_mut().enumerate() {
-                let r = camera.ray(x as f64 + 0.5, y as f64 + 0.5);
-                let (o, d) = (r.origin.as_vec3a(), r.direction.as_vec3a());
-                *out = scene.closest(Ray::new(o, d, 0.0, r.t_max as f32)).map(|hit| {
-                    let mut n = scene.geometric_normal(hit.id).normalize_or_zero();
-                    if n.dot(d.into()) > 0.0 {
-                        n = -n;
-                    }
-                    HitRecord { p: Vec3::from(o + d * hit.t), n }
+        records.par_chunks_mut(2 * w).enumerate().for_each(|(pair, rows)| {
+            let y0 = 2 * pair;
+            let two = rows.len() > w;
+            for x0 in (0..w).step_by(2) {
+                let at = |k: usize| ((x0 + (k & 1)).min(w - 1), if two { y0 + (k >> 1) } else { y0 });
+                let rays: [Ray; 4] = std::array::from_fn(|k| {
+                    let (x, y) = at(k);
+                    ray(x, y)
                 });
+                let hits = scene.closest4(rays);
+                for k in 0..4 {
+                    let (x, y) = at(k);
+                    rows[(y - y0) * w + x] = record(&rays[k], hits[k]);
+                }
             }
         });
     };

@@ -9,6 +9,7 @@
 //! Embree's with 3x the memory (docs/performance.md).
 
 mod build;
+mod packet;
 
 use std::mem::MaybeUninit;
 
@@ -234,8 +235,16 @@ impl TriBvh {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
-                    // Two or more: visit the nearest now, the others nearest first after it.
                     let tn = tnear.to_array();
+                    if rest & (rest - 1) == 0 {
+                        // Two (the common case): the nearer now, the other later.
+                        let (a, b) = (mask.trailing_zeros() as usize, rest.trailing_zeros() as usize);
+                        let (near, far) = if tn[a] <= tn[b] { (a, b) } else { (b, a) };
+                        stack.push(node.child[far], tn[far]);
+                        cur = node.child[near];
+                        continue;
+                    }
+                    // More: visit the nearest now, the others nearest first after it.
                     let mut hits = [(0.0f32, 0u32); 4];
                     let mut n = 0;
                     let mut m = mask;
