@@ -138,46 +138,40 @@ fn hit_triangles(tri: &Tri4, r: &Prepared, tmax: f32) -> (u32, Vec4, Vec4) {
     (ok.bitmask(), t, det)
 }
 
-/// The traversal stack: a fixed array (no allocation or clearing per ray), spilling into a Vec
+/// A traversal stack: a fixed array (no allocation or clearing per walk), spilling into a Vec
 /// for the rare tree deeper than it holds.
-struct Stack {
-    items: [MaybeUninit<(u32, f32)>; 192],
+struct Stack<T> {
+    items: [MaybeUninit<T>; 192],
     len: usize,
-    spill: Vec<(u32, f32)>,
+    spill: Vec<T>,
 }
 
-impl Stack {
+impl<T: Copy> Stack<T> {
     #[inline(always)]
-    fn new() -> Stack {
+    fn new() -> Stack<T> {
         Stack { items: [const { MaybeUninit::uninit() }; 192], len: 0, spill: Vec::new() }
     }
 
     #[inline(always)]
-    fn push(&mut self, child: u32, tnear: f32) {
+    fn push(&mut self, entry: T) {
         if self.len < self.items.len() {
-            self.items[self.len].write((child, tnear));
+            self.items[self.len].write(entry);
             self.len += 1;
         } else {
-            self.spill.push((child, tnear));
+            self.spill.push(entry);
         }
     }
 
-    /// The most recently pushed entry whose box starts within `tmax`.
     #[inline(always)]
-    fn pop(&mut self, tmax: f32) -> Option<u32> {
-        loop {
-            let (child, tnear) = if let Some(e) = self.spill.pop() {
-                e
-            } else if self.len > 0 {
-                self.len -= 1;
-                // SAFETY: entries below `len` were written by `push` and not popped since.
-                unsafe { self.items[self.len].assume_init() }
-            } else {
-                return None;
-            };
-            if tnear <= tmax {
-                return Some(child);
-            }
+    fn pop(&mut self) -> Option<T> {
+        if let Some(e) = self.spill.pop() {
+            Some(e)
+        } else if self.len > 0 {
+            self.len -= 1;
+            // SAFETY: entries below `len` were written by `push` and not popped since.
+            Some(unsafe { self.items[self.len].assume_init() })
+        } else {
+            None
         }
     }
 }
@@ -212,7 +206,7 @@ impl TriBvh {
         }
         let r = Prepared::new(ray);
         let mut tmax = ray.tmax;
-        let mut stack = Stack::new();
+        let mut stack: Stack<(u32, f32)> = Stack::new();
         let mut cur = self.root;
         loop {
             if cur & LEAF == 0 {
@@ -230,7 +224,7 @@ impl TriBvh {
                         while m != 0 {
                             let k = m.trailing_zeros() as usize;
                             m &= m - 1;
-                            stack.push(node.child[k], tn[k]);
+                            stack.push((node.child[k], tn[k]));
                         }
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
@@ -240,7 +234,7 @@ impl TriBvh {
                         // Two (the common case): the nearer now, the other later.
                         let (a, b) = (mask.trailing_zeros() as usize, rest.trailing_zeros() as usize);
                         let (near, far) = if tn[a] <= tn[b] { (a, b) } else { (b, a) };
-                        stack.push(node.child[far], tn[far]);
+                        stack.push((node.child[far], tn[far]));
                         cur = node.child[near];
                         continue;
                     }
@@ -261,7 +255,7 @@ impl TriBvh {
                     }
                     // `hits` is farthest first: push all but the nearest.
                     for &(t, c) in &hits[..n - 1] {
-                        stack.push(c, t);
+                        stack.push((c, t));
                     }
                     cur = hits[n - 1].1;
                     continue;
@@ -269,9 +263,16 @@ impl TriBvh {
             } else if leaf(&self.leaves[(cur & !LEAF) as usize], &r, &mut tmax) {
                 return;
             }
-            match stack.pop(tmax) {
-                Some(c) => cur = c,
-                None => return,
+            // The next subtree the ray still reaches.
+            loop {
+                match stack.pop() {
+                    Some((c, tnear)) if tnear <= tmax => {
+                        cur = c;
+                        break;
+                    }
+                    Some(_) => continue,
+                    None => return,
+                }
             }
         }
     }

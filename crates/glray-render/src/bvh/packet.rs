@@ -6,7 +6,7 @@
 use glam::{BVec4A, Vec4};
 use obvhs::ray::Ray;
 
-use super::{Node, Tri4, TriBvh, EDGE, EMPTY, LEAF};
+use super::{Node, Stack, Tri4, TriBvh, EDGE, EMPTY, LEAF};
 
 /// Four rays, one per lane.
 struct Rays4 {
@@ -83,7 +83,7 @@ impl TriBvh {
         let r = Rays4::new(rays);
         let mut tmax = Vec4::from_array(rays.map(|r| r.tmax));
         // Entries: a subtree and where each ray enters its box (infinity: the ray missed it).
-        let mut stack: Vec<(u32, Vec4)> = Vec::with_capacity(64);
+        let mut stack: Stack<(u32, Vec4)> = Stack::new();
         let mut cur = (self.root, Vec4::splat(f32::NEG_INFINITY));
         loop {
             let active = cur.1.cmple(tmax);
