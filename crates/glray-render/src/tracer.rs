@@ -38,21 +38,21 @@ pub(crate) struct Scratch {
     hits: Vec<Hit>,
     frags: Vec<(Hit, Fragment)>,
     pub rays: Cell<u64>,
-    /// The triangle the last camera ray hit: neighbouring pixels mostly hit the same one, and
-    /// an instance's triangle is made (lit, faced) when it is needed.
-    last: Option<(TriangleId, Option<Triangle>)>,
+    last: LastTriangle,
 }
 
-impl Scratch {
-    fn triangle(&mut self, frame: &Frame, id: TriangleId) -> Option<Triangle> {
-        match self.last {
-            Some((last, t)) if last == id => t,
-            _ => {
-                let t = frame.triangle(id);
-                self.last = Some((id, t));
-                t
-            }
+/// The triangle the last camera ray hit: neighbouring pixels mostly hit the same one, and an
+/// instance's triangle is made (lit, faced) when it is needed. Lent, not copied (a triangle
+/// with its lighting is a few hundred bytes).
+#[derive(Default)]
+struct LastTriangle(Option<(TriangleId, Option<Triangle>)>);
+
+impl LastTriangle {
+    fn get(&mut self, frame: &Frame, id: TriangleId) -> Option<&Triangle> {
+        if !matches!(self.0, Some((last, _)) if last == id) {
+            self.0 = Some((id, frame.triangle(id)));
         }
+        self.0.as_ref().and_then(|(_, t)| t.as_ref())
     }
 }
 
@@ -146,8 +146,8 @@ impl Tracer<'_> {
                 Some(hit) => hit,
                 None => self.scene.closest(ray),
             }?;
-            let t = s.triangle(self.frame, hit.id)?;
-            let f = self.surface(&t, at(&hit), r.direction, sampler, &s.rays, 0);
+            let t = s.last.get(self.frame, hit.id)?;
+            let f = self.surface(t, at(&hit), r.direction, sampler, &s.rays, 0);
             // Over the last frame (no clear), the depth it left still tests.
             if !self.frame.cleared && f.depth >= depth_under {
                 return None;
