@@ -109,33 +109,49 @@ fn hit_boxes(node: &Node, r: &Prepared, tmax: f32) -> (u32, Vec4) {
 /// rule guarantees; a strict test can miss both and leave a crack.
 const EDGE: f32 = 1e-6;
 
-/// Moller-Trumbore on four triangles: which lanes the ray hits within [tmin, tmax] (bit per
-/// lane), where, and each determinant (its sign says which face the ray sees: the geometric
-/// normal e1 x e2 dotted with the direction is -det).
+/// Moller-Trumbore, four (ray, triangle) pairs at once, one per lane: which lanes hit within
+/// [tmin, tmax] (bit per lane), where, and each determinant (its sign says which face the ray
+/// sees: the geometric normal e1 x e2 dotted with the direction is -det). A lane is a ray
+/// against four triangles (`hit_triangles`) or four rays against one (`packet`).
 #[inline(always)]
-fn hit_triangles(tri: &Tri4, r: &Prepared, tmax: f32) -> (u32, Vec4, Vec4) {
-    let [dx, dy, dz] = r.direction;
-    let [e1x, e1y, e1z] = tri.e1;
-    let [e2x, e2y, e2z] = tri.e2;
+#[allow(clippy::too_many_arguments)]
+fn moller_trumbore(
+    origin: &[Vec4; 3],
+    direction: &[Vec4; 3],
+    v0: &[Vec4; 3],
+    e1: &[Vec4; 3],
+    e2: &[Vec4; 3],
+    tmin: Vec4,
+    tmax: Vec4,
+) -> (u32, Vec4, Vec4) {
+    let [dx, dy, dz] = *direction;
+    let [e1x, e1y, e1z] = *e1;
+    let [e2x, e2y, e2z] = *e2;
     let (px, py, pz) = (dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x);
     let det = e1x * px + e1y * py + e1z * pz;
     let inv = Vec4::ONE / det;
-    let (sx, sy, sz) = (r.origin[0] - tri.v0[0], r.origin[1] - tri.v0[1], r.origin[2] - tri.v0[2]);
+    let (sx, sy, sz) = (origin[0] - v0[0], origin[1] - v0[1], origin[2] - v0[2]);
     let u = (sx * px + sy * py + sz * pz) * inv;
     let (qx, qy, qz) = (sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x);
     let v = (dx * qx + dy * qy + dz * qz) * inv;
     let t = (e2x * qx + e2y * qy + e2z * qz) * inv;
-    let lo = Vec4::splat(-EDGE);
-    let hi = Vec4::splat(1.0 + EDGE);
+    let (lo, hi) = (Vec4::splat(-EDGE), Vec4::splat(1.0 + EDGE));
     let ok = det.cmpne(Vec4::ZERO)
         & det.is_finite_mask()
         & u.cmpge(lo)
         & u.cmple(hi)
         & v.cmpge(lo)
         & (u + v).cmple(hi)
-        & t.cmpge(Vec4::splat(r.tmin))
-        & t.cmple(Vec4::splat(tmax));
+        & t.cmpge(tmin)
+        & t.cmple(tmax);
     (ok.bitmask(), t, det)
+}
+
+/// One ray against a leaf's four triangles (see `moller_trumbore`).
+#[inline(always)]
+fn hit_triangles(tri: &Tri4, r: &Prepared, tmax: f32) -> (u32, Vec4, Vec4) {
+    let (tmin, tmax) = (Vec4::splat(r.tmin), Vec4::splat(tmax));
+    moller_trumbore(&r.origin, &r.direction, &tri.v0, &tri.e1, &tri.e2, tmin, tmax)
 }
 
 /// A traversal stack: a fixed array (no allocation or clearing per walk), spilling into a Vec

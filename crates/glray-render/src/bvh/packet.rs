@@ -6,7 +6,7 @@
 use glam::{BVec4A, Vec4};
 use obvhs::ray::Ray;
 
-use super::{Node, Stack, Tri4, TriBvh, EDGE, EMPTY, LEAF};
+use super::{moller_trumbore, Node, Stack, Tri4, TriBvh, EMPTY, LEAF};
 
 /// Four rays, one per lane.
 struct Rays4 {
@@ -47,30 +47,11 @@ fn hit_box(node: &Node, k: usize, r: &Rays4, tmax: Vec4) -> (BVec4A, Vec4) {
 }
 
 /// Triangle `k` of a leaf against the four rays: which rays hit it before their `tmax` (bit
-/// per ray), where, and the determinants (see `hit_triangles`).
+/// per ray), where, and the determinants (see `moller_trumbore`).
 #[inline(always)]
 fn hit_triangle(tri: &Tri4, k: usize, r: &Rays4, tmax: Vec4) -> (u32, Vec4, Vec4) {
-    let s = |v: &[Vec4; 3]| [Vec4::splat(v[0][k]), Vec4::splat(v[1][k]), Vec4::splat(v[2][k])];
-    let ([e1x, e1y, e1z], [e2x, e2y, e2z], v0) = (s(&tri.e1), s(&tri.e2), s(&tri.v0));
-    let [dx, dy, dz] = r.direction;
-    let (px, py, pz) = (dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x);
-    let det = e1x * px + e1y * py + e1z * pz;
-    let inv = Vec4::ONE / det;
-    let (sx, sy, sz) = (r.origin[0] - v0[0], r.origin[1] - v0[1], r.origin[2] - v0[2]);
-    let u = (sx * px + sy * py + sz * pz) * inv;
-    let (qx, qy, qz) = (sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x);
-    let v = (dx * qx + dy * qy + dz * qz) * inv;
-    let t = (e2x * qx + e2y * qy + e2z * qz) * inv;
-    let (lo, hi) = (Vec4::splat(-EDGE), Vec4::splat(1.0 + EDGE));
-    let ok = det.cmpne(Vec4::ZERO)
-        & det.is_finite_mask()
-        & u.cmpge(lo)
-        & u.cmple(hi)
-        & v.cmpge(lo)
-        & (u + v).cmple(hi)
-        & t.cmpge(r.tmin)
-        & t.cmple(tmax);
-    (ok.bitmask(), t, det)
+    let lane = |v: &[Vec4; 3]| [Vec4::splat(v[0][k]), Vec4::splat(v[1][k]), Vec4::splat(v[2][k])];
+    moller_trumbore(&r.origin, &r.direction, &lane(&tri.v0), &lane(&tri.e1), &lane(&tri.e2), r.tmin, tmax)
 }
 
 impl TriBvh {
