@@ -184,16 +184,8 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
         }
     }
     let Some((_, axis, plane, lb, rb)) = best else {
-        // Every centroid in one place: halve by count.
-        let mid = records.len() / 2;
-        let bounds = |rs: &[Record]| {
-            rs.iter().fold(Bounds::EMPTY, |mut b, r| {
-                b.grow(r);
-                b
-            })
-        };
-        let (l, r) = records.split_at(mid);
-        return ((mid, bounds(l), Centroids::of(l)), (mid, bounds(r), Centroids::of(r)));
+        // Every centroid in one place.
+        return halve(records);
     };
     // Partition in place, records left of the plane first, noting each side's centroids.
     let (mut i, mut j) = (0, records.len());
@@ -210,7 +202,25 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
             records.swap(i, j);
         }
     }
+    if i == 0 || i == records.len() {
+        // Cannot happen (the bins counted both sides with the same arithmetic), but an empty
+        // side would never end: halve instead.
+        return halve(records);
+    }
     ((i, lb, lc), (i, rb, rc))
+}
+
+/// Splits `records` in two halves by count, whatever their positions.
+fn halve(records: &[Record]) -> (Part, Part) {
+    let mid = records.len() / 2;
+    let bounds = |rs: &[Record]| {
+        rs.iter().fold(Bounds::EMPTY, |mut b, r| {
+            b.grow(r);
+            b
+        })
+    };
+    let (l, r) = records.split_at(mid);
+    ((mid, bounds(l), Centroids::of(l)), (mid, bounds(r), Centroids::of(r)))
 }
 
 /// The nodes under construction (or those of one subtree, built on another thread). While
@@ -312,10 +322,6 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     if count == 0 {
         return (Vec::new(), Vec::new(), EMPTY);
     }
-    if count as u32 <= LEAF_SIZE {
-        let ids: Vec<u32> = (0..count as u32).collect();
-        return (Vec::new(), vec![Tri4::new(&ids, |i| corners(i as usize))], LEAF);
-    }
     let record = |i: usize| {
         let [a, b, c] = corners(i);
         let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
@@ -326,6 +332,17 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     } else {
         (0..count).map(record).collect()
     };
+    // A triangle with a NaN or infinite corner can never be hit (its determinant is not
+    // finite): it stays out, and no NaN or infinity reaches the bins and node bounds (SSE's
+    // min and max happen to drop a NaN in one operand order and keep it in the other).
+    records.retain(|r| Vec3A::from_vec4(r.lo).is_finite() && Vec3A::from_vec4(r.hi).is_finite());
+    if records.is_empty() {
+        return (Vec::new(), Vec::new(), EMPTY);
+    }
+    if records.len() as u32 <= LEAF_SIZE {
+        let ids: Vec<u32> = records.iter().map(Record::index).collect();
+        return (Vec::new(), vec![Tri4::new(&ids, |i| corners(i as usize))], LEAF);
+    }
     let mut out = Out::default();
     let centroids = Centroids::of(&records);
     let root = subtree(&mut records, 0, centroids, &mut out);

@@ -411,6 +411,34 @@ mod tests {
     }
 
     #[test]
+    fn degenerate_and_broken_triangles_build_and_trace_without_trouble() {
+        // A thousand copies of one triangle: every centroid in one place.
+        let one = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let bvh = build(&vec![one; 1000]);
+        let ray = Ray::new(Vec3A::new(0.2, 0.2, 1.0), Vec3A::NEG_Z, 0.0, f32::INFINITY);
+        assert!(bvh.closest(&ray, |_, _| true).is_some());
+        let mut n = 0;
+        bvh.each_hit(&ray, |_, _, _| n += 1);
+        assert_eq!(n, 1000);
+        // NaN and infinite corners are never hit, and do not hide the triangles around them.
+        let mut tris = soup(300);
+        for (k, bad) in [Vec3::NAN, Vec3::INFINITY, Vec3::NEG_INFINITY].into_iter().enumerate() {
+            tris[7 + 50 * k][1] = bad;
+            tris[299 - k][0] = bad;
+            tris[100 + k][2] = bad;
+        }
+        let bvh = build(&tris);
+        for k in 0..300 {
+            let o = Vec3A::new(random(k * 3 + 9_000), random(k * 3 + 9_001), 2.0);
+            let ray = Ray::new(o, Vec3A::NEG_Z, 0.0, f32::INFINITY);
+            assert_eq!(bvh.closest(&ray, |_, _| true), brute(&tris, &ray), "ray {k}");
+        }
+        // Nothing but broken triangles: an empty tree.
+        let bvh = build(&[[Vec3::NAN; 3]; 3]);
+        assert_eq!(bvh.closest(&ray, |_, _| true), None);
+    }
+
+    #[test]
     fn accept_skips_triangles_and_the_next_one_behind_counts() {
         // Two parallel squares' triangles facing +z, at z = 0 and z = -1.
         let quad = |z: f32| {
