@@ -439,6 +439,22 @@ mod tests {
     }
 
     #[test]
+    fn the_stack_spills_past_its_array_and_still_pops_last_in_first_out() {
+        let mut stack: Stack<(u32, f32)> = Stack::new();
+        for k in 0..500u32 {
+            stack.push((k, k as f32));
+        }
+        for k in (0..500u32).rev() {
+            assert_eq!(stack.pop(), Some((k, k as f32)));
+        }
+        assert_eq!(stack.pop(), None);
+        // And again after a spill: the array is reused.
+        stack.push((7, 0.5));
+        assert_eq!(stack.pop(), Some((7, 0.5)));
+        assert_eq!(stack.pop(), None);
+    }
+
+    #[test]
     fn accept_skips_triangles_and_the_next_one_behind_counts() {
         // Two parallel squares' triangles facing +z, at z = 0 and z = -1.
         let quad = |z: f32| {
