@@ -38,6 +38,14 @@ struct Bounds {
 impl Bounds {
     const EMPTY: Bounds = Bounds { lo: Vec3A::INFINITY, hi: Vec3A::NEG_INFINITY };
 
+    /// The box around a range's triangles.
+    fn of(records: &[Record]) -> Bounds {
+        records.iter().fold(Bounds::EMPTY, |mut b, r| {
+            b.grow(r);
+            b
+        })
+    }
+
     fn grow(&mut self, r: &Record) {
         self.lo = self.lo.min(Vec3A::from_vec4(r.lo));
         self.hi = self.hi.max(Vec3A::from_vec4(r.hi));
@@ -109,13 +117,17 @@ struct Centroids {
 impl Centroids {
     const EMPTY: Centroids = Centroids { lo: Vec3A::INFINITY, hi: Vec3A::NEG_INFINITY };
 
+    fn with(self, c: Vec3A) -> Centroids {
+        Centroids { lo: self.lo.min(c), hi: self.hi.max(c) }
+    }
+
     fn of(records: &[Record]) -> Centroids {
-        let grow = |c: Centroids, r: &Record| Centroids { lo: c.lo.min(r.centroid2()), hi: c.hi.max(r.centroid2()) };
+        let grow = |c: Centroids, r: &Record| c.with(r.centroid2());
         if records.len() >= PARALLEL {
             records
                 .par_chunks(4096)
                 .map(|chunk| chunk.iter().fold(Centroids::EMPTY, grow))
-                .reduce(|| Centroids::EMPTY, |a, b| Centroids { lo: a.lo.min(b.lo), hi: a.hi.max(b.hi) })
+                .reduce(|| Centroids::EMPTY, |a, b| a.with(b.lo).with(b.hi))
         } else {
             records.iter().fold(Centroids::EMPTY, grow)
         }
@@ -194,10 +206,10 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
         let r = records[i];
         let c = r.centroid2();
         if binning.bin_on(&r, axis) < plane {
-            lc = Centroids { lo: lc.lo.min(c), hi: lc.hi.max(c) };
+            lc = lc.with(c);
             i += 1;
         } else {
-            rc = Centroids { lo: rc.lo.min(c), hi: rc.hi.max(c) };
+            rc = rc.with(c);
             j -= 1;
             records.swap(i, j);
         }
@@ -213,14 +225,8 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
 /// Splits `records` in two halves by count, whatever their positions.
 fn halve(records: &[Record]) -> (Part, Part) {
     let mid = records.len() / 2;
-    let bounds = |rs: &[Record]| {
-        rs.iter().fold(Bounds::EMPTY, |mut b, r| {
-            b.grow(r);
-            b
-        })
-    };
     let (l, r) = records.split_at(mid);
-    ((mid, bounds(l), Centroids::of(l)), (mid, bounds(r), Centroids::of(r)))
+    ((mid, Bounds::of(l), Centroids::of(l)), (mid, Bounds::of(r), Centroids::of(r)))
 }
 
 /// The nodes under construction (or those of one subtree, built on another thread). While
@@ -319,9 +325,6 @@ fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut
 
 /// The tree over `count` triangles whose corners `corners` gives: (nodes, leaves, root).
 pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> (Vec<Node>, Vec<Tri4>, u32) {
-    if count == 0 {
-        return (Vec::new(), Vec::new(), EMPTY);
-    }
     let record = |i: usize| {
         let [a, b, c] = corners(i);
         let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));

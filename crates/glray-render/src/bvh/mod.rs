@@ -154,6 +154,18 @@ fn hit_triangles(tri: &Tri4, r: &Prepared, tmax: f32) -> (u32, Vec4, Vec4) {
     moller_trumbore(&r.origin, &r.direction, &tri.v0, &tri.e1, &tri.e2, tmin, tmax)
 }
 
+/// Puts `entry` (distance first) among the first `n` of `hits`, which are sorted farthest
+/// first, keeping them so: children are then pushed far to near and the nearest is visited now.
+#[inline(always)]
+fn insert_farthest_first<T: Copy>(hits: &mut [(f32, T); 4], n: usize, entry: (f32, T)) {
+    let mut j = n;
+    while j > 0 && hits[j - 1].0 < entry.0 {
+        hits[j] = hits[j - 1];
+        j -= 1;
+    }
+    hits[j] = entry;
+}
+
 /// A traversal stack: a fixed array (no allocation or clearing per walk), spilling into a Vec
 /// for the rare tree deeper than it holds.
 struct Stack<T> {
@@ -206,11 +218,6 @@ impl TriBvh {
         TriBvh { nodes, leaves, root }
     }
 
-    /// Bytes held by the tree.
-    pub fn size(&self) -> usize {
-        self.nodes.len() * size_of::<Node>() + self.leaves.len() * size_of::<Tri4>()
-    }
-
     /// Walks the tree, offering `leaf` each leaf the ray reaches within the current `tmax`;
     /// `leaf` may shorten `tmax`, or return true to stop the walk. `NEAREST`: children in the
     /// order the ray meets them (what a closest hit wants: a near hit prunes what lies behind);
@@ -245,28 +252,15 @@ impl TriBvh {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
+                    // Two or more: visit the nearest now, the others nearest first after it.
                     let tn = tnear.to_array();
-                    if rest & (rest - 1) == 0 {
-                        // Two (the common case): the nearer now, the other later.
-                        let (a, b) = (mask.trailing_zeros() as usize, rest.trailing_zeros() as usize);
-                        let (near, far) = if tn[a] <= tn[b] { (a, b) } else { (b, a) };
-                        stack.push((node.child[far], tn[far]));
-                        cur = node.child[near];
-                        continue;
-                    }
-                    // More: visit the nearest now, the others nearest first after it.
                     let mut hits = [(0.0f32, 0u32); 4];
                     let mut n = 0;
                     let mut m = mask;
                     while m != 0 {
                         let k = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        let mut j = n;
-                        while j > 0 && hits[j - 1].0 < tn[k] {
-                            hits[j] = hits[j - 1];
-                            j -= 1;
-                        }
-                        hits[j] = (tn[k], node.child[k]);
+                        insert_farthest_first(&mut hits, n, (tn[k], node.child[k]));
                         n += 1;
                     }
                     // `hits` is farthest first: push all but the nearest.

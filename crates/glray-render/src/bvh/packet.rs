@@ -6,7 +6,7 @@
 use glam::{BVec4A, Vec4};
 use obvhs::ray::Ray;
 
-use super::{moller_trumbore, Node, Stack, Tri4, TriBvh, EMPTY, LEAF};
+use super::{insert_farthest_first, moller_trumbore, Node, Stack, Tri4, TriBvh, EMPTY, LEAF};
 
 /// Four rays, one per lane.
 struct Rays4 {
@@ -31,8 +31,8 @@ impl Rays4 {
     }
 }
 
-/// Where each ray enters child `k`'s box, and which rays (bit per ray, of `active`) meet it
-/// before their `tmax`.
+/// Where each ray enters child `k`'s box, and which rays (a lane each) meet it before their
+/// `tmax`.
 #[inline(always)]
 fn hit_box(node: &Node, k: usize, r: &Rays4, tmax: Vec4) -> (BVec4A, Vec4) {
     let slab = |axis: usize| {
@@ -72,7 +72,7 @@ impl TriBvh {
                 if cur.0 & LEAF == 0 {
                     let node = &self.nodes[cur.0 as usize];
                     // The children some active ray meets, nearest (for the nearest ray) last.
-                    let mut hits = [(0.0f32, 0u32, Vec4::ZERO); 4];
+                    let mut hits = [(0.0f32, (0u32, Vec4::ZERO)); 4];
                     let mut n = 0;
                     for k in 0..4 {
                         if node.child[k] == EMPTY {
@@ -84,20 +84,14 @@ impl TriBvh {
                             continue;
                         }
                         let entered = Vec4::select(mask, tnear, Vec4::INFINITY);
-                        let key = entered.min_element();
-                        let mut j = n;
-                        while j > 0 && hits[j - 1].0 < key {
-                            hits[j] = hits[j - 1];
-                            j -= 1;
-                        }
-                        hits[j] = (key, node.child[k], entered);
+                        insert_farthest_first(&mut hits, n, (entered.min_element(), (node.child[k], entered)));
                         n += 1;
                     }
                     if n > 0 {
-                        for &(_, c, t) in &hits[..n - 1] {
-                            stack.push((c, t));
+                        for &(_, entry) in &hits[..n - 1] {
+                            stack.push(entry);
                         }
-                        cur = (hits[n - 1].1, hits[n - 1].2);
+                        cur = hits[n - 1].1;
                         continue;
                     }
                 } else {
