@@ -9,6 +9,7 @@
 //!   lazily, lock-free on the hot path;
 //! - `runtime`: settings and glray's own identity, read once;
 //! - `handlers`: what glray does on the calls gl-spec/classes.txt marks `handler`;
+//! - `profile`: what the current context is (version, core or compatibility profile);
 //! - `dlopen_hook`: programs that dlopen GL libraries end up in glray;
 //! - `ffi_guard`: no panic crosses `extern "C"`.
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
@@ -19,6 +20,7 @@ mod dlopen_hook;
 pub mod exports;
 mod ffi_guard;
 mod handlers;
+mod profile;
 mod raytrace;
 mod real;
 mod record;

@@ -237,18 +237,66 @@ fn the_trigger_setting_chooses_where_frames_are_ray_traced() {
 }
 
 #[test]
+fn core_profile_frames_stay_the_real_gls() {
+    // tests/helpers/core_profile.c: a GL 3.3 core context, a refused glBegin, a shader draw.
+    let dir = scratch("rt-core-profile");
+    let program = dir.join("core_profile");
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/helpers/core_profile.c");
+    run_ok(
+        Command::new("cc").arg("-O1").arg("-o").arg(&program).arg(&src).args(["-lOSMesa", "-lGL"]),
+        "cc core_profile.c",
+    );
+    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "core_profile plain"));
+    assert!(plain.contains("Core Profile") && plain.contains("glBegin error 0x502"), "{plain}");
+    assert!(plain.contains("inside 230 128 26, outside 26 51 76"), "{plain}");
+    // Ray tracing on (its glBegin must neither be captured nor presented), then recording: the
+    // same output, glGetError included (no query of fixed-function state leaks an error).
+    let scenes = dir.join("scenes");
+    let trace = dir.join("core.trace");
+    let mut traced = command(Way::Preload, &[], &program, 60);
+    traced.env("GLRAY_PRESET", "gl").env("GLRAY_DUMP_SCENE", &scenes).env("GLRAY_LOG", "info");
+    let traced = run_ok(&mut traced, "core_profile under glray");
+    assert_eq!(stdout(&traced), plain, "core profile under glray vs Mesa");
+    assert!(stderr(&traced).contains("core-profile context"), "{}", stderr(&traced));
+    assert!(!scenes.exists(), "nothing captured or ray traced in a core profile");
+    let mut recorded = command(Way::Preload, &[], &program, 60);
+    recorded.env("GLRAY_RECORD", &trace);
+    assert_eq!(stdout(&run_ok(&mut recorded, "core_profile recorded")), plain, "recorded vs Mesa");
+}
+
+#[test]
 fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
-    // tests/helpers/readback.c reads depth as float and as unsigned int, and RGB bytes.
+    // tests/helpers/readback.c reads depth as float and as unsigned int, and RGB bytes, then
+    // prints the state it set before the reads (program, textures, masks...) and glGetError.
     let dir = scratch("rt-readback");
     let program = dir.join("readback");
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/helpers/readback.c");
     run_ok(Command::new("cc").arg("-O1").arg("-o").arg(&program).arg(&src).args(["-lOSMesa", "-lGL"]), "cc readback.c");
     let plain = run_ok(&mut command(Way::Plain, &[], &program, 60), "readback plain");
-    let scenes = dir.join("scenes");
-    let mut cmd = command(Way::Preload, &[], &program, 60);
-    cmd.env("GLRAY_PRESET", "gl").env("GLRAY_DUMP_SCENE", &scenes);
-    let traced = run_ok(&mut cmd, "readback under glray");
-    assert_eq!(dumped(&scenes).0, 1, "one triangle captured and traced");
-    assert_eq!(stdout(&traced), stdout(&plain), "glReadPixels under glray vs Mesa");
-    assert!(stdout(&plain).contains("depth 0.8"), "{}", stdout(&plain));
+    let without_hash = |out: &str| out.lines().filter(|l| !l.starts_with("frame hash")).collect::<Vec<_>>().join("\n");
+    let mut hashes = Vec::new();
+    // Both ways of presenting: glDrawPixels (the default in this compatibility context) and the
+    // shader that core profiles get.
+    for way in ["pixels", "shader"] {
+        let scenes = dir.join(format!("scenes-{way}"));
+        let mut cmd = command(Way::Preload, &[], &program, 60);
+        cmd.env("GLRAY_PRESET", "gl").env("GLRAY_PRESENT", way).env("GLRAY_DUMP_SCENE", &scenes);
+        let traced = run_ok(&mut cmd, &format!("readback under glray, present={way}"));
+        assert_eq!(dumped(&scenes).0, 1, "one triangle captured and traced");
+        let err = stderr(&traced);
+        assert!(!err.contains("present"), "present={way}: {err}");
+        assert_eq!(
+            without_hash(&stdout(&traced)),
+            without_hash(&stdout(&plain)),
+            "glReadPixels and state, present={way} vs Mesa"
+        );
+        hashes.push(stdout(&traced).lines().find(|l| l.starts_with("frame hash")).map(String::from));
+    }
+    assert!(hashes[0].is_some());
+    assert_eq!(hashes[0], hashes[1], "the whole frame, presented with glDrawPixels and with a shader");
+    let plain = stdout(&plain);
+    assert!(
+        plain.contains("depth 0.8") && plain.contains("error 0x0") && plain.contains("viewport 3 4 50 40"),
+        "{plain}"
+    );
 }

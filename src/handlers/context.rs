@@ -10,6 +10,8 @@ use crate::real;
 fn bound_if<T: PartialEq + Default>(ok: T, backend: Backend) -> T {
     if ok != T::default() {
         set_backend(backend);
+        crate::profile::made_current();
+        crate::raytrace::made_current();
     }
     ok
 }

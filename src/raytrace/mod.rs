@@ -43,6 +43,8 @@ struct Live {
     /// The tracer, with the BVHs of display-list meshes kept across frames.
     renderer: glray_render::Renderer,
     dump: Option<PathBuf>,
+    /// GLRAY_PRESENT.
+    present: present::Way,
     /// The frame revision each thread presented last.
     presented: HashMap<u32, u64>,
     /// Threads told that their shader frames are left to the real GL.
@@ -72,6 +74,7 @@ pub fn configure(config: &Config) {
         trigger,
         renderer: glray_render::Renderer::new(glray_render::Options::from_config(config).unwrap_or_default()),
         dump: config.dump_scene().map(PathBuf::from),
+        present: present::Way::from_setting(config.present()),
         presented: HashMap::new(),
         last: HashMap::new(),
         shown: Default::default(),
@@ -105,8 +108,10 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
                 live.names[number] = reader.names[number].to_vec();
             }
             if let Event::Call { thread, .. } = event {
+                let ctx = live.capture.context(thread);
                 // Errors of a call the real GL did not get are glGetError's to report.
-                live.capture.context(thread).unseen = UNSEEN.with(|u| u.replace(false)) || in_skipped_begin();
+                ctx.unseen = UNSEEN.with(|u| u.replace(false)) || in_skipped_begin();
+                ctx.core_profile = crate::profile::core();
             }
             let names = &live.names;
             live.capture.event(&event, |n| names.get(n).map_or(&[][..], |v| &v[..]));
@@ -124,7 +129,19 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
     reader.names.len()
 }
 
+/// Called after this thread made a context current: capture follows only compatibility
+/// contexts (a core profile has no fixed-function GL; its frames stay the real GL's).
+pub fn made_current() {
+    if ON.load(Ordering::Relaxed) && crate::profile::core() && !TOLD_CORE.with(|t| t.replace(true)) {
+        glray_core::info!(
+            "a core-profile context is current: glray follows fixed-function GL, so its frames are the real GL's"
+        );
+    }
+}
+
 thread_local! {
+    /// This thread was told that core profiles are left to the real GL.
+    static TOLD_CORE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     /// The real GL did not get this thread's open glBegin: its vertices and glEnd skip it too.
     static SKIPPED_BEGIN: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     /// The real GL did not get this thread's last call (capture, following it next, reports
@@ -281,7 +298,11 @@ impl Live {
         self.frames += 1;
         let start = std::time::Instant::now();
         // SAFETY: called on the thread whose context is current, before its swap/finish/read.
-        unsafe { present::draw(&rendered) };
+        if !unsafe { present::draw(&rendered, self.present) } {
+            // Not put in place: the real GL rasterizes from the next frame on.
+            self.shown.remove(&thread);
+            return;
+        }
         if let Some(sink) = self.stats.as_mut() {
             sink.write(&stats::FrameStats {
                 frame: number,

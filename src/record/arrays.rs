@@ -236,7 +236,10 @@ impl ClientArrays {
                 real::glGetPointerv(pname, (&mut p as *mut *mut c_void).cast());
                 p as usize as u64
             };
-            for (k, q) in Q.iter().enumerate() {
+            // A core profile has only generic attributes: asking for the fixed arrays there
+            // would leave GL_INVALID_ENUM for the program's glGetError.
+            let fixed = !crate::profile::core();
+            for (k, q) in Q.iter().enumerate().filter(|_| fixed) {
                 if k == array_kind::TEXCOORD as usize {
                     continue;
                 }
@@ -253,8 +256,8 @@ impl ClientArrays {
                 a.buffer = geti(q.5);
             }
             let q = Q[array_kind::TEXCOORD as usize];
-            let active = geti(0x84E1); // GL_CLIENT_ACTIVE_TEXTURE
-            let units = (geti(0x8871) as usize).clamp(1, MAX_UNITS); // GL_MAX_TEXTURE_COORDS
+            let active = if fixed { geti(0x84E1) } else { GL_TEXTURE0 as i32 }; // GL_CLIENT_ACTIVE_TEXTURE
+            let units = if fixed { (geti(0x8871) as usize).clamp(1, MAX_UNITS) } else { 0 }; // GL_MAX_TEXTURE_COORDS
             for u in 0..units {
                 real::glClientActiveTexture(GL_TEXTURE0 as u32 + u as u32);
                 let a = &mut self.texcoords[u];
@@ -262,7 +265,9 @@ impl ClientArrays {
                 (a.size, a.ty, a.stride, a.ptr, a.buffer) =
                     (geti(q.1), geti(q.2) as u32, geti(q.3), getp(q.4), geti(q.5));
             }
-            real::glClientActiveTexture(active as u32);
+            if fixed {
+                real::glClientActiveTexture(active as u32);
+            }
             self.client_active = (active as u32).wrapping_sub(GL_TEXTURE0 as u32) as usize % MAX_UNITS;
             let attribs = (geti(0x8869) as usize).min(MAX_UNITS); // GL_MAX_VERTEX_ATTRIBS
             for i in 0..attribs {

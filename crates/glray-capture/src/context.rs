@@ -117,6 +117,10 @@ pub struct Context {
     pub(crate) normal_matrix: Option<(DMat4, DMat3)>,
     /// A shader program is in use: draws go through shaders capture cannot follow.
     pub(crate) programmable: bool,
+    /// The context is a core profile: it has no fixed-function commands (GL raises
+    /// INVALID_OPERATION for glBegin, glCallList... and draws nothing) and every draw goes through
+    /// shaders, so capture follows none of its calls and its frames stay the real GL's.
+    pub core_profile: bool,
     /// Counts changes to the frame (draws, clears), so that a frame is presented once.
     pub(crate) revision: u64,
     /// The framebuffer object draws go to (0: the window's or OSMesa's buffer).
@@ -145,6 +149,7 @@ impl Default for Context {
             sequence: 0,
             normal_matrix: None,
             programmable: false,
+            core_profile: false,
             revision: 0,
             framebuffer: 0,
             building: None,
@@ -240,7 +245,7 @@ impl Context {
     /// its geometry), and into the default framebuffer (a framebuffer object may be a texture
     /// the program draws with later, which capture does not follow).
     pub fn takes_draws(&self) -> bool {
-        !self.programmable && self.shared.lists.compiling().is_none() && self.framebuffer == 0
+        !self.programmable && !self.core_profile && self.shared.lists.compiling().is_none() && self.framebuffer == 0
     }
 
     /// Whether a display list is being compiled.
@@ -255,6 +260,9 @@ impl Context {
 
     /// Follows one call. Errors go to the context's error flag, as GL would raise them.
     pub fn call(&mut self, op: Op, ty: u32, a: &[Value]) {
+        if self.core_profile {
+            return;
+        }
         if let Some((_, execute)) = self.shared.lists.compiling() {
             if op.compiled() && !matches!(op, Op::NewList | Op::EndList) {
                 for item in self.compile_items(op, ty, a) {

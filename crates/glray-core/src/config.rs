@@ -39,6 +39,7 @@ pub const LOG_LEVELS: &[&str] = &["off", "error", "warn", "info", "debug"];
 pub const PRESETS: &[&str] = &["off", "gl", "ao", "full"];
 pub const TRIGGERS: &[&str] = &["auto", "swap", "finish", "flush", "readpixels"];
 pub const LIGHTING: &[&str] = &["vertex", "pixel"];
+pub const PRESENTS: &[&str] = &["auto", "pixels", "shader"];
 
 /// Every setting glray has. docs/settings.md is checked against this table by a test.
 pub const SETTINGS: &[Setting] = &[
@@ -152,6 +153,15 @@ pub const SETTINGS: &[Setting] = &[
         doc: "Where the GL look evaluates the lighting equation: `vertex`, at the vertices, colours interpolated \
               across triangles (Gouraud, as GL does); `pixel`, at every pixel with the interpolated normal \
               (smoother highlights on coarse meshes; no longer identical to GL).",
+    },
+    Setting {
+        key: "present",
+        kind: Kind::Choice(PRESENTS),
+        default: "auto",
+        doc: "How a ray-traced frame is put into the real framebuffer: `auto`, with glDrawPixels in \
+              compatibility contexts and with a textured triangle drawn by a small shader program in core \
+              profiles (which have no glDrawPixels); `pixels` or `shader` to force one (`shader` needs \
+              GL 3.1; `pixels` falls back to it in a core profile).",
     },
     Setting {
         key: "dump_scene",
@@ -420,6 +430,11 @@ impl Config {
     /// Where per-frame statistics go: "stderr", a file, or nowhere.
     pub fn stats(&self) -> Option<&str> {
         Some(self.get("stats")).filter(|p| !p.is_empty())
+    }
+
+    /// How frames are presented: "auto", "pixels" or "shader".
+    pub fn present(&self) -> &str {
+        self.get("present")
     }
 
     /// Where to dump each frame's scene, if anywhere.

@@ -1,12 +1,12 @@
-//! Putting a ray-traced frame into the real framebuffer of the current context (window, FBO
-//! or OSMesa buffer): colour with glDrawPixels at window position (0, 0), then depth, with
-//! every piece of state that affects pixel drawing saved and restored around it, so that the
-//! program's GL state is as it left it.
+//! Presenting with glDrawPixels (compatibility contexts): colour at window position (0, 0),
+//! then depth, with every piece of state that affects pixel drawing saved and restored around it
+//! (glPushAttrib), so that the program's GL state is as it left it.
 
 use std::ffi::c_void;
 
 use glray_render::Rendered;
 
+use super::get_int;
 use crate::real;
 
 const GL_ALL_ATTRIB_BITS: u32 = 0x000F_FFFF;
@@ -43,13 +43,6 @@ const OFF: &[u32] = &[
     0x8620, // VERTEX_PROGRAM_ARB
     0x8804, // FRAGMENT_PROGRAM_ARB
 ];
-
-fn get_int(pname: u32) -> i32 {
-    let mut v = [0i32; 4];
-    // SAFETY: glGetIntegerv writes at most 4 integers for these names.
-    unsafe { real::glGetIntegerv(pname, v.as_mut_ptr().cast()) };
-    v[0]
-}
 
 /// Draws `r` over the whole drawable.
 ///
