@@ -109,6 +109,8 @@ fn xscreensaver_hacks_are_ray_traced_like_mesa() {
         ("cubenetic", "textures with texgen"),
         ("glplanet", "a textured, lit sphere"),
         ("atlantis", "a background in another projection at z = 1, eye-linear texgen"),
+        ("superquadrics", "two-sided lighting (GL_LIGHT_MODEL_TWO_SIDE)"),
+        ("boxed", "points (particles) and lit balls"),
     ] {
         eprintln!("{name}: {kind}");
         ray_traced_like_mesa(name, &hack(name), &["-window"], 4, 0.02);
@@ -300,3 +302,4 @@ fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
         "{plain}"
     );
 }
+
