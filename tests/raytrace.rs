@@ -302,4 +302,3 @@ fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
         "{plain}"
     );
 }
-

@@ -341,6 +341,10 @@ impl Context {
         }
         if draw {
             // Client data is copied at compile time: keep the vertices the draw would fetch.
+            if let Some(mesh) = self.indexed_triangles(op, a) {
+                items.push(Item::Mesh(Arc::new(mesh)));
+                return items;
+            }
             let runs = self.fetch_draw(op, a).unwrap_or_default();
             items.extend(runs.into_iter().map(|(mode, verts)| Item::Mesh(Arc::new(fetched_mesh(mode, &verts)))));
             return items;
@@ -731,9 +735,14 @@ impl Context {
                     let mesh = match self.shared.buffer_draws.get(&key) {
                         Some(m) => m.clone(),
                         None => {
-                            let runs = self.fetch_draw(op, a)?;
-                            let Some((mode, verts)) = runs.first() else { return Ok(()) };
-                            let mesh = Arc::new(fetched_mesh(*mode, verts));
+                            let mesh = match self.indexed_triangles(op, a) {
+                                Some(mesh) => Arc::new(mesh),
+                                None => {
+                                    let runs = self.fetch_draw(op, a)?;
+                                    let Some((mode, verts)) = runs.first() else { return Ok(()) };
+                                    Arc::new(fetched_mesh(*mode, verts))
+                                }
+                            };
                             if self.shared.buffer_draws.len() >= MAX_BUFFER_DRAWS {
                                 self.shared.buffer_draws.clear();
                             }
@@ -1433,6 +1442,56 @@ mod tests {
         );
         call(&mut c, "glDrawArrays", &[i(4), i(-1), i(3)]);
         assert_eq!(c.errors.take(), 0x0501);
+    }
+
+    #[test]
+    fn indexed_buffer_draws_fetch_each_vertex_once() {
+        // A 4 x 4 grid of vertices with a colour each, 18 triangles through an element buffer.
+        let mut c = context();
+        let (mut positions, mut colors) = (Vec::new(), Vec::new());
+        for k in 0..16 {
+            positions.extend([(k % 4) as f32, (k / 4) as f32, 0.0]);
+            colors.extend([k as f32 / 16.0, 0.5, 1.0 - k as f32 / 16.0, 1.0]);
+        }
+        let mut indices: Vec<u16> = Vec::new();
+        for y in 0..3u16 {
+            for x in 0..3u16 {
+                let k = y * 4 + x;
+                indices.extend([k, k + 1, k + 5, k, k + 5, k + 4]);
+            }
+        }
+        indices.push(0); // not a whole triangle: GL draws 18
+        let index_bytes: Vec<u8> = indices.iter().flat_map(|v| v.to_ne_bytes()).collect();
+        let (p, q) = (f32s(&positions), f32s(&colors));
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(1)]);
+        call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(p.len() as i64), Value::Blob(&p), i(0x88E4)]);
+        call(&mut c, "glVertexPointer", &[i(3), i(0x1406), i(0), Value::Null]);
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(2)]);
+        call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(q.len() as i64), Value::Blob(&q), i(0x88E4)]);
+        call(&mut c, "glColorPointer", &[i(4), i(0x1406), i(0), Value::Null]);
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        call(&mut c, "glEnableClientState", &[i(0x8076)]); // GL_COLOR_ARRAY
+        call(&mut c, "glBindBuffer", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(3)]);
+        let n = index_bytes.len() as i64;
+        call(&mut c, "glBufferData", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(n), Value::Blob(&index_bytes), i(0x88E4)]);
+        call(&mut c, "glDrawElements", &[i(4), i(indices.len() as i64), i(0x1403), Value::Null]);
+        assert_eq!(c.errors.take(), 0);
+        let frame = c.frame();
+        assert_eq!(frame.instances.len(), 1);
+        let mesh = &frame.instances[0].mesh;
+        assert_eq!((mesh.vertex_count(), mesh.triangles.len()), (16, 18), "each vertex once, whole triangles");
+        for (t, corners) in indices.chunks_exact(3).enumerate() {
+            let tri = frame.triangle(TriangleId { instance: 0, index: t as u32 }).expect("drawn");
+            for (k, &v) in corners.iter().enumerate() {
+                let v = v as usize;
+                assert_eq!(tri.positions[k], Vec3::new(positions[3 * v], positions[3 * v + 1], 0.0));
+                assert_eq!(tri.colors[k], Vec4::from_slice(&colors[4 * v..4 * v + 4]));
+            }
+        }
+        // The colour array's last vertex stays current, as Mesa leaves it (as with every array
+        // draw here: the last index read, whole triangle or not).
+        let last = indices[indices.len() - 1] as usize;
+        assert_eq!(c.imm.current.color, Vec4::from_slice(&colors[4 * last..4 * last + 4]).as_dvec4());
     }
 
     #[test]

@@ -25,6 +25,16 @@ pub struct Attribute<T> {
     pub values: Vec<T>,
 }
 
+impl<T> Attribute<T> {
+    /// Every one of `n` vertices' values, or (None) none: all take the value current at the call.
+    fn all_or_none(values: Option<Vec<T>>, n: u32) -> Attribute<T> {
+        match values {
+            Some(values) => Attribute { first: 0, values },
+            None => Attribute { first: n, values: Vec::new() },
+        }
+    }
+}
+
 impl<T: Copy> Attribute<T> {
     /// Vertex `i`'s own value; None when it takes the value current at the call.
     #[inline]
@@ -120,6 +130,41 @@ impl Mesh {
             max,
             ..Mesh::default()
         })
+    }
+
+    /// An indexed array draw of GL_TRIANGLES, its vertices fetched once each: the arrays'
+    /// values (None: that array is off, the value current at the call applies), the triangles'
+    /// vertex indices, and what the draw leaves current (normal, colour, texture coordinates).
+    pub(crate) fn from_arrays(
+        positions: Vec<DVec4>,
+        normals: Option<Vec<Vec3>>,
+        colors: Option<Vec<Vec4>>,
+        texcoords: Option<Vec<Vec4>>,
+        triangles: Vec<[u32; 3]>,
+        end: (Option<DVec3>, Option<DVec4>, Option<DVec4>),
+    ) -> Mesh {
+        let n = positions.len() as u32;
+        let ws = positions.iter().any(|p| p.w != 1.0).then(|| positions.iter().map(|p| p.w as f32).collect());
+        let positions: Vec<Vec3> = positions.iter().map(|p| p.truncate().as_vec3()).collect();
+        let min = positions.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
+        let max = positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+        Mesh {
+            id: next_id(),
+            provoking: triangles.iter().map(|t| t[2]).collect(),
+            triangles,
+            positions,
+            ws,
+            normals: Attribute::all_or_none(normals, n),
+            colors: Attribute::all_or_none(colors, n),
+            texcoords: Attribute::all_or_none(texcoords, n),
+            from_arrays: true,
+            end_normal: end.0,
+            end_color: end.1,
+            end_texcoord: end.2,
+            min,
+            max,
+            ..Mesh::default()
+        }
     }
 
     pub fn vertex_count(&self) -> u32 {
