@@ -7,13 +7,15 @@
 //! thread that never made a context current (a trace cut from a longer run) has a context of
 //! its own.
 
-use std::collections::HashMap;
-
 use glray_core::trace::{Event, Value};
 
 use crate::context::Context;
 use crate::frame::Frame;
 use crate::ops::{op_for, Op};
+
+/// Every call looks its thread's context up (four maps, twice per call): a 10M-vertex display
+/// list is 60M calls, and SipHash on these small integer keys was a fifth of compiling it.
+type HashMap<K, V> = rustc_hash::FxHashMap<K, V>;
 
 /// What a command means to capture: a GL command it follows, or a context call.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -51,6 +53,10 @@ pub struct Capture {
     holders: HashMap<u64, u64>,
     /// The thread of the last call: the one whose frame a frame event ends.
     last_thread: u32,
+    /// The last thread `context` resolved, and its context's key: calls come in long runs from
+    /// one thread, and the four lookups that resolve one are most of following a glVertex.
+    /// Forgotten when a context is created or made current.
+    resolved: Option<(u32, u64)>,
 }
 
 /// The key of a thread's context when it never made one current.
@@ -75,6 +81,7 @@ impl Capture {
                 match self.kinds.get(*cmd).copied().flatten() {
                     Some(Kind::Gl(op, ty)) => self.context(*thread).call(op, ty, args),
                     Some(Kind::Create(share)) => {
+                        self.resolved = None;
                         let created = ret.as_ref().map_or(0, Value::as_int) as u64;
                         let share = args.get(share).map_or(0, Value::as_int) as u64;
                         if created != 0 {
@@ -83,6 +90,7 @@ impl Capture {
                         }
                     }
                     Some(Kind::MakeCurrent(at)) => {
+                        self.resolved = None;
                         let ok = ret.as_ref().is_none_or(|r| r.as_int() != 0);
                         if ok {
                             match args.get(at).map_or(0, Value::as_int) as u64 {
@@ -107,6 +115,9 @@ impl Capture {
 
     /// The context current on a thread, holding its share group's objects.
     pub fn context(&mut self, thread: u32) -> &mut Context {
+        if let Some((_, key)) = self.resolved.filter(|(t, _)| *t == thread) {
+            return self.contexts.entry(key).or_default();
+        }
         let key = self.current.get(&thread).copied().unwrap_or_else(|| thread_key(thread));
         let group = *self.groups.get(&key).unwrap_or(&key);
         let holder = self.holders.insert(group, key);
@@ -114,6 +125,7 @@ impl Capture {
             let shared = self.contexts.get_mut(&h).map(Context::take_shared).unwrap_or_default();
             self.contexts.entry(key).or_default().put_shared(shared);
         }
+        self.resolved = Some((thread, key));
         self.contexts.entry(key).or_default()
     }
 }

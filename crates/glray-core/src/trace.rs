@@ -397,7 +397,7 @@ impl<'a> Reader<'a> {
         self.error_at(self.event_start, message)
     }
 
-    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], TraceError> {
+    fn take(&mut self, n: usize, what: &(impl fmt::Display + ?Sized)) -> Result<&'a [u8], TraceError> {
         let left = self.data.len() - self.pos;
         if n > left {
             return Err(self.error_at(self.pos, format!("truncated: {what} needs {n} bytes, {left} left")));
@@ -407,11 +407,11 @@ impl<'a> Reader<'a> {
         Ok(s)
     }
 
-    fn byte(&mut self, what: &str) -> Result<u8, TraceError> {
+    fn byte(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<u8, TraceError> {
         Ok(self.take(1, what)?[0])
     }
 
-    fn varint(&mut self, what: &str) -> Result<u64, TraceError> {
+    fn varint(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<u64, TraceError> {
         let start = self.pos;
         let mut v = 0u64;
         for shift in (0..64).step_by(7) {
@@ -427,14 +427,14 @@ impl<'a> Reader<'a> {
         Err(self.error_at(start, format!("{what}: varint longer than 64 bits")))
     }
 
-    fn zigzag(&mut self, what: &str) -> Result<i64, TraceError> {
+    fn zigzag(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<i64, TraceError> {
         let v = self.varint(what)?;
         Ok((v >> 1) as i64 ^ -((v & 1) as i64))
     }
 
     /// A count of items of at least `min_item_bytes` each: never more than the bytes left allow,
     /// so a corrupt count cannot cause a huge allocation.
-    fn count(&mut self, min_item_bytes: usize, what: &str) -> Result<usize, TraceError> {
+    fn count(&mut self, min_item_bytes: usize, what: &(impl fmt::Display + ?Sized)) -> Result<usize, TraceError> {
         let start = self.pos;
         let n = self.varint(what)?;
         let left = (self.data.len() - self.pos) as u64;
@@ -444,24 +444,24 @@ impl<'a> Reader<'a> {
         Ok(n as usize)
     }
 
-    fn sized(&mut self, what: &str) -> Result<&'a [u8], TraceError> {
+    fn sized(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<&'a [u8], TraceError> {
         let n = self.count(1, what)?;
         self.take(n, what)
     }
 
-    fn u32_of(&mut self, what: &str) -> Result<u32, TraceError> {
+    fn u32_of(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<u32, TraceError> {
         let start = self.pos;
         let v = self.varint(what)?;
         u32::try_from(v).map_err(|_| self.error_at(start, format!("{what} {v} does not fit 32 bits")))
     }
 
-    fn i32_of(&mut self, what: &str) -> Result<i32, TraceError> {
+    fn i32_of(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<i32, TraceError> {
         let start = self.pos;
         let v = self.zigzag(what)?;
         i32::try_from(v).map_err(|_| self.error_at(start, format!("{what} {v} does not fit 32 bits")))
     }
 
-    fn value(&mut self, what: &str) -> Result<Value<'a>, TraceError> {
+    fn value(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<Value<'a>, TraceError> {
         let at = self.pos;
         Ok(match self.byte(what)? {
             ty::INT => Value::Int(self.zigzag(what)?),
@@ -511,7 +511,7 @@ impl<'a> Reader<'a> {
                 let nargs = self.byte("the argument count")?;
                 let mut args = Vec::with_capacity(nargs as usize);
                 for i in 0..nargs {
-                    args.push(self.value(&format!("argument {i}"))?);
+                    args.push(self.value(&format_args!("argument {i}"))?);
                 }
                 let ret = if self.data.get(self.pos) == Some(&ty::NONE) {
                     self.pos += 1;
