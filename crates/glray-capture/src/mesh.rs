@@ -42,6 +42,12 @@ impl<T: Copy> Attribute<T> {
         i.checked_sub(self.first).and_then(|k| self.values.get(k as usize).copied())
     }
 
+    /// Where vertex `i`'s own value is stored, if it has one.
+    #[inline]
+    pub fn value(&self, i: u32) -> Option<&T> {
+        i.checked_sub(self.first).and_then(|k| self.values.get(k as usize))
+    }
+
     /// Keeps the values of the first `n` vertices.
     fn truncate(&mut self, n: u32) {
         self.values.truncate(n.saturating_sub(self.first) as usize);

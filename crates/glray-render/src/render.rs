@@ -287,10 +287,22 @@ impl Job<'_> {
             let last = y0 + drows.len() / w - 1;
             if (inside(y0) || inside(last)) && x0 < x1 {
                 let mut scratch = Scratch::default();
-                for x in (x0..x1).step_by(2) {
-                    let right = (x + 1).min(x1 - 1);
-                    let pixels = [(x, y0), (right, y0), (x, last), (right, last)];
-                    let centers = tracer.centers(pixels);
+                // The rows' camera rays first, then the cache lines their hits' shading reads
+                // (big meshes miss on every hit), then the shading.
+                let quads: Vec<_> = (x0..x1)
+                    .step_by(2)
+                    .map(|x| {
+                        let right = (x + 1).min(x1 - 1);
+                        let pixels = [(x, y0), (right, y0), (x, last), (right, last)];
+                        (x, pixels, tracer.centers(pixels))
+                    })
+                    .collect();
+                for vertices in [false, true] {
+                    for hit in quads.iter().filter_map(|q| q.2.as_ref()).flatten().flatten() {
+                        frame.prefetch_triangle(hit.id, vertices);
+                    }
+                }
+                for (x, pixels, centers) in quads {
                     for (k, &(px, py)) in pixels.iter().enumerate() {
                         // A quad cut by the image's last column or row repeats a pixel.
                         let repeated = (k & 1 == 1 && px == x) || (k >= 2 && py == y0);
