@@ -39,11 +39,18 @@ pub(crate) fn decode_attribute(f: AttrForm, a: &[Value]) -> GlResult<Given> {
         }
         _ => (0, 0),
     };
-    let raw: Vec<f64> = if f.vector {
-        args::array(args::bytes(a, first), f.ty, f.n)
-    } else {
-        (first..first + f.n).map(|i| args::float(a, i)).collect()
-    };
+    // At most four values, on the stack: this runs for every glVertex, glNormal and glColor a
+    // display list compiles (tens of millions in a big list).
+    let mut values = [0.0f64; 4];
+    let mut len = 0;
+    for k in 0..f.n.min(4) {
+        let value =
+            if f.vector { args::element(args::bytes(a, first), f.ty, k) } else { Some(args::float(a, first + k)) };
+        let Some(v) = value else { break };
+        values[k] = v;
+        len = k + 1;
+    }
+    let raw = &values[..len];
     let get = |k: usize, default: f64| raw.get(k).copied().unwrap_or(default);
     let norm = |k: usize, default: f64| raw.get(k).map_or(default, |x| args::normalize(*x, f.ty));
     Ok(match f.attr {
