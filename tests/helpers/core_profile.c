@@ -3,14 +3,10 @@
  * core way (GLSL program, vertex array, buffer) and reads the frame back. Under glray the output
  * must be the same as without: glray captures fixed-function GL only, so a core profile's frames
  * stay the real GL's. Built by tests/raytrace.rs with cc. */
-#define GL_GLEXT_PROTOTYPES
-#include <GL/osmesa.h>
-#include <GL/gl.h>
-#include <GL/glext.h>
 #include <stdio.h>
 #include <stdlib.h>
 
-#define GET(type, name) type name = (type)OSMesaGetProcAddress(#name)
+#include "gl_functions.h"
 
 int main(void) {
   int w = 64, h = 64;
@@ -20,20 +16,7 @@ int main(void) {
   if (!c) { printf("no core profile context\n"); return 1; }
   void *buf = malloc(w * h * 4);
   OSMesaMakeCurrent(c, buf, GL_UNSIGNED_BYTE, w, h);
-  GET(PFNGLCREATESHADERPROC, glCreateShader);
-  GET(PFNGLSHADERSOURCEPROC, glShaderSource);
-  GET(PFNGLCOMPILESHADERPROC, glCompileShader);
-  GET(PFNGLCREATEPROGRAMPROC, glCreateProgram);
-  GET(PFNGLATTACHSHADERPROC, glAttachShader);
-  GET(PFNGLLINKPROGRAMPROC, glLinkProgram);
-  GET(PFNGLUSEPROGRAMPROC, glUseProgram);
-  GET(PFNGLGENVERTEXARRAYSPROC, glGenVertexArrays);
-  GET(PFNGLBINDVERTEXARRAYPROC, glBindVertexArray);
-  GET(PFNGLGENBUFFERSPROC, glGenBuffers);
-  GET(PFNGLBINDBUFFERPROC, glBindBuffer);
-  GET(PFNGLBUFFERDATAPROC, glBufferData);
-  GET(PFNGLVERTEXATTRIBPOINTERPROC, glVertexAttribPointer);
-  GET(PFNGLENABLEVERTEXATTRIBARRAYPROC, glEnableVertexAttribArray);
+  load_gl_functions();
   printf("version %s\n", (const char *)glGetString(GL_VERSION));
 
   glViewport(0, 0, w, h);
@@ -46,11 +29,7 @@ int main(void) {
   /* The core way. */
   const char *vs = "#version 330 core\nlayout(location = 0) in vec2 p;\nvoid main() { gl_Position = vec4(p, 0.0, 1.0); }\n";
   const char *fs = "#version 330 core\nout vec4 c;\nvoid main() { c = vec4(0.9, 0.5, 0.1, 1.0); }\n";
-  GLuint s1 = glCreateShader(GL_VERTEX_SHADER), s2 = glCreateShader(GL_FRAGMENT_SHADER);
-  glShaderSource(s1, 1, &vs, NULL); glCompileShader(s1);
-  glShaderSource(s2, 1, &fs, NULL); glCompileShader(s2);
-  GLuint prog = glCreateProgram();
-  glAttachShader(prog, s1); glAttachShader(prog, s2); glLinkProgram(prog);
+  GLuint prog = program_of(vs, fs);
   float tri[] = {-0.8f, -0.8f, 0.8f, -0.8f, 0.0f, 0.6f};
   GLuint vao, vbo;
   glGenVertexArrays(1, &vao); glBindVertexArray(vao);

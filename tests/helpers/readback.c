@@ -9,14 +9,10 @@
  * masks, depth function, culling, polygon modes, alpha test. After the reads it prints that
  * state and glGetError: it must read the same with and without glray, whichever way glray
  * presents (GLRAY_PRESENT). Built by tests/raytrace.rs with cc. */
-#define GL_GLEXT_PROTOTYPES
-#include <GL/osmesa.h>
-#include <GL/gl.h>
-#include <GL/glext.h>
 #include <stdio.h>
 #include <stdlib.h>
 
-#define GET(type, name) type name = (type)OSMesaGetProcAddress(#name)
+#include "gl_functions.h"
 
 static void print_ints(const char *what, GLenum pname, int n) {
   GLint v[4] = {0};
@@ -31,20 +27,7 @@ int main(void) {
   OSMesaContext c = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, NULL);
   void *buf = malloc(w * h * 4);
   OSMesaMakeCurrent(c, buf, GL_UNSIGNED_BYTE, w, h);
-  GET(PFNGLCREATESHADERPROC, glCreateShader);
-  GET(PFNGLSHADERSOURCEPROC, glShaderSource);
-  GET(PFNGLCOMPILESHADERPROC, glCompileShader);
-  GET(PFNGLCREATEPROGRAMPROC, glCreateProgram);
-  GET(PFNGLATTACHSHADERPROC, glAttachShader);
-  GET(PFNGLLINKPROGRAMPROC, glLinkProgram);
-  GET(PFNGLUSEPROGRAMPROC, glUseProgram);
-  GET(PFNGLGENVERTEXARRAYSPROC, glGenVertexArrays);
-  GET(PFNGLBINDVERTEXARRAYPROC, glBindVertexArray);
-  GET(PFNGLACTIVETEXTUREPROC, glActiveTexture);
-  GET(PFNGLGENSAMPLERSPROC, glGenSamplers);
-  GET(PFNGLBINDSAMPLERPROC, glBindSampler);
-  GET(PFNGLGENBUFFERSPROC, glGenBuffers);
-  GET(PFNGLBINDBUFFERPROC, glBindBuffer);
+  load_gl_functions();
   printf("version %s\n", (const char *)glGetString(GL_VERSION));
 
   glViewport(0, 0, w, h);
@@ -59,11 +42,7 @@ int main(void) {
   /* The state a present must leave alone. */
   const char *vs = "#version 120\nvoid main() { gl_Position = gl_Vertex; }\n";
   const char *fs = "#version 120\nvoid main() { gl_FragColor = vec4(1.0); }\n";
-  GLuint s1 = glCreateShader(GL_VERTEX_SHADER), s2 = glCreateShader(GL_FRAGMENT_SHADER);
-  glShaderSource(s1, 1, &vs, NULL); glCompileShader(s1);
-  glShaderSource(s2, 1, &fs, NULL); glCompileShader(s2);
-  GLuint prog = glCreateProgram();
-  glAttachShader(prog, s1); glAttachShader(prog, s2); glLinkProgram(prog);
+  GLuint prog = program_of(vs, fs);
   glUseProgram(prog);
   GLuint vao, tex[2], sampler, pbo;
   glGenVertexArrays(1, &vao); glBindVertexArray(vao);
