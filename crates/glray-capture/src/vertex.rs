@@ -43,11 +43,11 @@ pub(crate) fn decode_attribute(f: AttrForm, a: &[Value]) -> GlResult<Given> {
     // display list compiles (tens of millions in a big list).
     let mut values = [0.0f64; 4];
     let mut len = 0;
-    for k in 0..f.n.min(4) {
+    for (k, slot) in values.iter_mut().enumerate().take(f.n) {
         let value =
             if f.vector { args::element(args::bytes(a, first), f.ty, k) } else { Some(args::float(a, first + k)) };
         let Some(v) = value else { break };
-        values[k] = v;
+        *slot = v;
         len = k + 1;
     }
     let raw = &values[..len];
