@@ -5,7 +5,7 @@
 use std::cell::Cell;
 use std::ffi::CStr;
 
-use crate::real;
+use crate::real::{self, get_int};
 
 /// What a context is: its version, ES or desktop, core or compatibility.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -37,13 +37,6 @@ const GL_EXTENSIONS: u32 = 0x1F03;
 const GL_NUM_EXTENSIONS: u32 = 0x821D;
 const GL_CONTEXT_PROFILE_MASK: u32 = 0x9126;
 const GL_CONTEXT_CORE_PROFILE_BIT: i32 = 0x1;
-
-fn get_int(pname: u32) -> i32 {
-    let mut v = [0i32; 4];
-    // SAFETY: glGetIntegerv writes at most 4 integers for the names asked here.
-    unsafe { real::glGetIntegerv(pname, v.as_mut_ptr().cast()) };
-    v[0]
-}
 
 /// # Safety
 /// A GL context must be current on this thread.

@@ -8,3 +8,18 @@ use crate::dispatch;
 use std::ffi::{c_ulong, c_void};
 
 include!(concat!(env!("OUT_DIR"), "/real.rs"));
+
+/// The real GL's integer state `pname` (glGetIntegerv), its first `N` values (N <= 16: enough for
+/// every value glray asks: bindings, pixel-store state, viewports, polygon modes).
+pub fn get_ints<const N: usize>(pname: u32) -> [i32; N] {
+    const { assert!(N <= 16) };
+    let mut v = [0i32; 16];
+    // SAFETY: glGetIntegerv writes at most 16 integers for the names glray asks.
+    unsafe { glGetIntegerv(pname, v.as_mut_ptr().cast()) };
+    std::array::from_fn(|i| v[i])
+}
+
+/// The real GL's integer state `pname`, a single value (glGetIntegerv).
+pub fn get_int(pname: u32) -> i32 {
+    get_ints::<1>(pname)[0]
+}

@@ -226,11 +226,7 @@ impl ClientArrays {
         ];
         // SAFETY: state queries with out-parameters of the right sizes.
         unsafe {
-            let geti = |pname: u32| {
-                let mut v = 0i32;
-                real::glGetIntegerv(pname, (&mut v as *mut i32).cast());
-                v
-            };
+            let geti = real::get_int;
             let getp = |pname: u32| {
                 let mut p: *mut c_void = std::ptr::null_mut();
                 real::glGetPointerv(pname, (&mut p as *mut *mut c_void).cast());

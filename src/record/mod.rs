@@ -584,10 +584,7 @@ pub(crate) const GL_PIXEL_UNPACK_BUFFER_BINDING: u32 = 0x88EF;
 
 /// The buffer object bound to a binding point, from the real GL.
 pub(crate) fn bound_buffer(binding: u32) -> i32 {
-    let mut v = 0i32;
-    // SAFETY: glGetIntegerv of a binding writes one integer.
-    unsafe { real::glGetIntegerv(binding, (&mut v as *mut i32).cast()) };
-    v
+    real::get_int(binding)
 }
 
 fn surface_size(kind: Kind, dpy: u64, drawable: u64) -> (u32, u32) {

@@ -77,10 +77,7 @@ fn pixel_bytes(format: i64, ty: i64) -> usize {
 }
 
 fn unpack(pname: u32) -> i64 {
-    let mut v = 0i32;
-    // SAFETY: glGetIntegerv of a pixel-store value writes one integer.
-    unsafe { real::glGetIntegerv(pname, (&mut v as *mut i32).cast()) };
-    v as i64
+    real::get_int(pname) as i64
 }
 
 /// Bytes of a width x height x depth image read with the current unpack state (row length,

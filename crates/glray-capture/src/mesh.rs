@@ -39,7 +39,7 @@ impl<T: Copy> Attribute<T> {
     /// Vertex `i`'s own value; None when it takes the value current at the call.
     #[inline]
     pub fn at(&self, i: u32) -> Option<T> {
-        i.checked_sub(self.first).and_then(|k| self.values.get(k as usize).copied())
+        self.value(i).copied()
     }
 
     /// Where vertex `i`'s own value is stored, if it has one.
@@ -107,6 +107,11 @@ pub struct Mesh {
     pub max: Vec3,
 }
 
+/// The box around `positions` (empty: min above max).
+fn bounds(positions: &[Vec3]) -> (Vec3, Vec3) {
+    positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
+}
+
 /// A new mesh's id.
 fn next_id() -> u64 {
     static NEXT_ID: AtomicU64 = AtomicU64::new(1);
@@ -122,20 +127,37 @@ impl Mesh {
         if normals.len() != positions.len() || triangles.iter().flatten().any(|&i| i >= n) {
             return None;
         }
-        let min = positions.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
-        let max = positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
-        Some(Mesh {
+        Some(Mesh::of_triangles(
+            positions,
+            Attribute::all_or_none(Some(normals), n),
+            Attribute::all_or_none(None, n),
+            Attribute::all_or_none(None, n),
+            triangles,
+        ))
+    }
+
+    /// An indexed mesh of GL_TRIANGLES (each triangle's provoking vertex its third), with its
+    /// bounds and a new id.
+    fn of_triangles(
+        positions: Vec<Vec3>,
+        normals: Attribute<Vec3>,
+        colors: Attribute<Vec4>,
+        texcoords: Attribute<Vec4>,
+        triangles: Vec<[u32; 3]>,
+    ) -> Mesh {
+        let (min, max) = bounds(&positions);
+        Mesh {
             id: next_id(),
             provoking: triangles.iter().map(|t| t[2]).collect(),
             triangles,
             positions,
-            normals: Attribute { first: 0, values: normals },
-            colors: Attribute { first: n, values: Vec::new() },
-            texcoords: Attribute { first: n, values: Vec::new() },
+            normals,
+            colors,
+            texcoords,
             min,
             max,
             ..Mesh::default()
-        })
+        }
     }
 
     /// An indexed array draw of GL_TRIANGLES, its vertices fetched once each: the arrays'
@@ -151,25 +173,20 @@ impl Mesh {
     ) -> Mesh {
         let n = positions.len() as u32;
         let ws = positions.iter().any(|p| p.w != 1.0).then(|| positions.iter().map(|p| p.w as f32).collect());
-        let positions: Vec<Vec3> = positions.iter().map(|p| p.truncate().as_vec3()).collect();
-        let min = positions.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
-        let max = positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+        let positions = positions.iter().map(|p| p.truncate().as_vec3()).collect();
         Mesh {
-            id: next_id(),
-            provoking: triangles.iter().map(|t| t[2]).collect(),
-            triangles,
-            positions,
             ws,
-            normals: Attribute::all_or_none(normals, n),
-            colors: Attribute::all_or_none(colors, n),
-            texcoords: Attribute::all_or_none(texcoords, n),
             from_arrays: true,
             end_normal: end.0,
             end_color: end.1,
             end_texcoord: end.2,
-            min,
-            max,
-            ..Mesh::default()
+            ..Mesh::of_triangles(
+                positions,
+                Attribute::all_or_none(normals, n),
+                Attribute::all_or_none(colors, n),
+                Attribute::all_or_none(texcoords, n),
+                triangles,
+            )
         }
     }
 
@@ -297,8 +314,7 @@ impl MeshBuilder {
         for a in [&mut m.normals.first, &mut m.colors.first, &mut m.texcoords.first] {
             *a = (*a).min(n);
         }
-        m.min = m.positions.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
-        m.max = m.positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+        (m.min, m.max) = bounds(&m.positions);
         m
     }
 

@@ -16,7 +16,6 @@ use std::sync::Mutex;
 use glray_render::Rendered;
 
 use crate::profile::{self, Kind};
-use crate::real;
 
 /// A way of presenting, as set by `GLRAY_PRESENT`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,13 +55,6 @@ fn choose(way: Way, kind: Kind) -> (Option<Way>, Option<&'static str>) {
             (Some(Way::Pixels), Some("present = shader needs GL 3.1 or later; presenting with glDrawPixels"))
         }
     }
-}
-
-pub(super) fn get_int(pname: u32) -> i32 {
-    let mut v = [0i32; 4];
-    // SAFETY: glGetIntegerv writes at most 4 integers for the names asked here.
-    unsafe { real::glGetIntegerv(pname, v.as_mut_ptr().cast()) };
-    v[0]
 }
 
 /// Messages already given (each once per process).

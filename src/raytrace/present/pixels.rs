@@ -6,8 +6,7 @@ use std::ffi::c_void;
 
 use glray_render::Rendered;
 
-use super::get_int;
-use crate::real;
+use crate::real::{self, get_int};
 
 const GL_ALL_ATTRIB_BITS: u32 = 0x000F_FFFF;
 const GL_CLIENT_ALL_ATTRIB_BITS: u32 = 0xFFFF_FFFF;

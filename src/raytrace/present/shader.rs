@@ -13,8 +13,8 @@ use std::ffi::c_void;
 
 use glray_render::Rendered;
 
-use super::{get_int, Kind};
-use crate::real;
+use super::Kind;
+use crate::real::{self, get_int, get_ints};
 
 const VERTEX: &str = "#version 140
 // One triangle that covers the viewport: (-1,-1), (3,-1), (-1,3).
@@ -127,13 +127,6 @@ struct Saved {
     core: bool,
 }
 
-fn ints<const N: usize>(pname: u32) -> [i32; N] {
-    let mut v = [0i32; 4];
-    // SAFETY: glGetIntegerv writes at most 4 integers for the names asked here.
-    unsafe { real::glGetIntegerv(pname, v.as_mut_ptr().cast()) };
-    std::array::from_fn(|i| v[i])
-}
-
 fn bools<const N: usize>(pname: u32) -> [u8; N] {
     let mut v = [0u8; 4];
     // SAFETY: glGetBooleanv writes at most 4 booleans for the names asked here.
@@ -164,14 +157,14 @@ unsafe fn save(kind: Kind, off: &[u32]) -> Saved {
         samplers: has_samplers.then_some(samplers),
         unpack_buffer: get_int(GL_PIXEL_UNPACK_BUFFER_BINDING),
         unpack: UNPACK.iter().map(|&(p, _)| get_int(p)).collect(),
-        viewport: ints(GL_VIEWPORT),
+        viewport: get_ints(GL_VIEWPORT),
         enabled: off.iter().map(|&cap| (cap, real::glIsEnabled(cap) != 0)).collect(),
         core: kind.core,
         depth_test: real::glIsEnabled(GL_DEPTH_TEST) != 0,
         depth_func: get_int(GL_DEPTH_FUNC),
         depth_mask: bools::<1>(GL_DEPTH_WRITEMASK)[0],
         colour_mask: bools(GL_COLOR_WRITEMASK),
-        polygon_mode: ints(GL_POLYGON_MODE),
+        polygon_mode: get_ints(GL_POLYGON_MODE),
     }
 }
 
