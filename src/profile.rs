@@ -70,7 +70,9 @@ thread_local! {
     static CURRENT: Cell<Option<Option<Kind>>> = const { Cell::new(None) };
 }
 
-/// Called after this thread made a context current (or released it).
+/// Called after this thread made a context current (or released it). Asked now rather than when
+/// first needed: capture asks after every call, and a glGetString after a glBegin would be an
+/// error the program sees.
 pub fn made_current() {
     // SAFETY: on the thread that just bound the context; with none bound, glGetString returns NULL.
     let kind = unsafe { query() };
@@ -79,13 +81,14 @@ pub fn made_current() {
 
 /// What this thread's current context is (asked now if it was not at its MakeCurrent).
 pub fn current() -> Option<Kind> {
-    CURRENT.with(|c| {
-        *c.get().get_or_insert_with(|| {
+    CURRENT.with(|c| match c.get() {
+        Some(kind) => kind,
+        None => {
             // SAFETY: as in made_current; asked of whatever is current on this thread.
             let kind = unsafe { query() };
             c.set(Some(kind));
             kind
-        })
+        }
     })
 }
 
