@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Weak};
 use std::time::Duration;
 
-use glam::{Affine3A, DMat4, Vec3, Vec3A};
+use glam::{Affine3A, DMat4, Mat3, Vec3, Vec3A};
 use glray_capture::frame::{Frame, Solid, TriangleId};
 use glray_capture::instance::Instance;
 use glray_capture::mesh::Mesh;
@@ -23,7 +23,7 @@ use obvhs::ray::RayHit;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
-use crate::bvh::TriBvh;
+use crate::bvh::{TriBvh, TriHit};
 
 /// Where a ray (unit direction) enters a capsule around the segment from `a` to `b` (a ball when
 /// they meet), or infinity (Quilez's capsule test: the cylinder, then the cap it came in by).
@@ -71,12 +71,14 @@ fn capsule(s: &Solid, ray: &Ray) -> f32 {
     }
 }
 
-/// A ray's hit: which triangle, where along the ray, and its draw's place in drawing order.
+/// A ray's hit: which triangle, where along the ray, its draw's place in drawing order, and
+/// its geometric normal (eye space, e1 x e2 of its corners in drawing order, not normalised).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hit {
     pub id: TriangleId,
     pub t: f32,
     pub sequence: u32,
+    pub normal: Vec3,
 }
 
 /// A mesh's BVH (its leaves hold their triangles' corners: a leaf is read from one place
@@ -134,6 +136,9 @@ struct Placed<'f> {
     instance: &'f Instance,
     bvh: Arc<MeshBvh>,
     to_object: Affine3A,
+    /// Takes an object-space e1 x e2 to the eye-space one: (M e1) x (M e2) = cof(M) (e1 x e2)
+    /// for the modelview's linear part M (its cofactor matrix, so mirrors keep the winding).
+    normal_to_eye: Mat3,
 }
 
 impl Placed<'_> {
@@ -142,6 +147,12 @@ impl Placed<'_> {
         let o = self.to_object.transform_point3a(r.origin);
         let d = self.to_object.transform_vector3a(r.direction);
         Ray::new(o, d, r.tmin, r.tmax)
+    }
+
+    /// A hit on the instance's mesh as a hit of the scene.
+    fn hit(&self, k: usize, h: TriHit) -> Hit {
+        let id = TriangleId { instance: k as u32, index: h.index };
+        Hit { id, t: h.t, sequence: self.instance.sequence, normal: self.normal_to_eye * h.normal }
     }
 
     /// Whether a hit (with determinant `det`, see `bvh`) is on a face the instance draws: the
@@ -180,10 +191,15 @@ impl<'f> Scene<'f> {
             .instances
             .iter()
             .zip(bvhs)
-            .map(|(instance, bvh)| Placed {
-                instance,
-                bvh,
-                to_object: Affine3A::from_mat4(instance.modelview.inverse().as_mat4()),
+            .map(|(instance, bvh)| {
+                let m = instance.modelview.as_mat4();
+                let (a, b, c) = (m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate());
+                Placed {
+                    instance,
+                    bvh,
+                    to_object: Affine3A::from_mat4(instance.modelview.inverse().as_mat4()),
+                    normal_to_eye: Mat3::from_cols(b.cross(c), c.cross(a), a.cross(b)),
+                }
             })
             .collect();
         let bounds: Vec<Aabb> = placed.iter().map(|p| eye_bounds(&p.instance.mesh, &p.instance.modelview)).collect();
@@ -324,25 +340,30 @@ impl<'f> Scene<'f> {
         })
     }
 
+    /// A hit on the eye-space triangles as a hit of the scene.
+    fn flat(&self, h: TriHit) -> Hit {
+        let id = TriangleId { instance: TriangleId::FLAT, index: h.index };
+        Hit { id, t: h.t, sequence: self.sequence(id), normal: h.normal }
+    }
+
     /// The closest hit in [tmin, tmax].
     pub fn closest(&self, ray: Ray) -> Option<Hit> {
-        let mut best: Option<(TriangleId, f32)> = None;
         let mut ray = ray;
-        if let Some((index, t)) = self.bvh.closest(&ray, |_, _| true) {
-            best = Some((TriangleId { instance: TriangleId::FLAT, index }, t));
-            ray.tmax = t;
+        let mut best = self.bvh.closest(&ray, |_, _| true).map(|h| self.flat(h));
+        if let Some(h) = best {
+            ray.tmax = h.t;
         }
         self.visit_instances(ray, false, |r, k| {
             let p = &self.placed[k];
             match p.bvh.bvh.closest(&p.ray(r), |_, det| p.drawn(det)) {
-                Some((index, t)) => {
-                    best = Some((TriangleId { instance: k as u32, index }, t));
-                    t
+                Some(h) => {
+                    best = Some(p.hit(k, h));
+                    h.t
                 }
                 None => f32::INFINITY,
             }
         });
-        best.map(|(id, t)| Hit { id, t, sequence: self.sequence(id) })
+        best
     }
 
     /// The closest hits of four rays (coherent ones: a 2x2 quad of camera rays), as `closest`
@@ -352,60 +373,45 @@ impl<'f> Scene<'f> {
             // Many instances: the top level is walked ray by ray.
             return rays.map(|r| self.closest(r));
         }
-        let mut best: [Option<(TriangleId, f32)>; 4] = [None; 4];
         let mut rays = rays;
-        let keep = |best: &mut [Option<(TriangleId, f32)>; 4],
-                    rays: &mut [Ray; 4],
-                    hits: [Option<(u32, f32)>; 4],
-                    instance: u32| {
+        let keep = |best: &mut [Option<Hit>; 4], rays: &mut [Ray; 4], hits: [Option<Hit>; 4]| {
             for (j, hit) in hits.into_iter().enumerate() {
-                if let Some((index, t)) = hit {
-                    best[j] = Some((TriangleId { instance, index }, t));
-                    rays[j].tmax = t;
+                if let Some(h) = hit {
+                    best[j] = Some(h);
+                    rays[j].tmax = h.t;
                 }
             }
         };
-        let hits = self.bvh.closest4(&rays, |_, _| true);
-        keep(&mut best, &mut rays, hits, TriangleId::FLAT);
+        let mut best = self.bvh.closest4(&rays, |_, _| true).map(|h| h.map(|h| self.flat(h)));
+        for (j, h) in best.iter().enumerate() {
+            if let Some(h) = h {
+                rays[j].tmax = h.t;
+            }
+        }
         for (k, b) in self.boxes.iter().enumerate() {
             if rays.iter().all(|r| b.intersect_ray(r) == f32::INFINITY) {
                 continue;
             }
             let p = &self.placed[k];
             let hits = p.bvh.bvh.closest4(&rays.map(|r| p.ray(&r)), |_, det| p.drawn(det));
-            keep(&mut best, &mut rays, hits, k as u32);
+            keep(&mut best, &mut rays, hits.map(|h| h.map(|h| p.hit(k, h))));
         }
-        best.map(|b| b.map(|(id, t)| Hit { id, t, sequence: self.sequence(id) }))
+        best
     }
 
     /// Every hit in [tmin, tmax], in no particular order.
     pub fn all(&self, ray: Ray, out: &mut Vec<Hit>) {
         out.clear();
-        self.bvh.each_hit(&ray, |index, t, _| {
-            let id = TriangleId { instance: TriangleId::FLAT, index };
-            out.push(Hit { id, t, sequence: self.sequence(id) });
-        });
+        self.bvh.each_hit(&ray, |h, _| out.push(self.flat(h)));
         self.visit_instances(ray, false, |r, k| {
             let p = &self.placed[k];
-            p.bvh.bvh.each_hit(&p.ray(r), |index, t, det| {
+            p.bvh.bvh.each_hit(&p.ray(r), |h, det| {
                 if p.drawn(det) {
-                    out.push(Hit { id: TriangleId { instance: k as u32, index }, t, sequence: p.instance.sequence });
+                    out.push(p.hit(k, h));
                 }
             });
             f32::INFINITY
         });
-    }
-
-    /// The geometric normal (not normalised, in eye space, winding e1 x e2) of a hit's triangle.
-    pub fn geometric_normal(&self, id: TriangleId) -> Vec3 {
-        let [a, b, c] = if id.instance == TriangleId::FLAT {
-            self.frame.triangles[id.index as usize].positions
-        } else {
-            let p = &self.placed[id.instance as usize];
-            let m = p.instance.modelview;
-            p.instance.mesh.corners(id.index as usize).map(|v| m.transform_point3(v.as_dvec3()).as_vec3())
-        };
-        (b - a).cross(c - a)
     }
 
     fn sequence(&self, id: TriangleId) -> u32 {
@@ -469,5 +475,64 @@ mod tests {
         assert!((capsule(&ball, &ray([-1.0, 0.0, 3.0], [0.0, 0.0, -1.0])) - 2.5).abs() < 1e-5);
         let short = Ray { tmax: 2.0, ..ray([-1.0, 0.0, 3.0], [0.0, 0.0, -1.0]) };
         assert_eq!(capsule(&ball, &short), f32::INFINITY, "beyond the ray's reach");
+    }
+
+    /// A scene of one triangle drawn with `modelview`, as an instance of a mesh.
+    fn one_instance(modelview: DMat4) -> (Frame, [Vec3; 3]) {
+        let corners = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let mesh = Mesh::indexed(corners.to_vec(), vec![Vec3::Z; 3], vec![[0, 1, 2]]).unwrap();
+        let instance = Instance {
+            mesh: Arc::new(mesh),
+            modelview,
+            object_to_clip: modelview,
+            normal_matrix: glam::DMat3::from_mat4(modelview).inverse().transpose(),
+            normalize: false,
+            rescale_normal: false,
+            texture_matrix: DMat4::IDENTITY,
+            normal: glam::DVec3::Z,
+            color: glam::DVec4::ONE,
+            texcoord: glam::DVec4::W,
+            surface: 0,
+            camera: 0,
+            sequence: 0,
+            lighting: 0,
+            flat: false,
+            front_ccw: true,
+            cull: None,
+            mirrored: false,
+        };
+        let eye = corners.map(|c| modelview.transform_point3(c.as_dvec3()).as_vec3());
+        (Frame { instances: vec![instance], ..Frame::default() }, eye)
+    }
+
+    #[test]
+    fn hits_carry_the_eye_space_normal_of_their_triangle_in_its_winding() {
+        use glam::DVec3;
+        // Moved, scaled unevenly, rotated, and mirrored (the winding turns with the mirror).
+        let modelviews = [
+            DMat4::from_translation(DVec3::new(0.0, 0.0, -5.0)),
+            DMat4::from_translation(DVec3::new(0.5, -0.2, -4.0))
+                * DMat4::from_rotation_y(0.4)
+                * DMat4::from_scale(DVec3::new(3.0, 0.5, 2.0)),
+            DMat4::from_translation(DVec3::new(0.0, 0.0, -3.0)) * DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0)),
+        ];
+        for m in modelviews {
+            let (frame, [a, b, c]) = one_instance(m);
+            let expected = (b - a).cross(c - a);
+            let scene = Scene::build(&frame, &mut Meshes::default());
+            let centre = (a + b + c) / 3.0;
+            let r = ray([0.0, 0.0, 0.0], centre.to_array());
+            let hit = scene.closest(r).expect("the ray through the triangle's centre hits it");
+            assert!(
+                hit.normal.normalize().abs_diff_eq(expected.normalize(), 1e-5),
+                "{m}: {} vs {expected}",
+                hit.normal
+            );
+            let four = scene.closest4([r; 4]);
+            assert!(four.iter().all(|h| *h == Some(hit)));
+            let mut all = Vec::new();
+            scene.all(r, &mut all);
+            assert_eq!(all, [hit]);
+        }
     }
 }

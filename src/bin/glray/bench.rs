@@ -213,7 +213,7 @@ fn kernels(frame: &Frame, ao: u32, frames: u32) -> Kernels {
     let record = |ray: &Ray, hit: Option<glray_render::scene::Hit>| {
         hit.map(|hit| {
             let d = Vec3::from(ray.direction);
-            let mut n = scene.geometric_normal(hit.id).normalize_or_zero();
+            let mut n = hit.normal.normalize_or_zero();
             if n.dot(d) > 0.0 {
                 n = -n;
             }

@@ -9,7 +9,7 @@
 use glam::{Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
-use super::{Node, Tri4, EMPTY, LEAF, LEAF_SIZE};
+use super::{Node, Tri4, EMPTY, LEAF, LEAF_SIZE, WIDTH};
 
 /// A triangle's box; `lo.w` holds the triangle's index (as bits).
 #[derive(Clone, Copy)]
@@ -235,7 +235,7 @@ fn halve(records: &[Record]) -> (Part, Part) {
 #[derive(Default)]
 struct Out {
     nodes: Vec<Node>,
-    lens: Vec<[u8; 4]>,
+    lens: Vec<[u8; WIDTH]>,
 }
 
 impl Out {
@@ -257,11 +257,11 @@ impl Out {
 fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut Out) -> u32 {
     // Children as (start, end, bounds, centroids) in `records`, in order; split the one with
     // the largest surface (of those with more than a leaf's worth) until there are four.
-    let mut kids: Vec<(usize, usize, Bounds, Centroids)> = Vec::with_capacity(4);
+    let mut kids: Vec<(usize, usize, Bounds, Centroids)> = Vec::with_capacity(WIDTH);
     let ((mid, lb, lc), (_, rb, rc)) = split(records, centroids);
     kids.push((0, mid, lb, lc));
     kids.push((mid, records.len(), rb, rc));
-    while kids.len() < 4 {
+    while kids.len() < WIDTH {
         let Some((k, _)) = kids
             .iter()
             .enumerate()
@@ -277,12 +277,9 @@ fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut
     }
     let index = out.nodes.len();
     let mut node = Node::EMPTY;
-    let mut lens = [0u8; 4];
+    let mut lens = [0u8; WIDTH];
     for (lane, &(s, e, b, _)) in kids.iter().enumerate() {
-        for axis in 0..3 {
-            node.bounds[0][axis][lane] = b.lo[axis];
-            node.bounds[1][axis][lane] = b.hi[axis];
-        }
+        node.set_bounds(lane, b.lo, b.hi);
         if (e - s) as u32 <= LEAF_SIZE {
             node.child[lane] = LEAF | (first + s) as u32;
             lens[lane] = (e - s) as u8;
@@ -291,7 +288,7 @@ fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut
     out.nodes.push(node);
     out.lens.push(lens);
     // The inner children's ranges, as disjoint slices.
-    let mut parts: Vec<(usize, &mut [Record], usize, Centroids)> = Vec::with_capacity(4);
+    let mut parts: Vec<(usize, &mut [Record], usize, Centroids)> = Vec::with_capacity(WIDTH);
     let mut rest = records;
     let mut at = 0;
     for (lane, &(s, e, _, c)) in kids.iter().enumerate() {
@@ -353,7 +350,7 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     // go before the leaves are made (peak memory).
     let mut ids: Vec<([u32; 4], u8)> = Vec::new();
     for (node, lens) in out.nodes.iter_mut().zip(&out.lens) {
-        for lane in 0..4 {
+        for lane in 0..WIDTH {
             if lens[lane] > 0 {
                 let first = (node.child[lane] & !LEAF) as usize;
                 let mut leaf = [0u32; 4];

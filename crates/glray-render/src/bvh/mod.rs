@@ -22,18 +22,37 @@ const LEAF: u32 = 1 << 31;
 const EMPTY: u32 = u32::MAX;
 /// A subtree of at most this many triangles is one leaf.
 const LEAF_SIZE: u32 = 4;
+/// Children per node, tested four at a time (one SIMD test per group of four).
+const WIDTH: usize = 4;
+const GROUPS: usize = WIDTH / 4;
 
-/// Four children: `bounds[0]` their minimum corners and `bounds[1]` their maximum, per axis,
-/// one child per lane. Aligned so that a node is two whole cache lines.
+/// `WIDTH` children, in groups of four: `bounds[g][0]` the minimum corners and `bounds[g][1]`
+/// the maximum of children 4g..4g+4, per axis, one child per lane. Aligned so that a node is
+/// whole cache lines.
 #[derive(Clone, Copy)]
 #[repr(C, align(64))]
 struct Node {
-    bounds: [[Vec4; 3]; 2],
-    child: [u32; 4],
+    bounds: [[[Vec4; 3]; 2]; GROUPS],
+    child: [u32; WIDTH],
 }
 
 impl Node {
-    const EMPTY: Node = Node { bounds: [[Vec4::INFINITY; 3], [Vec4::NEG_INFINITY; 3]], child: [EMPTY; 4] };
+    const EMPTY: Node =
+        Node { bounds: [[[Vec4::INFINITY; 3], [Vec4::NEG_INFINITY; 3]]; GROUPS], child: [EMPTY; WIDTH] };
+
+    /// Child `k`'s box.
+    fn set_bounds(&mut self, k: usize, lo: Vec3A, hi: Vec3A) {
+        for axis in 0..3 {
+            self.bounds[k / 4][0][axis][k % 4] = lo[axis];
+            self.bounds[k / 4][1][axis][k % 4] = hi[axis];
+        }
+    }
+
+    /// Side `side` (0: minimum, 1: maximum) of child `k`'s box along `axis`.
+    #[inline(always)]
+    fn bound(&self, side: usize, axis: usize, k: usize) -> f32 {
+        self.bounds[k / 4][side][axis][k % 4]
+    }
 }
 
 /// Up to four triangles, one per lane: first corner, edges to the other two, and the caller's
@@ -65,6 +84,31 @@ impl Tri4 {
     }
 }
 
+impl Tri4 {
+    /// Lane `k`'s geometric normal e1 x e2 (not normalised): the walk has the leaf in cache,
+    /// where looking it up later through the mesh's indices would be two more misses per hit.
+    #[inline(always)]
+    fn normal(&self, k: usize) -> Vec3 {
+        let lane = |v: &[Vec4; 3]| Vec3::new(v[0][k], v[1][k], v[2][k]);
+        lane(&self.e1).cross(lane(&self.e2))
+    }
+
+    #[inline(always)]
+    fn hit(&self, k: usize, t: f32) -> TriHit {
+        TriHit { index: self.id[k], t, normal: self.normal(k) }
+    }
+}
+
+/// A ray's hit on a triangle of the tree: the index the triangle had in the slice the tree was
+/// built from, where along the ray, and its geometric normal (e1 x e2 of its corners in the
+/// order given, in the tree's space, not normalised).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TriHit {
+    pub index: u32,
+    pub t: f32,
+    pub normal: Vec3,
+}
+
 /// A ray made ready for the SIMD tests: every component in all four lanes, and for each axis
 /// which side of a box it meets first.
 struct Prepared {
@@ -91,17 +135,23 @@ impl Prepared {
     }
 }
 
-/// Which of the node's four boxes the ray meets within [tmin, tmax] (bit per child), and where
-/// it enters each.
+/// Which of the node's boxes the ray meets within [tmin, tmax] (bit per child), and where it
+/// enters each.
 #[inline(always)]
-fn hit_boxes(node: &Node, r: &Prepared, tmax: f32) -> (u32, Vec4) {
-    let slab = |axis: usize, side: usize| (node.bounds[side][axis] - r.origin[axis]) * r.inverse[axis];
-    let near = |axis: usize| slab(axis, r.near[axis]);
-    let far = |axis: usize| slab(axis, 1 - r.near[axis]);
-    let tnear = near(0).max(near(1)).max(near(2).max(Vec4::splat(r.tmin)));
-    // Widened by a few ulps so that rounding in the slabs cannot lose a box the ray grazes.
-    let tfar = far(0).min(far(1)).min(far(2).min(Vec4::splat(tmax))) * (1.0 + 4.0 * f32::EPSILON);
-    (tnear.cmple(tfar).bitmask(), tnear)
+fn hit_boxes(node: &Node, r: &Prepared, tmax: f32) -> (u32, [f32; WIDTH]) {
+    let mut mask = 0;
+    let mut entry = [0.0; WIDTH];
+    for (g, bounds) in node.bounds.iter().enumerate() {
+        let slab = |axis: usize, side: usize| (bounds[side][axis] - r.origin[axis]) * r.inverse[axis];
+        let near = |axis: usize| slab(axis, r.near[axis]);
+        let far = |axis: usize| slab(axis, 1 - r.near[axis]);
+        let tnear = near(0).max(near(1)).max(near(2).max(Vec4::splat(r.tmin)));
+        // Widened by a few ulps so that rounding in the slabs cannot lose a box the ray grazes.
+        let tfar = far(0).min(far(1)).min(far(2).min(Vec4::splat(tmax))) * (1.0 + 4.0 * f32::EPSILON);
+        mask |= tnear.cmple(tfar).bitmask() << (4 * g);
+        entry[4 * g..4 * g + 4].copy_from_slice(&tnear.to_array());
+    }
+    (mask, entry)
 }
 
 /// How far outside a triangle's edges (in barycentric units) a hit still counts: a ray through
@@ -157,7 +207,7 @@ fn hit_triangles(tri: &Tri4, r: &Prepared, tmax: f32) -> (u32, Vec4, Vec4) {
 /// Puts `entry` (distance first) among the first `n` of `hits`, which are sorted farthest
 /// first, keeping them so: children are then pushed far to near and the nearest is visited now.
 #[inline(always)]
-fn insert_farthest_first<T: Copy>(hits: &mut [(f32, T); 4], n: usize, entry: (f32, T)) {
+fn insert_farthest_first<T: Copy, const N: usize>(hits: &mut [(f32, T); N], n: usize, entry: (f32, T)) {
     let mut j = n;
     while j > 0 && hits[j - 1].0 < entry.0 {
         hits[j] = hits[j - 1];
@@ -242,7 +292,7 @@ impl TriBvh {
                         continue;
                     }
                     if !NEAREST {
-                        let tn = tnear.to_array();
+                        let tn = tnear;
                         let mut m = rest;
                         while m != 0 {
                             let k = m.trailing_zeros() as usize;
@@ -253,8 +303,8 @@ impl TriBvh {
                         continue;
                     }
                     // Two or more: visit the nearest now, the others nearest first after it.
-                    let tn = tnear.to_array();
-                    let mut hits = [(0.0f32, 0u32); 4];
+                    let tn = tnear;
+                    let mut hits = [(0.0f32, 0u32); WIDTH];
                     let mut n = 0;
                     let mut m = mask;
                     while m != 0 {
@@ -288,9 +338,9 @@ impl TriBvh {
     }
 
     /// The closest hit in [tmin, tmax] among triangles `accept` takes (given the triangle's
-    /// index and the determinant of the hit, see `hit_triangles`): (index, t).
+    /// index and the determinant of the hit, see `hit_triangles`).
     #[inline]
-    pub fn closest(&self, ray: &Ray, mut accept: impl FnMut(u32, f32) -> bool) -> Option<(u32, f32)> {
+    pub fn closest(&self, ray: &Ray, mut accept: impl FnMut(u32, f32) -> bool) -> Option<TriHit> {
         let mut best = None;
         self.walk::<true>(ray, |tri, r, tmax| {
             let (mut mask, t, det) = hit_triangles(tri, r, *tmax);
@@ -303,7 +353,7 @@ impl TriBvh {
                 mask &= mask - 1;
                 if t[k] < *tmax && accept(tri.id[k], det[k]) {
                     *tmax = t[k];
-                    best = Some((tri.id[k], t[k]));
+                    best = Some(tri.hit(k, t[k]));
                 }
             }
             false
@@ -322,16 +372,16 @@ impl TriBvh {
         hit
     }
 
-    /// Every hit within [tmin, tmax], in no particular order: `visit(index, t, det)`.
+    /// Every hit within [tmin, tmax], in no particular order: `visit(hit, det)`.
     #[inline]
-    pub fn each_hit(&self, ray: &Ray, mut visit: impl FnMut(u32, f32, f32)) {
+    pub fn each_hit(&self, ray: &Ray, mut visit: impl FnMut(TriHit, f32)) {
         self.walk::<false>(ray, |tri, r, tmax| {
             let (mut mask, t, det) = hit_triangles(tri, r, *tmax);
             let (t, det) = (t.to_array(), det.to_array());
             while mask != 0 {
                 let k = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                visit(tri.id[k], t[k], det[k]);
+                visit(tri.hit(k, t[k]), det[k]);
             }
             false
         });
@@ -388,16 +438,22 @@ mod tests {
                 let target = Vec3A::new(random(k * 7 + 100_002), random(k * 7 + 100_003), 0.0);
                 let ray = Ray::new(o, (target - o).normalize(), 0.0, f32::INFINITY);
                 let expected = brute(&tris, &ray);
-                assert_eq!(bvh.closest(&ray, |_, _| true), expected, "{n} triangles, ray {k}");
+                let found = bvh.closest(&ray, |_, _| true);
+                assert_eq!(found.map(|h| (h.index, h.t)), expected, "{n} triangles, ray {k}");
+                if let Some(h) = found {
+                    let [a, b, c] = tris[h.index as usize];
+                    assert!(h.normal.cross((b - a).cross(c - a)).length() <= 1e-6 * h.normal.length_squared());
+                    assert!(h.normal.dot((b - a).cross(c - a)) > 0.0);
+                }
                 assert_eq!(bvh.occluded(&ray), expected.is_some());
                 let mut all = 0;
-                bvh.each_hit(&ray, |_, _, _| all += 1);
+                bvh.each_hit(&ray, |_, _| all += 1);
                 let every = (0..n).filter(|&i| brute(&tris[i as usize..=i as usize], &ray).is_some()).count();
                 assert_eq!(all, every, "{n} triangles, ray {k}: every hit");
                 // A ray that ends before the first hit meets nothing.
                 if let Some((_, t)) = expected {
                     let short = Ray { tmax: t * 0.999, ..ray };
-                    assert_eq!(bvh.closest(&short, |_, _| true), None);
+                    assert!(bvh.closest(&short, |_, _| true).is_none());
                     assert!(!bvh.occluded(&short));
                 }
             }
@@ -412,7 +468,7 @@ mod tests {
         let ray = Ray::new(Vec3A::new(0.2, 0.2, 1.0), Vec3A::NEG_Z, 0.0, f32::INFINITY);
         assert!(bvh.closest(&ray, |_, _| true).is_some());
         let mut n = 0;
-        bvh.each_hit(&ray, |_, _, _| n += 1);
+        bvh.each_hit(&ray, |_, _| n += 1);
         assert_eq!(n, 1000);
         // NaN and infinite corners are never hit, and do not hide the triangles around them.
         let mut tris = soup(300);
@@ -425,11 +481,11 @@ mod tests {
         for k in 0..300 {
             let o = Vec3A::new(random(k * 3 + 9_000), random(k * 3 + 9_001), 2.0);
             let ray = Ray::new(o, Vec3A::NEG_Z, 0.0, f32::INFINITY);
-            assert_eq!(bvh.closest(&ray, |_, _| true), brute(&tris, &ray), "ray {k}");
+            assert_eq!(bvh.closest(&ray, |_, _| true).map(|h| (h.index, h.t)), brute(&tris, &ray), "ray {k}");
         }
         // Nothing but broken triangles: an empty tree.
         let bvh = build(&[[Vec3::NAN; 3]; 3]);
-        assert_eq!(bvh.closest(&ray, |_, _| true), None);
+        assert!(bvh.closest(&ray, |_, _| true).is_none());
     }
 
     #[test]
@@ -458,12 +514,13 @@ mod tests {
         let tris: Vec<Triangle> = quad(0.0).into_iter().chain(quad(-1.0)).collect();
         let bvh = build(&tris);
         let ray = Ray::new(Vec3A::new(0.2, -0.3, 5.0), Vec3A::NEG_Z, 0.0, f32::INFINITY);
-        let (near, t) = bvh.closest(&ray, |_, _| true).unwrap();
+        let TriHit { index: near, t, normal } = bvh.closest(&ray, |_, _| true).unwrap();
+        assert!(normal.normalize().abs_diff_eq(Vec3::Z, 1e-6), "{normal}");
         assert!(near < 2 && (t - 5.0).abs() < 1e-5);
-        let (far, t) = bvh.closest(&ray, |i, _| i >= 2).unwrap();
+        let TriHit { index: far, t, .. } = bvh.closest(&ray, |i, _| i >= 2).unwrap();
         assert!(far >= 2 && (t - 6.0).abs() < 1e-5);
         // Front faces seen from +z: the normal e1 x e2 is +z, so -det < 0 for a ray going -z.
-        bvh.each_hit(&ray, |_, _, det| assert!(det > 0.0));
+        bvh.each_hit(&ray, |_, det| assert!(det > 0.0));
     }
 
     #[test]

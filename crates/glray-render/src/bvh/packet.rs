@@ -6,7 +6,7 @@
 use glam::{BVec4A, Vec4};
 use obvhs::ray::Ray;
 
-use super::{insert_farthest_first, moller_trumbore, Node, Stack, Tri4, TriBvh, EMPTY, LEAF};
+use super::{insert_farthest_first, moller_trumbore, Node, Stack, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
 
 /// Four rays, one per lane.
 struct Rays4 {
@@ -36,8 +36,8 @@ impl Rays4 {
 #[inline(always)]
 fn hit_box(node: &Node, k: usize, r: &Rays4, tmax: Vec4) -> (BVec4A, Vec4) {
     let slab = |axis: usize| {
-        let lo = (Vec4::splat(node.bounds[0][axis][k]) - r.origin[axis]) * r.inverse[axis];
-        let hi = (Vec4::splat(node.bounds[1][axis][k]) - r.origin[axis]) * r.inverse[axis];
+        let lo = (Vec4::splat(node.bound(0, axis, k)) - r.origin[axis]) * r.inverse[axis];
+        let hi = (Vec4::splat(node.bound(1, axis, k)) - r.origin[axis]) * r.inverse[axis];
         (lo.min(hi), lo.max(hi))
     };
     let (x, y, z) = (slab(0), slab(1), slab(2));
@@ -56,7 +56,7 @@ fn hit_triangle(tri: &Tri4, k: usize, r: &Rays4, tmax: Vec4) -> (u32, Vec4, Vec4
 
 impl TriBvh {
     /// The closest hit of each of four rays, as `closest` would find it for each alone.
-    pub fn closest4(&self, rays: &[Ray; 4], mut accept: impl FnMut(u32, f32) -> bool) -> [Option<(u32, f32)>; 4] {
+    pub fn closest4(&self, rays: &[Ray; 4], mut accept: impl FnMut(u32, f32) -> bool) -> [Option<TriHit>; 4] {
         let mut best = [None; 4];
         if self.root == EMPTY {
             return best;
@@ -72,9 +72,9 @@ impl TriBvh {
                 if cur.0 & LEAF == 0 {
                     let node = &self.nodes[cur.0 as usize];
                     // The children some active ray meets, nearest (for the nearest ray) last.
-                    let mut hits = [(0.0f32, (0u32, Vec4::ZERO)); 4];
+                    let mut hits = [(0.0f32, (0u32, Vec4::ZERO)); WIDTH];
                     let mut n = 0;
-                    for k in 0..4 {
+                    for k in 0..WIDTH {
                         if node.child[k] == EMPTY {
                             continue;
                         }
@@ -112,7 +112,7 @@ impl TriBvh {
                             mask &= mask - 1;
                             if ts[lane] < bound[lane] && accept(tri.id[k], dets[lane]) {
                                 bound[lane] = ts[lane];
-                                best[lane] = Some((tri.id[k], ts[lane]));
+                                best[lane] = Some(tri.hit(k, ts[lane]));
                             }
                         }
                         tmax = Vec4::from_array(bound);
