@@ -91,11 +91,15 @@ const OFF: &[u32] = &[
     0x8C89, // RASTERIZER_DISCARD
     0x809E, // SAMPLE_ALPHA_TO_COVERAGE
     0x80A0, // SAMPLE_COVERAGE
-    0x8E51, // SAMPLE_MASK
     0x8DB9, // FRAMEBUFFER_SRGB
     0x8037, // POLYGON_OFFSET_FILL
-    0x864F, // DEPTH_CLAMP
     0x3000, 0x3001, 0x3002, 0x3003, 0x3004, 0x3005, 0x3006, 0x3007, // CLIP_DISTANCE0..7
+];
+
+/// What GL 3.2 added (a 3.1 context answers GL_INVALID_ENUM for these).
+const OFF_32: &[u32] = &[
+    0x8E51, // SAMPLE_MASK
+    0x864F, // DEPTH_CLAMP
 ];
 
 /// What compatibility contexts add (when `shader` is forced there): per-fragment fixed-function
@@ -104,6 +108,18 @@ const OFF_COMPAT: &[u32] = &[
     0x0BC0, // ALPHA_TEST
     0x0B42, // POLYGON_STIPPLE
 ];
+
+/// The capabilities to turn off (and put back) in a context of kind `kind`.
+fn capabilities_off(kind: Kind) -> Vec<u32> {
+    let mut off = OFF.to_vec();
+    if (kind.major, kind.minor) >= (3, 2) {
+        off.extend_from_slice(OFF_32);
+    }
+    if !kind.core {
+        off.extend_from_slice(OFF_COMPAT);
+    }
+    off
+}
 
 /// The program's state, as it was before the present.
 struct Saved {
@@ -323,7 +339,7 @@ unsafe fn upload(unit: u32, texture: u32, internal: i32, format: u32, ty: u32, w
 /// # Safety
 /// A GL context (desktop GL 3.1 or later) must be current on this thread.
 pub unsafe fn draw(r: &Rendered, kind: Kind) -> Result<(), String> {
-    let off: Vec<u32> = OFF.iter().chain(if kind.core { &[][..] } else { OFF_COMPAT }).copied().collect();
+    let off = capabilities_off(kind);
     let saved = save(kind, &off);
     let result = draw_saved(r, kind, &off);
     restore(&saved);
@@ -359,4 +375,33 @@ unsafe fn draw_saved(r: &Rendered, kind: Kind, off: &[u32]) -> Result<(), String
     real::glPolygonMode(GL_FRONT_AND_BACK, GL_FILL as u32);
     real::glDrawArrays(GL_TRIANGLES, 0, 3);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kind(major: u32, minor: u32, core: bool) -> Kind {
+        Kind { major, minor, es: false, core }
+    }
+
+    #[test]
+    fn only_capabilities_the_context_knows_are_turned_off() {
+        const SAMPLE_MASK: u32 = 0x8E51;
+        const ALPHA_TEST: u32 = 0x0BC0;
+        // A bare 3.1 context: no GL 3.2 capabilities, no fixed-function ones.
+        let off = capabilities_off(kind(3, 1, true));
+        assert!(!off.contains(&SAMPLE_MASK) && !off.contains(&ALPHA_TEST));
+        assert!(off.contains(&0x0BE2), "blending is always off");
+        // 3.3 core: GL 3.2's too.
+        let off = capabilities_off(kind(3, 3, true));
+        assert!(off.contains(&SAMPLE_MASK) && !off.contains(&ALPHA_TEST));
+        // A compatibility context (shader forced): the fixed-function fragment state as well.
+        let off = capabilities_off(kind(4, 5, false));
+        assert!(off.contains(&SAMPLE_MASK) && off.contains(&ALPHA_TEST));
+        let mut unique = off.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), off.len());
+    }
 }
