@@ -105,7 +105,7 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
         while let Some(event) = reader.next_event().map_err(|e| e.to_string())? {
             if let Event::Name { number } = event {
                 live.names.resize(number + 1, Vec::new());
-                live.names[number] = reader.names[number].to_vec();
+                live.names[number] = reader.name(number).to_vec();
             }
             if let Event::Call { thread, .. } = event {
                 let ctx = live.capture.context(thread);
@@ -126,7 +126,7 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
         Ok(Err(e)) => stop(&format!("capture could not read a call: {e}")),
         Err(_) => stop("internal error in capture"),
     }
-    reader.names.len()
+    reader.named()
 }
 
 /// Called after this thread made a context current: capture follows only compatibility

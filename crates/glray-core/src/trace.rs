@@ -328,7 +328,9 @@ pub struct Reader<'a> {
     /// Offset of the event being read, for messages.
     event_start: usize,
     pub version: u32,
-    pub names: Vec<&'a [u8]>,
+    /// How many commands earlier pieces named (see `events`); `names` continues from there.
+    named_before: usize,
+    names: Vec<&'a [u8]>,
     calls: u64,
     in_call: bool,
     ended: bool,
@@ -342,6 +344,7 @@ impl<'a> Reader<'a> {
             pos: 0,
             event_start: 0,
             version: 0,
+            named_before: 0,
             names: Vec::new(),
             calls: 0,
             in_call: false,
@@ -372,11 +375,22 @@ impl<'a> Reader<'a> {
             pos: 0,
             event_start: 0,
             version: VERSION,
-            names: vec![&[][..]; named],
+            named_before: named,
+            names: Vec::new(),
             calls: 0,
             in_call: false,
             ended: false,
         }
+    }
+
+    /// How many commands are named so far.
+    pub fn named(&self) -> usize {
+        self.named_before + self.names.len()
+    }
+
+    /// The name of command `number` (empty for one an earlier piece named, see `events`).
+    pub fn name(&self, number: usize) -> &'a [u8] {
+        number.checked_sub(self.named_before).and_then(|k| self.names.get(k)).copied().unwrap_or(&[])
     }
 
     /// The offset of the next event.
@@ -501,9 +515,9 @@ impl<'a> Reader<'a> {
                 self.in_call = true;
                 let at = self.pos;
                 let cmd = self.varint("the command number")?;
-                if cmd >= self.names.len() as u64 {
+                if cmd >= self.named() as u64 {
                     return Err(
-                        self.error_at(at, format!("command number {cmd} was never named ({} are)", self.names.len()))
+                        self.error_at(at, format!("command number {cmd} was never named ({} are)", self.named()))
                     );
                 }
                 let cmd = cmd as usize;
@@ -557,7 +571,7 @@ impl<'a> Reader<'a> {
                     return Err(self.error(format!("bad command name {:?}", String::from_utf8_lossy(name))));
                 }
                 self.names.push(name);
-                Event::Name { number: self.names.len() - 1 }
+                Event::Name { number: self.named() - 1 }
             }
             tag::END => {
                 self.ended = true;
@@ -609,6 +623,29 @@ mod tests {
     }
 
     #[test]
+    fn pieces_of_a_stream_number_commands_after_the_earlier_pieces() {
+        // Three commands were named by earlier pieces; this one calls the third and names a fourth.
+        let mut e = Encoder::new();
+        e.begin_call(2, 0, 0);
+        e.no_return();
+        e.name(b"glFinish");
+        e.begin_call(3, 0, 0);
+        e.no_return();
+        let mut r = Reader::events(e.bytes(), 3);
+        assert!(matches!(r.next_event().unwrap(), Some(Event::Call { cmd: 2, .. })));
+        assert_eq!(r.next_event().unwrap(), Some(Event::Name { number: 3 }));
+        assert!(matches!(r.next_event().unwrap(), Some(Event::Call { cmd: 3, .. })));
+        assert_eq!(r.next_event().unwrap(), None);
+        assert_eq!((r.named(), r.name(3), r.name(1), r.name(9)), (4, &b"glFinish"[..], &b""[..], &b""[..]));
+        // A command no piece named is an error at its offset.
+        let mut e = Encoder::new();
+        e.begin_call(3, 0, 0);
+        e.no_return();
+        let err = Reader::events(e.bytes(), 3).next_event().unwrap_err();
+        assert!(err.to_string().contains("command number 3 was never named (3 are)"), "{err}");
+    }
+
+    #[test]
     fn round_trip() {
         let data = sample();
         let mut r = Reader::new(&data).unwrap();
@@ -647,7 +684,7 @@ mod tests {
         );
         assert_eq!(events[6], Event::End);
         assert_eq!(r.calls(), 3);
-        assert_eq!(r.names, vec![&b"glBegin"[..], b"glVertex3fv", b"glXSwapBuffers"]);
+        assert_eq!((0..3).map(|n| r.name(n)).collect::<Vec<_>>(), [&b"glBegin"[..], b"glVertex3fv", b"glXSwapBuffers"]);
     }
 
     #[test]

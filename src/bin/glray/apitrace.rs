@@ -580,7 +580,7 @@ mod tests {
         let mut calls = Vec::new();
         while let Some(e) = r.next_event().unwrap() {
             if let glray_core::trace::Event::Call { cmd, args, .. } = e {
-                calls.push((String::from_utf8_lossy(r.names[cmd]).into_owned(), args.len()));
+                calls.push((String::from_utf8_lossy(r.name(cmd)).into_owned(), args.len()));
             }
         }
         assert_eq!(calls, vec![("glViewport".to_string(), 4), ("glClearColor".to_string(), 4)]);

@@ -341,7 +341,7 @@ fn dump_events(
             Event::Call { cmd, thread, args, ret } => {
                 let args: Vec<String> = args.iter().map(show_value).collect();
                 let ret = ret.map(|v| format!(" = {}", show_value(&v))).unwrap_or_default();
-                let name = String::from_utf8_lossy(r.names[cmd]);
+                let name = String::from_utf8_lossy(r.name(cmd));
                 write(format!("{} [{thread}] {name}({}){ret}", r.calls() - 1, args.join(", ")))?;
                 if max_calls.is_some_and(|m| r.calls() >= m) {
                     break;

@@ -60,7 +60,7 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options
     while let Some(event) = reader.next_event().map_err(|e| e.to_string())? {
         if let Event::Name { number } = event {
             read_pixels.resize(number + 1, false);
-            read_pixels[number] = reader.names[number] == b"glReadPixels";
+            read_pixels[number] = reader.name(number) == b"glReadPixels";
         }
         if let Event::Call { cmd, thread, args, .. } = &event {
             summary.calls += 1;
@@ -83,8 +83,7 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options
             }
         }
         let number = if let Event::Frame { number } = event { Some(number) } else { None };
-        let names = &reader.names;
-        if let Some((thread, frame)) = capture.event(&event, |n| names[n]) {
+        if let Some((thread, frame)) = capture.event(&event, |n| reader.name(n)) {
             let number = number.unwrap_or_default();
             // Every frame is rendered (a later one may draw over it); the chosen ones written.
             if let Some((rendered, image)) = picture(&frame, last.get(&thread), &mut renderer) {

@@ -297,7 +297,7 @@ impl Replayer {
                     let Some(ours) = map[c] else {
                         return Err(at(format!(
                             "the trace calls {}, which this glray does not know",
-                            String::from_utf8_lossy(reader.names[c])
+                            String::from_utf8_lossy(reader.name(c))
                         )));
                     };
                     self.thread = thread;
@@ -316,7 +316,7 @@ impl Replayer {
                 Event::Frame { number } => self.frame(number).map_err(at)?,
                 Event::Name { number } => {
                     debug_assert_eq!(number, map.len());
-                    map.push(lookup(reader.names[number]));
+                    map.push(lookup(reader.name(number)));
                 }
                 Event::End => break,
             }
