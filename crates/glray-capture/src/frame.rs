@@ -73,9 +73,14 @@ pub struct Lighting {
 }
 
 impl Lighting {
-    /// The materials with `color` put in by glColorMaterial, as GL does at each vertex.
-    pub fn materials(&self, color: DVec4) -> [Material; 2] {
-        color_materials(self.materials, self.color_material, color)
+    /// The materials with `color` put in by glColorMaterial, as GL does at each vertex (the
+    /// state's own, not a copy, without glColorMaterial: this runs for every corner of every
+    /// hit, and the two materials are 336 bytes).
+    pub fn materials(&self, color: DVec4) -> std::borrow::Cow<'_, [Material; 2]> {
+        match self.color_material {
+            None => std::borrow::Cow::Borrowed(&self.materials),
+            Some(_) => std::borrow::Cow::Owned(color_materials(self.materials, self.color_material, color)),
+        }
     }
 }
 
