@@ -58,6 +58,33 @@ pub fn facing_flip(modelview: &DMat4, projection: &DMat4) -> bool {
 }
 
 impl Instance {
+    /// `mesh` drawn with `modelview` and `projection` and GL's initial state otherwise (smooth,
+    /// counter-clockwise front faces, no culling, no normalization, identity texture matrix,
+    /// white, normal +z), as the first surface, camera and lighting of its frame: for frames
+    /// made without a program (benchmarks, tests).
+    pub fn new(mesh: Arc<Mesh>, modelview: DMat4, projection: DMat4) -> Instance {
+        Instance {
+            mesh,
+            modelview,
+            object_to_clip: projection * modelview,
+            normal_matrix: DMat3::from_mat4(modelview).inverse().transpose(),
+            normalize: false,
+            rescale_normal: false,
+            texture_matrix: DMat4::IDENTITY,
+            normal: DVec3::Z,
+            color: DVec4::ONE,
+            texcoord: DVec4::W,
+            surface: 0,
+            camera: 0,
+            sequence: 0,
+            lighting: 0,
+            flat: false,
+            front_ccw: true,
+            cull: None,
+            mirrored: facing_flip(&modelview, &projection),
+        }
+    }
+
     /// Clip coordinates of triangle `index`'s corners.
     #[inline]
     fn clip(&self, index: usize) -> [DVec4; 3] {

@@ -481,26 +481,7 @@ mod tests {
     fn one_instance(modelview: DMat4) -> (Frame, [Vec3; 3]) {
         let corners = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let mesh = Mesh::indexed(corners.to_vec(), vec![Vec3::Z; 3], vec![[0, 1, 2]]).unwrap();
-        let instance = Instance {
-            mesh: Arc::new(mesh),
-            modelview,
-            object_to_clip: modelview,
-            normal_matrix: glam::DMat3::from_mat4(modelview).inverse().transpose(),
-            normalize: false,
-            rescale_normal: false,
-            texture_matrix: DMat4::IDENTITY,
-            normal: glam::DVec3::Z,
-            color: glam::DVec4::ONE,
-            texcoord: glam::DVec4::W,
-            surface: 0,
-            camera: 0,
-            sequence: 0,
-            lighting: 0,
-            flat: false,
-            front_ccw: true,
-            cull: None,
-            mirrored: false,
-        };
+        let instance = Instance::new(Arc::new(mesh), modelview, DMat4::IDENTITY);
         let eye = corners.map(|c| modelview.transform_point3(c.as_dvec3()).as_vec3());
         (Frame { instances: vec![instance], ..Frame::default() }, eye)
     }

@@ -7,7 +7,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use glam::{DMat3, DMat4, DVec3, DVec4, Vec3};
+use glam::{DMat4, DVec3, DVec4, Vec3};
 use glray_capture::camera::Viewport;
 use glray_capture::frame::{Frame, Lighting, Surface, View};
 use glray_capture::instance::Instance;
@@ -97,26 +97,7 @@ pub fn frame(mesh: Mesh, width: u32, height: u32) -> Frame {
     let m = DVec4::from(MATERIAL);
     let material = Material { ambient: m, diffuse: m, ..Material::default() };
     let viewport = Viewport { x: 0, y: 0, width: width as i32, height: height as i32 };
-    let instance = Instance {
-        mesh: std::sync::Arc::new(mesh),
-        modelview: view,
-        object_to_clip: projection * view,
-        normal_matrix: DMat3::from_mat4(view).inverse().transpose(),
-        normalize: false,
-        rescale_normal: false,
-        texture_matrix: DMat4::IDENTITY,
-        normal: DVec3::Z,
-        color: DVec4::ONE,
-        texcoord: DVec4::W,
-        surface: 0,
-        camera: 0,
-        sequence: 0,
-        lighting: 0,
-        flat: false,
-        front_ccw: true,
-        cull: None,
-        mirrored: false,
-    };
+    let instance = Instance::new(std::sync::Arc::new(mesh), view, projection);
     Frame {
         instances: vec![instance],
         surfaces: vec![Surface::depth_tested()],
