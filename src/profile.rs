@@ -18,6 +18,14 @@ pub struct Kind {
     pub core: bool,
 }
 
+#[cfg(test)]
+impl Kind {
+    /// A desktop GL context of this version and profile (for tests of what depends on it).
+    pub fn desktop(major: u32, minor: u32, core: bool) -> Kind {
+        Kind { major, minor, es: false, core }
+    }
+}
+
 /// GL_VERSION's "major.minor" and whether it names OpenGL ES ("OpenGL ES 3.2 Mesa 22.3.6",
 /// "4.5 (Core Profile) Mesa 22.3.6", "2.1 Mesa ...").
 fn parse_version(version: &str) -> Option<(u32, u32, bool)> {

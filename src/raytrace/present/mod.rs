@@ -109,21 +109,17 @@ pub unsafe fn draw(r: &Rendered, way: Way) -> bool {
 mod tests {
     use super::*;
 
-    fn kind(major: u32, minor: u32, core: bool) -> Kind {
-        Kind { major, minor, es: false, core }
-    }
-
     #[test]
     fn core_profiles_are_presented_with_a_shader_and_the_rest_with_pixels() {
-        assert_eq!(choose(Way::Auto, kind(4, 5, true)), (Some(Way::Shader), None));
-        assert_eq!(choose(Way::Auto, kind(4, 5, false)), (Some(Way::Pixels), None));
-        assert_eq!(choose(Way::Auto, kind(2, 1, false)), (Some(Way::Pixels), None));
-        assert_eq!(choose(Way::Shader, kind(4, 5, false)), (Some(Way::Shader), None));
+        assert_eq!(choose(Way::Auto, Kind::desktop(4, 5, true)), (Some(Way::Shader), None));
+        assert_eq!(choose(Way::Auto, Kind::desktop(4, 5, false)), (Some(Way::Pixels), None));
+        assert_eq!(choose(Way::Auto, Kind::desktop(2, 1, false)), (Some(Way::Pixels), None));
+        assert_eq!(choose(Way::Shader, Kind::desktop(4, 5, false)), (Some(Way::Shader), None));
         // Forcing what the context cannot do falls back, and says so.
-        let (way, message) = choose(Way::Pixels, kind(3, 3, true));
+        let (way, message) = choose(Way::Pixels, Kind::desktop(3, 3, true));
         assert_eq!(way, Some(Way::Shader));
         assert!(message.unwrap().contains("core profile"));
-        let (way, message) = choose(Way::Shader, kind(2, 1, false));
+        let (way, message) = choose(Way::Shader, Kind::desktop(2, 1, false));
         assert_eq!(way, Some(Way::Pixels));
         assert!(message.unwrap().contains("3.1"));
         let es = Kind { major: 3, minor: 2, es: true, core: false };

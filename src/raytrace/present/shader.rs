@@ -381,23 +381,19 @@ unsafe fn draw_saved(r: &Rendered, kind: Kind, off: &[u32]) -> Result<(), String
 mod tests {
     use super::*;
 
-    fn kind(major: u32, minor: u32, core: bool) -> Kind {
-        Kind { major, minor, es: false, core }
-    }
-
     #[test]
     fn only_capabilities_the_context_knows_are_turned_off() {
         const SAMPLE_MASK: u32 = 0x8E51;
         const ALPHA_TEST: u32 = 0x0BC0;
         // A bare 3.1 context: no GL 3.2 capabilities, no fixed-function ones.
-        let off = capabilities_off(kind(3, 1, true));
+        let off = capabilities_off(Kind::desktop(3, 1, true));
         assert!(!off.contains(&SAMPLE_MASK) && !off.contains(&ALPHA_TEST));
         assert!(off.contains(&0x0BE2), "blending is always off");
         // 3.3 core: GL 3.2's too.
-        let off = capabilities_off(kind(3, 3, true));
+        let off = capabilities_off(Kind::desktop(3, 3, true));
         assert!(off.contains(&SAMPLE_MASK) && !off.contains(&ALPHA_TEST));
         // A compatibility context (shader forced): the fixed-function fragment state as well.
-        let off = capabilities_off(kind(4, 5, false));
+        let off = capabilities_off(Kind::desktop(4, 5, false));
         assert!(off.contains(&SAMPLE_MASK) && off.contains(&ALPHA_TEST));
         let mut unique = off.clone();
         unique.sort();
