@@ -382,12 +382,9 @@ impl<'f> Scene<'f> {
                 }
             }
         };
-        let mut best = self.bvh.closest4(&rays, |_, _| true).map(|h| h.map(|h| self.flat(h)));
-        for (j, h) in best.iter().enumerate() {
-            if let Some(h) = h {
-                rays[j].tmax = h.t;
-            }
-        }
+        let mut best = [None; 4];
+        let hits = self.bvh.closest4(&rays, |_, _| true);
+        keep(&mut best, &mut rays, hits.map(|h| h.map(|h| self.flat(h))));
         for (k, b) in self.boxes.iter().enumerate() {
             if rays.iter().all(|r| b.intersect_ray(r) == f32::INFINITY) {
                 continue;

@@ -1,6 +1,6 @@
-//! Building the four-wide BVH: top-down binned SAH (the surface area heuristic on 16 bins per
-//! axis, as Embree's "medium" build), splitting each node's range in two, then the larger child
-//! again, until it has four children; ranges of at most `LEAF_SIZE` triangles are leaves.
+//! Building the BVH: top-down binned SAH (the surface area heuristic on 16 bins per axis, as
+//! Embree's "medium" build), splitting each node's range in two, then the larger child again,
+//! until it has `WIDTH` children; ranges of at most `LEAF_SIZE` triangles are leaves.
 //!
 //! Lean on purpose (issue 5: build time and peak memory): one 32-byte record per triangle
 //! (its box, the triangle's index in the box's spare lane) partitioned in place, no binary tree
@@ -256,7 +256,7 @@ impl Out {
 /// `centroids` bounds) into `out`: the reference of its root, an inner node.
 fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut Out) -> u32 {
     // Children as (start, end, bounds, centroids) in `records`, in order; split the one with
-    // the largest surface (of those with more than a leaf's worth) until there are four.
+    // the largest surface (of those with more than a leaf's worth) until there are WIDTH.
     let mut kids: Vec<(usize, usize, Bounds, Centroids)> = Vec::with_capacity(WIDTH);
     let ((mid, lb, lc), (_, rb, rc)) = split(records, centroids);
     kids.push((0, mid, lb, lc));

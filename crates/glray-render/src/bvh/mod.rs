@@ -1,8 +1,8 @@
 //! glray's own BVH over triangles, the accelerator every ray of a frame goes through.
 //!
-//! Four children per node, their boxes stored axis by axis so that one SIMD test (glam's `Vec4`:
-//! SSE on x86-64, NEON on aarch64, plain floats elsewhere; nothing beyond the target's baseline,
-//! since the library runs on whatever node loads it) meets all four; leaves of up to four
+//! `WIDTH` (four) children per node, their boxes stored axis by axis so that one SIMD test
+//! (glam's `Vec4`: SSE on x86-64, NEON on aarch64, plain floats elsewhere; nothing beyond the
+//! target's baseline, since the library runs on whatever node loads it) meets four at once; leaves of up to four
 //! triangles, stored the same way (corner and edges precomputed) and tested at once. `build`
 //! makes it (binned SAH). Why not obvhs's CWBVH: its generic single-ray traversal was half of
 //! every frame's profile, 4x slower per ray than Embree's, and its PLOC build 3-4x slower than
@@ -82,9 +82,7 @@ impl Tri4 {
         let v = |k: usize| lanes[k].map(Vec4::from_array);
         Tri4 { v0: v(0), e1: v(1), e2: v(2), id }
     }
-}
 
-impl Tri4 {
     /// Lane `k`'s geometric normal e1 x e2 (not normalised): the walk has the leaf in cache,
     /// where looking it up later through the mesh's indices would be two more misses per hit.
     #[inline(always)]
@@ -292,25 +290,23 @@ impl TriBvh {
                         continue;
                     }
                     if !NEAREST {
-                        let tn = tnear;
                         let mut m = rest;
                         while m != 0 {
                             let k = m.trailing_zeros() as usize;
                             m &= m - 1;
-                            stack.push((node.child[k], tn[k]));
+                            stack.push((node.child[k], tnear[k]));
                         }
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
                     // Two or more: visit the nearest now, the others nearest first after it.
-                    let tn = tnear;
                     let mut hits = [(0.0f32, 0u32); WIDTH];
                     let mut n = 0;
                     let mut m = mask;
                     while m != 0 {
                         let k = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        insert_farthest_first(&mut hits, n, (tn[k], node.child[k]));
+                        insert_farthest_first(&mut hits, n, (tnear[k], node.child[k]));
                         n += 1;
                     }
                     // `hits` is farthest first: push all but the nearest.
