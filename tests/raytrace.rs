@@ -238,16 +238,22 @@ fn the_trigger_setting_chooses_where_frames_are_ray_traced() {
     assert!(err.contains("trigger") && err.contains("auto, swap, finish, flush, readpixels"), "{err}");
 }
 
+/// tests/helpers/`name`.c compiled against OSMesa into `dir`.
+fn osmesa_helper(dir: &Path, name: &str) -> PathBuf {
+    let program = dir.join(name);
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/helpers/{name}.c"));
+    run_ok(
+        Command::new("cc").arg("-O1").arg("-o").arg(&program).arg(&src).args(["-lOSMesa", "-lGL"]),
+        &format!("cc {name}.c"),
+    );
+    program
+}
+
 #[test]
 fn core_profile_frames_stay_the_real_gls() {
     // tests/helpers/core_profile.c: a GL 3.3 core context, a refused glBegin, a shader draw.
     let dir = scratch("rt-core-profile");
-    let program = dir.join("core_profile");
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/helpers/core_profile.c");
-    run_ok(
-        Command::new("cc").arg("-O1").arg("-o").arg(&program).arg(&src).args(["-lOSMesa", "-lGL"]),
-        "cc core_profile.c",
-    );
+    let program = osmesa_helper(&dir, "core_profile");
     let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "core_profile plain"));
     assert!(plain.contains("Core Profile") && plain.contains("glBegin error 0x502"), "{plain}");
     assert!(plain.contains("inside 230 128 26, outside 26 51 76"), "{plain}");
@@ -271,9 +277,7 @@ fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
     // tests/helpers/readback.c reads depth as float and as unsigned int, and RGB bytes, then
     // prints the state it set before the reads (program, textures, masks...) and glGetError.
     let dir = scratch("rt-readback");
-    let program = dir.join("readback");
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/helpers/readback.c");
-    run_ok(Command::new("cc").arg("-O1").arg("-o").arg(&program).arg(&src).args(["-lOSMesa", "-lGL"]), "cc readback.c");
+    let program = osmesa_helper(&dir, "readback");
     let plain = run_ok(&mut command(Way::Plain, &[], &program, 60), "readback plain");
     let without_hash = |out: &str| out.lines().filter(|l| !l.starts_with("frame hash")).collect::<Vec<_>>().join("\n");
     let mut hashes = Vec::new();
