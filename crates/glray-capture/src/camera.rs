@@ -33,6 +33,13 @@ pub struct Camera {
     far0: DVec4,
     dx: DVec4,
     dy: DVec4,
+    /// 2 / viewport width and height: window to NDC is a multiply (a camera ray is made for
+    /// every pixel, twice; divisions were a sixth of a GL-look frame).
+    ndc_scale: (f64, f64),
+    /// 1 / w of the near and far points when w is the same over the whole window (the inverse
+    /// projection's x and y columns have w = 0: every gluPerspective, glFrustum and glOrtho
+    /// camera): unprojecting a pixel then divides only to normalize its direction.
+    recip_w: Option<(f64, f64)>,
     pub viewport: Viewport,
     /// glDepthRange (near, far).
     pub depth_range: (f64, f64),
@@ -45,12 +52,16 @@ impl Camera {
             return None;
         }
         let inverse = projection.inverse();
+        let (near0, far0) = (inverse * DVec4::new(0.0, 0.0, -1.0, 1.0), inverse * DVec4::new(0.0, 0.0, 1.0, 1.0));
+        let (dx, dy) = (inverse.col(0), inverse.col(1));
         Some(Camera {
             projection,
-            near0: inverse * DVec4::new(0.0, 0.0, -1.0, 1.0),
-            far0: inverse * DVec4::new(0.0, 0.0, 1.0, 1.0),
-            dx: inverse.col(0),
-            dy: inverse.col(1),
+            near0,
+            far0,
+            dx,
+            dy,
+            ndc_scale: (2.0 / viewport.width as f64, 2.0 / viewport.height as f64),
+            recip_w: (dx.w == 0.0 && dy.w == 0.0).then(|| (near0.w.recip(), far0.w.recip())),
             viewport,
             depth_range,
         })
@@ -66,14 +77,15 @@ impl Camera {
     #[inline]
     pub fn ray(&self, x: f64, y: f64) -> Ray {
         let v = self.viewport;
-        let ndc_x = 2.0 * (x - v.x as f64) / v.width as f64 - 1.0;
-        let ndc_y = 2.0 * (y - v.y as f64) / v.height as f64 - 1.0;
+        let ndc_x = (x - v.x as f64) * self.ndc_scale.0 - 1.0;
+        let ndc_y = (y - v.y as f64) * self.ndc_scale.1 - 1.0;
         let xy = self.dx * ndc_x + self.dy * ndc_y;
         let (near, far) = (self.near0 + xy, self.far0 + xy);
-        let (near, far) = (near.truncate() / near.w, far.truncate() / far.w);
+        let (near_w, far_w) = self.recip_w.unwrap_or_else(|| (near.w.recip(), far.w.recip()));
+        let (near, far) = (near.truncate() * near_w, far.truncate() * far_w);
         let span = far - near;
         let t_max = span.length();
-        Ray { origin: near, direction: span / t_max, t_max }
+        Ray { origin: near, direction: span * t_max.recip(), t_max }
     }
 
     /// The window depth of an eye-space point: what the depth buffer would hold for it.
@@ -140,17 +152,26 @@ mod tests {
     #[test]
     fn points_on_a_ray_land_on_its_pixel_at_increasing_depth() {
         let p = projection(|m| m.frustum(-1.0, 1.0, -0.5, 0.5, 0.5, 50.0).unwrap());
+        // A projection that turns the frustum: its w varies over the window (the general
+        // unprojection, not the constant-w one every glFrustum and glOrtho camera takes).
+        let turned = p * DMat4::from_rotation_y(0.3) * DMat4::from_rotation_x(-0.2);
         let vp = Viewport { x: 10, y: 20, width: 64, height: 32 };
-        let cam = Camera::new(p, vp, (0.25, 0.75)).unwrap();
-        let r = cam.ray(30.5, 41.5);
-        let mut last = f64::NEG_INFINITY;
-        for t in [0.0, 0.5, 5.0, 20.0, r.t_max] {
-            let hit = r.origin + r.direction * t;
-            let (x, y) = cam.window_position(hit);
-            assert!((x - 30.5).abs() < 1e-6 && (y - 41.5).abs() < 1e-6, "t {t}: ({x}, {y})");
-            let d = cam.window_depth(hit);
-            assert!(d > last && (0.25 - 1e-9..=0.75 + 1e-9).contains(&d), "t {t}: depth {d}");
-            last = d;
+        for (p, constant_w) in [(p, true), (turned, false)] {
+            let cam = Camera::new(p, vp, (0.25, 0.75)).unwrap();
+            assert_eq!(cam.recip_w.is_some(), constant_w);
+            for (px, py) in [(30.5, 41.5), (10.5, 20.5), (73.5, 51.5)] {
+                let r = cam.ray(px, py);
+                let mut last = f64::NEG_INFINITY;
+                for t in [0.0, 0.5, 5.0, 20.0, r.t_max] {
+                    let hit = r.origin + r.direction * t;
+                    let (x, y) = cam.window_position(hit);
+                    assert!((x - px).abs() < 1e-6 && (y - py).abs() < 1e-6, "t {t}: ({x}, {y})");
+                    let d = cam.window_depth(hit);
+                    assert!(d > last && (0.25 - 1e-9..=0.75 + 1e-9).contains(&d), "t {t}: depth {d}");
+                    last = d;
+                }
+                assert!((cam.window_depth(r.origin + r.direction * r.t_max) - 0.75).abs() < 1e-9);
+            }
         }
         assert!(Camera::new(DMat4::ZERO, vp, (0.0, 1.0)).is_none());
         assert!(Camera::new(p, Viewport { width: 0, ..vp }, (0.0, 1.0)).is_none());

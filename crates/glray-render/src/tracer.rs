@@ -105,14 +105,12 @@ impl Tracer<'_> {
         any.then(|| (sum / n as f32, depth))
     }
 
-    /// The camera ray through window position (px, py): in double precision, and as traced.
-    fn camera_ray(&self, px: f64, py: f64) -> (EyeRay, Ray) {
-        let r = self.camera.ray(px, py);
+    /// The camera ray `r` as traced (in single precision, with its reciprocal direction).
+    fn traced(r: &EyeRay) -> Ray {
         // GL keeps what lies exactly on the near and far planes (backgrounds are often drawn at
         // z = 1): a hair of slack keeps float rounding from dropping them.
         let slack = (r.t_max * 1e-4) as f32;
-        let ray = Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack);
-        (r, ray)
+        Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack)
     }
 
     /// The closest hits of the rays through the centres of four pixels (a 2x2 quad), traced
@@ -121,7 +119,7 @@ impl Tracer<'_> {
         if !self.simple || self.pass != 0 {
             return None;
         }
-        let rays = pixels.map(|(x, y)| self.camera_ray(x as f64 + 0.5, y as f64 + 0.5).1);
+        let rays = pixels.map(|(x, y)| Self::traced(&self.camera.ray(x as f64 + 0.5, y as f64 + 0.5)));
         Some(self.scene.closest4(rays))
     }
 
@@ -138,13 +136,19 @@ impl Tracer<'_> {
         sampler: &mut Sampler,
         s: &mut Scratch,
     ) -> Option<(Vec4, f64)> {
-        let (r, ray) = self.camera_ray(px, py);
         count(&s.rays, 1);
+        if self.simple && matches!(known, Some(None)) {
+            // Known to miss (most pixels of many frames): no ray to make again.
+            return None;
+        }
+        // The eye ray in double precision, for where the hit is; traced again only when its
+        // hits are not known already.
+        let r = self.camera.ray(px, py);
         let at = |hit: &Hit| r.origin + r.direction * hit.t as f64;
         if self.simple {
             let hit = match known {
                 Some(hit) => hit,
-                None => self.scene.closest(ray),
+                None => self.scene.closest(Self::traced(&r)),
             }?;
             let t = s.last.get(self.frame, hit.id)?;
             let f = self.surface(t, at(&hit), r.direction, sampler, &s.rays, 0);
@@ -154,7 +158,7 @@ impl Tracer<'_> {
             }
             return Some((opaque(&f), f.depth));
         }
-        self.scene.all(ray, &mut s.hits);
+        self.scene.all(Self::traced(&r), &mut s.hits);
         if s.hits.is_empty() {
             return None;
         }
