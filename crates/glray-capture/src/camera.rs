@@ -67,6 +67,10 @@ impl Camera {
         })
     }
 
+    pub fn projection(&self) -> &DMat4 {
+        &self.projection
+    }
+
     /// Whether the projection is a perspective one (its last row is not (0, 0, 0, 1)).
     pub fn is_perspective(&self) -> bool {
         self.projection.row(3) != DVec4::new(0.0, 0.0, 0.0, 1.0)

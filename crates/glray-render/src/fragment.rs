@@ -46,10 +46,14 @@ fn barycentric(t: &Triangle, p: DVec3) -> DVec3 {
 
 /// The interpolation weights the rasterizer uses at `p`: barycentric coordinates on the screen,
 /// made perspective-correct with each corner's own clip w (so that a draw brought in from
-/// another camera interpolates as it was drawn). Falls back to eye-space weights when a
-/// corner lies behind the eye (the rasterizer would have clipped the triangle first).
-fn weights(t: &Triangle, camera: &Camera, p: DVec3) -> DVec3 {
-    if t.clip_w.iter().any(|w| *w <= 0.0) {
+/// another camera interpolates as it was drawn). A triangle drawn with `camera`'s own
+/// projection takes the eye-space weights, which are the same thing (perspective-correct
+/// interpolation is interpolation in eye space) for a fraction of the work: no corner is
+/// projected. They are also the fallback when a corner lies behind the eye (the rasterizer
+/// would have clipped the triangle first).
+fn weights(frame: &Frame, t: &Triangle, camera: &Camera, p: DVec3) -> DVec3 {
+    let own = frame.cameras.get(t.camera as usize).is_some_and(|v| v.projection == *camera.projection());
+    if own || t.clip_w.iter().any(|w| *w <= 0.0) {
         return barycentric(t, p);
     }
     let w = t.positions.map(|v| {
@@ -102,7 +106,7 @@ pub type Visibility<'a> = Option<&'a dyn Fn(&Light) -> f32>;
 /// the point (shadows; its ambient term stays, as GL's ambient is not directional).
 pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: bool, visible: Visibility) -> Fragment {
     let surface = &frame.surfaces[t.surface as usize];
-    let b = weights(t, camera, p).as_vec3();
+    let b = weights(frame, t, camera, p).as_vec3();
     let mix4 = |v: [Vec4; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix3 = |v: [Vec3; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix2 = |v: [Vec2; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
@@ -200,5 +204,45 @@ mod tests {
         };
         let b = barycentric(&t, DVec3::new(0.25, 0.5, 0.0));
         assert!((b - DVec3::new(0.25, 0.25, 0.5)).length() < 1e-12, "{b}");
+    }
+
+    #[test]
+    fn eye_space_weights_are_the_perspective_correct_screen_weights_under_the_own_camera() {
+        use glam::DMat4;
+        use glray_capture::camera::Viewport;
+        use glray_capture::frame::View;
+        let mut m = glray_capture::matrix::Matrices::default();
+        m.frustum(-0.4, 0.4, -0.3, 0.3, 0.5, 50.0).unwrap();
+        let projection = *m.top();
+        let viewport = Viewport { x: 0, y: 0, width: 300, height: 200 };
+        let camera = Camera::new(projection, viewport, (0.0, 1.0)).unwrap();
+        // A triangle steeply inclined in depth: screen-linear and perspective-correct weights differ.
+        let positions = [Vec3::new(-1.0, -0.5, -2.0), Vec3::new(2.0, -0.4, -12.0), Vec3::new(0.3, 1.5, -5.0)];
+        let clip_w = positions.map(|p| (projection * p.as_dvec3().extend(1.0)).w as f32);
+        let t = Triangle {
+            positions,
+            colors: [Vec4::ZERO; 3],
+            secondary: [Vec3::ZERO; 3],
+            texcoords: [Vec2::ZERO; 3],
+            surface: 0,
+            sequence: 0,
+            camera: 0,
+            clip_w,
+            normals: [Vec3::Z; 3],
+            base_colors: [Vec4::ONE; 3],
+            lighting: NO_LIGHTING,
+            back: false,
+        };
+        let own = Frame { cameras: vec![View { projection, viewport }], ..Frame::default() };
+        // Without its camera in the frame, the corners are projected (the screen weights).
+        let other = Frame { cameras: vec![View { projection: DMat4::IDENTITY, viewport }], ..Frame::default() };
+        for want in [DVec3::new(0.2, 0.3, 0.5), DVec3::new(0.7, 0.2, 0.1), DVec3::new(0.05, 0.05, 0.9)] {
+            let [a, b, c] = positions.map(|p| p.as_dvec3());
+            let p = a * want.x + b * want.y + c * want.z;
+            let screen = weights(&other, &t, &camera, p);
+            let eye = weights(&own, &t, &camera, p);
+            assert!((screen - want).length() < 1e-6, "screen {screen} want {want}");
+            assert!((eye - want).length() < 1e-6, "eye {eye} want {want}");
+        }
     }
 }
