@@ -97,13 +97,14 @@ struct Binning {
 impl Binning {
     fn bin(&self, r: &Record) -> [usize; 3] {
         let b = ((r.centroid2() - self.origin) * self.scale).min(Vec3A::splat((BINS - 1) as f32)).max(Vec3A::ZERO);
-        [b.x as usize, b.y as usize, b.z as usize]
+        // Through i32: f32 to usize is a long sequence on x86-64 (no unsigned 64-bit convert).
+        [b.x as i32 as usize, b.y as i32 as usize, b.z as i32 as usize]
     }
 
     /// `bin(r)[axis]`, computed for that axis alone (the same arithmetic: the same answer).
     fn bin_on(&self, r: &Record, axis: usize) -> usize {
         let c = r.centroid2()[axis];
-        ((c - self.origin[axis]) * self.scale[axis]).min((BINS - 1) as f32).max(0.0) as usize
+        ((c - self.origin[axis]) * self.scale[axis]).min((BINS - 1) as f32).max(0.0) as i32 as usize
     }
 }
 
