@@ -8,6 +8,7 @@
 use std::sync::Arc;
 
 use glam::{DMat4, DVec4, Vec2, Vec3, Vec4};
+use glray_core::prefetch;
 
 use crate::camera::Viewport;
 use crate::instance::Instance;
@@ -246,28 +247,25 @@ impl Frame {
     pub fn prefetch_triangle(&self, id: TriangleId, vertices: bool) {
         if id.instance == TriangleId::FLAT {
             if let Some(t) = self.triangles.get(id.index as usize).filter(|_| !vertices) {
-                let at = (t as *const Triangle).cast::<u8>();
-                for line in (0..std::mem::size_of::<Triangle>()).step_by(64) {
-                    prefetch(at.wrapping_add(line));
-                }
+                prefetch::all(t);
             }
             return;
         }
         let Some(mesh) = self.instances.get(id.instance as usize).map(|i| &i.mesh) else { return };
         let Some(corners) = mesh.triangles.get(id.index as usize) else { return };
         if !vertices {
-            prefetch(corners);
+            prefetch::line(corners);
             return;
         }
         for &v in corners {
             if let Some(p) = mesh.positions.get(v as usize) {
-                prefetch(p);
+                prefetch::line(p);
             }
             if let Some(n) = mesh.normals.value(v) {
-                prefetch(n);
+                prefetch::line(n);
             }
             if let Some(c) = mesh.colors.value(v) {
-                prefetch(c);
+                prefetch::line(c);
             }
         }
     }
@@ -366,17 +364,4 @@ impl Frame {
         }
         out
     }
-}
-
-/// A hint to bring the cache line at `p` in; it never faults, whatever the address.
-#[inline(always)]
-fn prefetch<T>(p: *const T) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: _mm_prefetch only hints the cache (SSE, the x86-64 baseline); it reads nothing
-    // the program sees and does not fault on any address.
-    unsafe {
-        std::arch::x86_64::_mm_prefetch(p.cast::<i8>(), std::arch::x86_64::_MM_HINT_T0)
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = p;
 }

@@ -14,6 +14,7 @@ mod packet;
 use std::mem::MaybeUninit;
 
 use glam::{Vec3, Vec3A, Vec4};
+use glray_core::prefetch;
 use obvhs::ray::Ray;
 
 /// A child reference with this bit set is a leaf (the rest: its index in `leaves`).
@@ -94,6 +95,21 @@ impl Tri4 {
     #[inline(always)]
     fn hit(&self, k: usize, t: f32) -> TriHit {
         TriHit { index: self.id[k], t, normal: self.normal(k) }
+    }
+}
+
+impl TriBvh {
+    /// Starts loading child `c` (a node or a leaf) that the walk will visit later, so that its
+    /// misses overlap the subtree visited first (a deep 10M tree misses on most nodes).
+    #[inline(always)]
+    fn prefetch_child(&self, c: u32) {
+        if c & LEAF == 0 {
+            if let Some(node) = self.nodes.get(c as usize) {
+                prefetch::all(node);
+            }
+        } else if let Some(leaf) = self.leaves.get((c & !LEAF) as usize) {
+            prefetch::all(leaf);
+        }
     }
 }
 
@@ -294,6 +310,7 @@ impl TriBvh {
                         while m != 0 {
                             let k = m.trailing_zeros() as usize;
                             m &= m - 1;
+                            self.prefetch_child(node.child[k]);
                             stack.push((node.child[k], tnear[k]));
                         }
                         cur = node.child[mask.trailing_zeros() as usize];
@@ -311,6 +328,7 @@ impl TriBvh {
                     }
                     // `hits` is farthest first: push all but the nearest.
                     for &(t, c) in &hits[..n - 1] {
+                        self.prefetch_child(c);
                         stack.push((c, t));
                     }
                     cur = hits[n - 1].1;

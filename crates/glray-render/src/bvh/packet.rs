@@ -89,6 +89,7 @@ impl TriBvh {
                     }
                     if n > 0 {
                         for &(_, entry) in &hits[..n - 1] {
+                            self.prefetch_child(entry.0);
                             stack.push(entry);
                         }
                         cur = hits[n - 1].1;
