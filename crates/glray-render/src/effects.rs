@@ -4,7 +4,7 @@
 use glam::{DVec3, Vec3};
 use glray_capture::lighting::Light;
 
-use crate::sampling::{cosine_hemisphere, Sampler};
+use crate::sampling::{Hemisphere, Sampler};
 use crate::scene::Scene;
 use obvhs::ray::Ray;
 
@@ -89,9 +89,10 @@ pub fn occlusion(scene: &Scene, at: &Origin, count: u32, distance: f32, eps: f32
     if count == 0 {
         return 0.0;
     }
+    let around = Hemisphere::around(at.n);
     let hidden: f32 = (0..count)
         .map(|_| {
-            let d = cosine_hemisphere(at.n, s.next2());
+            let d = around.cosine(s.next2());
             1.0 - scene.transmittance(leaving(at.p, at.n, d, eps, distance), Some(at.draw))
         })
         .sum();

@@ -52,15 +52,35 @@ pub fn basis(n: Vec3) -> (Vec3, Vec3) {
     (Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3::new(b, sign + n.y * n.y * a, -n.y))
 }
 
-/// A direction in the hemisphere around unit `n`, cosine-weighted (Malley's method: a uniform
-/// point on the disk, lifted).
+/// The hemisphere around a unit normal, with its basis made once for the many directions a
+/// point's ambient occlusion takes.
+#[derive(Debug, Clone, Copy)]
+pub struct Hemisphere {
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+}
+
+impl Hemisphere {
+    pub fn around(n: Vec3) -> Hemisphere {
+        let (t, b) = basis(n);
+        Hemisphere { t, b, n }
+    }
+
+    /// A cosine-weighted direction (Malley's method: a uniform point on the disk, lifted). Unit
+    /// length by construction: x^2 + y^2 + z^2 = u.x + (1 - u.x).
+    #[inline]
+    pub fn cosine(&self, u: Vec2) -> Vec3 {
+        let r = u.x.sqrt();
+        let (sin, cos) = (std::f32::consts::TAU * u.y).sin_cos();
+        let z = (1.0 - u.x).max(0.0).sqrt();
+        self.t * (r * cos) + self.b * (r * sin) + self.n * z
+    }
+}
+
+/// A direction in the hemisphere around unit `n`, cosine-weighted (see `Hemisphere::cosine`).
 pub fn cosine_hemisphere(n: Vec3, u: Vec2) -> Vec3 {
-    let r = u.x.sqrt();
-    let phi = std::f32::consts::TAU * u.y;
-    let (t, b) = basis(n);
-    let (x, y) = (r * phi.cos(), r * phi.sin());
-    let z = (1.0 - u.x).max(0.0).sqrt();
-    (t * x + b * y + n * z).normalize()
+    Hemisphere::around(n).cosine(u)
 }
 
 #[cfg(test)]
