@@ -186,22 +186,27 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
 mod tests {
     use super::*;
 
-    #[test]
-    fn barycentric_weights_reproduce_the_point() {
-        let t = Triangle {
-            positions: [Vec3::ZERO, Vec3::X, Vec3::Y],
+    /// An unlit, untextured triangle of the frame's first surface and camera.
+    fn plain(positions: [Vec3; 3], clip_w: [f32; 3]) -> Triangle {
+        Triangle {
+            positions,
             colors: [Vec4::ZERO; 3],
             secondary: [Vec3::ZERO; 3],
             texcoords: [Vec2::ZERO; 3],
             surface: 0,
             sequence: 0,
             camera: 0,
-            clip_w: [1.0; 3],
+            clip_w,
             normals: [Vec3::Z; 3],
             base_colors: [Vec4::ONE; 3],
             lighting: NO_LIGHTING,
             back: false,
-        };
+        }
+    }
+
+    #[test]
+    fn barycentric_weights_reproduce_the_point() {
+        let t = plain([Vec3::ZERO, Vec3::X, Vec3::Y], [1.0; 3]);
         let b = barycentric(&t, DVec3::new(0.25, 0.5, 0.0));
         assert!((b - DVec3::new(0.25, 0.25, 0.5)).length() < 1e-12, "{b}");
     }
@@ -219,20 +224,7 @@ mod tests {
         // A triangle steeply inclined in depth: screen-linear and perspective-correct weights differ.
         let positions = [Vec3::new(-1.0, -0.5, -2.0), Vec3::new(2.0, -0.4, -12.0), Vec3::new(0.3, 1.5, -5.0)];
         let clip_w = positions.map(|p| (projection * p.as_dvec3().extend(1.0)).w as f32);
-        let t = Triangle {
-            positions,
-            colors: [Vec4::ZERO; 3],
-            secondary: [Vec3::ZERO; 3],
-            texcoords: [Vec2::ZERO; 3],
-            surface: 0,
-            sequence: 0,
-            camera: 0,
-            clip_w,
-            normals: [Vec3::Z; 3],
-            base_colors: [Vec4::ONE; 3],
-            lighting: NO_LIGHTING,
-            back: false,
-        };
+        let t = plain(positions, clip_w);
         let own = Frame { cameras: vec![View { projection, viewport }], ..Frame::default() };
         // Without its camera in the frame, the corners are projected (the screen weights).
         let other = Frame { cameras: vec![View { projection: DMat4::IDENTITY, viewport }], ..Frame::default() };
