@@ -52,7 +52,12 @@ fn barycentric(t: &Triangle, p: DVec3) -> DVec3 {
 /// projected. They are also the fallback when a corner lies behind the eye (the rasterizer
 /// would have clipped the triangle first).
 fn weights(frame: &Frame, t: &Triangle, camera: &Camera, p: DVec3) -> DVec3 {
-    let own = frame.cameras.get(t.camera as usize).is_some_and(|v| v.projection == *camera.projection());
+    // The same projection and viewport: a triangle carried over from another viewport
+    // (`Frame::unified`) keeps the screen weights.
+    let own = frame
+        .cameras
+        .get(t.camera as usize)
+        .is_some_and(|v| v.viewport == camera.viewport && v.projection == *camera.projection());
     if own || t.clip_w.iter().any(|w| *w <= 0.0) {
         return barycentric(t, p);
     }
