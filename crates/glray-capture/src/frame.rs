@@ -12,7 +12,7 @@ use glray_core::prefetch;
 
 use crate::camera::Viewport;
 use crate::instance::Instance;
-use crate::lighting::{Light, LightModel, Material};
+use crate::lighting::{prepare, Light, LightModel, Material, Prepared};
 use crate::texture::Texture;
 
 /// One triangle, ready to trace.
@@ -71,9 +71,22 @@ pub struct Lighting {
     pub materials: [Material; 2],
     /// glColorMaterial's (face, mode) when GL_COLOR_MATERIAL is on.
     pub color_material: Option<(u32, u32)>,
+    /// `lighting::prepare` of the lights and model: what every vertex would otherwise work out
+    /// again (made by `new`).
+    pub prepared: Vec<Prepared>,
 }
 
 impl Lighting {
+    pub fn new(
+        lights: Vec<Light>,
+        model: LightModel,
+        materials: [Material; 2],
+        color_material: Option<(u32, u32)>,
+    ) -> Lighting {
+        let prepared = prepare(&lights, &model);
+        Lighting { lights, model, materials, color_material, prepared }
+    }
+
     /// The materials with `color` put in by glColorMaterial, as GL does at each vertex (the
     /// state's own, not a copy, without glColorMaterial: this runs for every corner of every
     /// hit, and the two materials are 336 bytes).

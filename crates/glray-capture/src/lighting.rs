@@ -89,6 +89,34 @@ impl Default for LightModel {
     }
 }
 
+/// What the lighting equation needs of a directional light that no vertex changes, worked out
+/// once per frame: its unit direction and, for a viewer at infinity, its half vector (two
+/// square roots and divisions per light and vertex otherwise; the tracer lights every hit's
+/// three corners). See `prepare`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Prepared {
+    /// The light is directional (`direction` holds its unit direction).
+    directional: bool,
+    /// `half` holds the half vector (a directional light and a viewer at infinity).
+    fixed_half: bool,
+    direction: DVec3,
+    half: DVec3,
+}
+
+/// `lights` made ready for many vertices under `model`, one entry per light, in order.
+pub fn prepare(lights: &[Light], model: &LightModel) -> Vec<Prepared> {
+    lights
+        .iter()
+        .map(|l| {
+            let directional = l.position.w == 0.0;
+            let direction = if directional { l.position.truncate().normalize_or_zero() } else { DVec3::ZERO };
+            let fixed_half = directional && !model.local_viewer;
+            let half = if fixed_half { (direction + DVec3::Z).normalize_or_zero() } else { DVec3::ZERO };
+            Prepared { directional, fixed_half, direction, half }
+        })
+        .collect()
+}
+
 /// The lit colour of a vertex at `position` (eye coordinates) with unit `normal` (eye
 /// coordinates, already flipped for a back face): the primary colour and the secondary
 /// (specular) colour, both clamped to [0, 1]. The alpha is the material's diffuse alpha.
@@ -100,10 +128,25 @@ pub fn light_vertex(
     lights: &[Light],
     model: &LightModel,
 ) -> (DVec4, DVec4) {
+    light_vertex_prepared(position, normal, m, lights, &[], model)
+}
+
+/// `light_vertex` with `prepared` (`prepare` of the same lights and model; lights it has no
+/// entry for are worked out at the vertex): the same numbers, the per-light work done once.
+#[inline]
+pub fn light_vertex_prepared(
+    position: DVec3,
+    normal: DVec3,
+    m: &Material,
+    lights: &[Light],
+    prepared: &[Prepared],
+    model: &LightModel,
+) -> (DVec4, DVec4) {
     let mut primary = m.emission.truncate() + m.ambient.truncate() * model.ambient.truncate();
     let mut specular = DVec3::ZERO;
     let eye = if model.local_viewer { (-position).normalize_or_zero() } else { DVec3::Z };
-    for l in lights.iter().filter(|l| l.enabled) {
+    for (k, l) in lights.iter().enumerate().filter(|(_, l)| l.enabled) {
+        let ready = prepared.get(k);
         let (to_light, attenuation) = if l.position.w != 0.0 {
             let p = l.position.truncate() / l.position.w;
             let d = p - position;
@@ -112,7 +155,10 @@ pub fn light_vertex(
                 1.0 / (l.constant_attenuation + l.linear_attenuation * dist + l.quadratic_attenuation * dist * dist);
             (d.normalize_or_zero(), att)
         } else {
-            (l.position.truncate().normalize_or_zero(), 1.0)
+            match ready {
+                Some(r) if r.directional => (r.direction, 1.0),
+                _ => (l.position.truncate().normalize_or_zero(), 1.0),
+            }
         };
         let spot = if l.spot_cutoff == 180.0 {
             1.0
@@ -132,7 +178,10 @@ pub fn light_vertex(
         let mut term = m.ambient.truncate() * l.ambient.truncate();
         if n_dot_l > 0.0 {
             term += n_dot_l * m.diffuse.truncate() * l.diffuse.truncate();
-            let half = (to_light + eye).normalize_or_zero();
+            let half = match ready {
+                Some(r) if r.fixed_half => r.half,
+                _ => (to_light + eye).normalize_or_zero(),
+            };
             let n_dot_h = normal.dot(half).max(0.0);
             // 0^0 is 1 in GL's equation: a shininess of 0 gives the full specular colour.
             let power = if m.shininess == 0.0 { 1.0 } else { n_dot_h.powf(m.shininess) };
@@ -151,20 +200,22 @@ pub fn light_vertex(
 
 /// The lit colours (primary, secondary) of one face of a vertex: the front with `materials[0]`,
 /// or, for face 1 with two-sided lighting, the back with the reversed normal and
-/// `materials[1]` (one-sided lighting gives the back face the front's colours).
+/// `materials[1]` (one-sided lighting gives the back face the front's colours). `prepared` as
+/// for `light_vertex_prepared` (empty: everything worked out at the vertex).
 #[inline]
 pub fn light_face(
     position: DVec3,
     normal: DVec3,
     materials: &[Material; 2],
     lights: &[Light],
+    prepared: &[Prepared],
     model: &LightModel,
     face: usize,
 ) -> (DVec4, DVec4) {
     if face == 1 && model.two_side {
-        light_vertex(position, -normal, &materials[1], lights, model)
+        light_vertex_prepared(position, -normal, &materials[1], lights, prepared, model)
     } else {
-        light_vertex(position, normal, &materials[0], lights, model)
+        light_vertex_prepared(position, normal, &materials[0], lights, prepared, model)
     }
 }
 
@@ -240,5 +291,31 @@ mod tests {
         let local = LightModel { local_viewer: true, ..separate };
         let (_, s) = light_vertex(DVec3::new(0.0, 0.0, -5.0), DVec3::Z, &m, &[tilted], &local);
         assert!((s.x - expect).abs() < 1e-12);
+    }
+
+    #[test]
+    fn prepared_lights_give_the_same_colours_as_lighting_from_scratch() {
+        let directional = Light { position: DVec4::new(0.3, 0.8, 0.5, 0.0), ..light0() };
+        let positional = Light { position: DVec4::new(1.0, 2.0, 1.0, 1.0), linear_attenuation: 0.2, ..light0() };
+        let spot =
+            Light { spot_cutoff: 40.0, spot_exponent: 3.0, spot_direction: DVec3::new(0.0, -1.0, -0.5), ..positional };
+        let off = Light { enabled: false, ..directional };
+        let lights = [off, directional, positional, spot];
+        let m = Material { specular: DVec4::new(0.6, 0.5, 0.4, 1.0), shininess: 12.0, ..Material::default() };
+        for local_viewer in [false, true] {
+            let model = LightModel { local_viewer, separate_specular: true, ..LightModel::default() };
+            let prepared = prepare(&lights, &model);
+            for (p, n) in [
+                (DVec3::new(0.0, 0.0, -5.0), DVec3::Z),
+                (DVec3::new(0.5, 1.5, -2.0), DVec3::new(0.2, 0.9, 0.3).normalize()),
+                (DVec3::new(-1.0, 0.0, -3.0), DVec3::new(-0.6, 0.0, 0.8)),
+            ] {
+                let scratch = light_vertex(p, n, &m, &lights, &model);
+                assert_eq!(light_vertex_prepared(p, n, &m, &lights, &prepared, &model), scratch);
+                // Fewer entries than lights: the rest worked out at the vertex.
+                assert_eq!(light_vertex_prepared(p, n, &m, &lights, &prepared[..2], &model), scratch);
+                assert_ne!(scratch.0, DVec4::ZERO);
+            }
+        }
     }
 }

@@ -156,12 +156,12 @@ impl Context {
     /// The lighting state of the moment, as a frame keeps it.
     pub(crate) fn lighting_state(&self) -> Lighting {
         let s = &self.s;
-        Lighting {
-            lights: s.lights.iter().filter(|l| l.enabled).copied().collect(),
-            model: s.model,
-            materials: s.materials,
-            color_material: s.color_material.then_some((s.color_material_face, s.color_material_mode)),
-        }
+        Lighting::new(
+            s.lights.iter().filter(|l| l.enabled).copied().collect(),
+            s.model,
+            s.materials,
+            s.color_material.then_some((s.color_material_face, s.color_material_mode)),
+        )
     }
 
     /// The fixed-function vertex stage: eye position, lighting of both faces, texture
@@ -181,9 +181,9 @@ impl Context {
             let mats = color_materials(s.materials, color_material, cur.color);
             let s = &self.s;
             let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
-            let (f0, f1) = light_face(p, normal, &mats, &s.lights, &s.model, 0);
+            let (f0, f1) = light_face(p, normal, &mats, &s.lights, &[], &s.model, 0);
             let (b0, b1) =
-                if s.model.two_side { light_face(p, normal, &mats, &s.lights, &s.model, 1) } else { (f0, f1) };
+                if s.model.two_side { light_face(p, normal, &mats, &s.lights, &[], &s.model, 1) } else { (f0, f1) };
             ([f0, b0], [f1, b1])
         } else {
             let c = cur.color.clamp(DVec4::ZERO, DVec4::ONE);

@@ -6,7 +6,7 @@
 use glam::{DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
 use glray_capture::camera::Camera;
 use glray_capture::frame::{Frame, Triangle, NO_LIGHTING};
-use glray_capture::lighting::{light_vertex, Light};
+use glray_capture::lighting::{light_vertex_prepared, Light};
 use glray_capture::texture::{GL_ALPHA, GL_RGB};
 
 const GL_REPLACE: u32 = 0x1E01;
@@ -132,9 +132,9 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
                         Light { diffuse: x.diffuse * v, specular: x.specular * v, ..*x }
                     })
                     .collect();
-                light_vertex(p, n, m, &lights, &l.model)
+                light_vertex_prepared(p, n, m, &lights, &l.prepared, &l.model)
             }
-            None => light_vertex(p, n, m, &l.lights, &l.model),
+            None => light_vertex_prepared(p, n, m, &l.lights, &l.prepared, &l.model),
         };
         (primary.as_vec4(), secondary.truncate().as_vec3())
     } else {

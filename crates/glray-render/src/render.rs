@@ -457,12 +457,12 @@ mod tests {
         // A big quad and a close positional light over its centre: at the corners the light
         // grazes, so per-vertex lighting leaves the centre dark; per pixel it is bright.
         let light = Light { enabled: true, position: glam::DVec4::new(0.0, 0.0, -4.0, 1.0), ..Light::new(0) };
-        let lighting = Lighting {
-            lights: vec![light],
-            model: LightModel { ambient: glam::DVec4::ZERO, ..LightModel::default() },
-            materials: [Material::default(); 2],
-            color_material: None,
-        };
+        let lighting = Lighting::new(
+            vec![light],
+            LightModel { ambient: glam::DVec4::ZERO, ..LightModel::default() },
+            [Material::default(); 2],
+            None,
+        );
         let mut q = quad(-5.0, Vec4::new(0.0, 0.0, 0.0, 1.0), 0, 0);
         for t in &mut q {
             t.lighting = 0;

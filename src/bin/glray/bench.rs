@@ -107,12 +107,7 @@ pub fn frame(mesh: Mesh, width: u32, height: u32) -> Frame {
         clear_color: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
         cleared: true,
         depth_cleared: true,
-        lightings: vec![Lighting {
-            lights: vec![light],
-            model: LightModel::default(),
-            materials: [material; 2],
-            color_material: None,
-        }],
+        lightings: vec![Lighting::new(vec![light], LightModel::default(), [material; 2], None)],
         cameras: vec![View { projection, viewport }],
         width,
         height,
