@@ -72,11 +72,13 @@ pub struct Lighting {
     /// glColorMaterial's (face, mode) when GL_COLOR_MATERIAL is on.
     pub color_material: Option<(u32, u32)>,
     /// `lighting::prepare` of the lights and model: what every vertex would otherwise work out
-    /// again (made by `new`).
-    pub prepared: Vec<Prepared>,
+    /// again. Private, so that every `Lighting` is made by `new`, which derives it.
+    prepared: Vec<Prepared>,
 }
 
 impl Lighting {
+    /// A draw's lighting: the enabled `lights` (eye coordinates), the model, the front and back
+    /// materials and glColorMaterial's (face, mode).
     pub fn new(
         lights: Vec<Light>,
         model: LightModel,
@@ -85,6 +87,11 @@ impl Lighting {
     ) -> Lighting {
         let prepared = prepare(&lights, &model);
         Lighting { lights, model, materials, color_material, prepared }
+    }
+
+    /// The lights made ready for many vertices (`lighting::prepare`), one entry per light.
+    pub fn prepared(&self) -> &[Prepared] {
+        &self.prepared
     }
 
     /// The materials with `color` put in by glColorMaterial, as GL does at each vertex (the

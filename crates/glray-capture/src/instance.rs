@@ -128,7 +128,7 @@ impl Instance {
                         return (p, Vec4::ZERO, Vec3::ZERO, n, vec4(color));
                     }
                     let mats = l.materials(color);
-                    let (a, b) = light_face(p, n, &mats, &l.lights, &l.prepared, &l.model, face);
+                    let (a, b) = light_face(p, n, &mats, &l.lights, l.prepared(), &l.model, face);
                     (a, b, n)
                 }
                 None => (color.clamp(DVec4::ZERO, DVec4::ONE), DVec4::ZERO, DVec3::Z),

@@ -78,11 +78,6 @@ impl Hemisphere {
     }
 }
 
-/// A direction in the hemisphere around unit `n`, cosine-weighted (see `Hemisphere::cosine`).
-pub fn cosine_hemisphere(n: Vec3, u: Vec2) -> Vec3 {
-    Hemisphere::around(n).cosine(u)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -106,9 +101,10 @@ mod tests {
         let (t, b) = basis(n);
         assert!(t.dot(n).abs() < 1e-6 && b.dot(n).abs() < 1e-6 && t.dot(b).abs() < 1e-6);
         let mut s = Sampler::new(&[7]);
+        let around = Hemisphere::around(n);
         let mut mean_cos = 0.0;
         for _ in 0..20_000 {
-            let d = cosine_hemisphere(n, s.next2());
+            let d = around.cosine(s.next2());
             assert!(d.dot(n) >= -1e-5 && (d.length() - 1.0).abs() < 1e-4);
             mean_cos += d.dot(n);
         }
