@@ -6,6 +6,8 @@
 //! (its box, the triangle's index in the box's spare lane) partitioned in place, no binary tree
 //! in between, and the top of the tree built on rayon in parallel.
 
+use std::sync::Mutex;
+
 use glam::{Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
@@ -253,9 +255,12 @@ impl Out {
     }
 }
 
-/// Builds the subtree over `records` (starting at record `first` of all, whose centroids
-/// `centroids` bounds) into `out`: the reference of its root, an inner node.
-fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut Out) -> u32 {
+/// A node over `records` (starting at record `first` of all, whose centroids `centroids`
+/// bounds), its children's leaf lengths (0: inner), and the ranges of its inner children, still
+/// to be built, with their lanes.
+type Made<'r> = (Node, [u8; WIDTH], Vec<(usize, &'r mut [Record], usize, Centroids)>);
+
+fn node(records: &mut [Record], first: usize, centroids: Centroids) -> Made<'_> {
     // Children as (start, end, bounds, centroids) in `records`, in order; split the one with
     // the largest surface (of those with more than a leaf's worth) until there are WIDTH.
     let mut kids: Vec<(usize, usize, Bounds, Centroids)> = Vec::with_capacity(WIDTH);
@@ -276,7 +281,6 @@ fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut
         kids[k] = (s, s + mid, lb, lc);
         kids.insert(k + 1, (s + mid, e, rb, rc));
     }
-    let index = out.nodes.len();
     let mut node = Node::EMPTY;
     let mut lens = [0u8; WIDTH];
     for (lane, &(s, e, b, _)) in kids.iter().enumerate() {
@@ -286,10 +290,8 @@ fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut
             lens[lane] = (e - s) as u8;
         }
     }
-    out.nodes.push(node);
-    out.lens.push(lens);
     // The inner children's ranges, as disjoint slices.
-    let mut parts: Vec<(usize, &mut [Record], usize, Centroids)> = Vec::with_capacity(WIDTH);
+    let mut parts = Vec::with_capacity(WIDTH);
     let mut rest = records;
     let mut at = 0;
     for (lane, &(s, e, _, c)) in kids.iter().enumerate() {
@@ -301,22 +303,46 @@ fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut
         rest = tail;
         at = e;
     }
-    if at >= PARALLEL {
-        let subs: Vec<(usize, Out, u32)> = parts
-            .into_par_iter()
-            .map(|(lane, part, first, c)| {
-                let mut sub = Out::default();
-                let root = subtree(part, first, c, &mut sub);
-                (lane, sub, root)
-            })
-            .collect();
-        for (lane, sub, root) in subs {
-            out.nodes[index].child[lane] = out.append(sub, root);
-        }
-    } else {
-        for (lane, part, first, c) in parts {
-            out.nodes[index].child[lane] = subtree(part, first, c, out);
-        }
+    (node, lens, parts)
+}
+
+/// Builds the subtree over `records` (see `node`) into `out` on this thread: the reference of
+/// its root, an inner node.
+fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut Out) -> u32 {
+    let (node, lens, parts) = node(records, first, centroids);
+    let index = out.nodes.len();
+    out.nodes.push(node);
+    out.lens.push(lens);
+    for (lane, part, first, c) in parts {
+        out.nodes[index].child[lane] = subtree(part, first, c, out);
+    }
+    index as u32
+}
+
+/// Builds the subtree over `records` (see `node`) into the tree all threads share: ranges of
+/// `PARALLEL` records or more make their node there and build their children in parallel;
+/// smaller ones are built whole on one thread and appended in one step. (Subtrees returning
+/// their nodes to their parents instead copied every node once per parallel level, and the
+/// vectors' growth left ~100 MB of freed pages in the allocator at 10M triangles: peak memory.)
+fn shared_subtree(records: &mut [Record], first: usize, centroids: Centroids, shared: &Mutex<Out>) -> u32 {
+    let lock = || shared.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    if records.len() < PARALLEL {
+        let mut local = Out::default();
+        let root = subtree(records, first, centroids, &mut local);
+        return lock().append(local, root);
+    }
+    let (node, lens, parts) = node(records, first, centroids);
+    let index = {
+        let mut out = lock();
+        out.nodes.push(node);
+        out.lens.push(lens);
+        out.nodes.len() - 1
+    };
+    let children: Vec<(usize, u32)> =
+        parts.into_par_iter().map(|(lane, part, first, c)| (lane, shared_subtree(part, first, c, shared))).collect();
+    let mut out = lock();
+    for (lane, child) in children {
+        out.nodes[index].child[lane] = child;
     }
     index as u32
 }
@@ -344,9 +370,10 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
         let ids: Vec<u32> = records.iter().map(Record::index).collect();
         return (Vec::new(), vec![Tri4::new(&ids, |i| corners(i as usize))], LEAF);
     }
-    let mut out = Out::default();
     let centroids = Centroids::of(&records);
-    let root = subtree(&mut records, 0, centroids, &mut out);
+    let shared = Mutex::new(Out::default());
+    let root = shared_subtree(&mut records, 0, centroids, &shared);
+    let mut out = shared.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner());
     // The leaves, numbered in node order, each as the triangles of its records; the records
     // go before the leaves are made (peak memory).
     let mut ids: Vec<([u32; 4], u8)> = Vec::new();

@@ -474,6 +474,42 @@ mod tests {
         }
     }
 
+    /// Checks the subtree under `c` against `lo..hi` (its box in the parent) and counts its
+    /// triangles in `seen`.
+    fn check(bvh: &TriBvh, tris: &[Triangle], c: u32, lo: Vec3, hi: Vec3, seen: &mut [u32]) {
+        let inside = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
+        if c & LEAF != 0 {
+            let leaf = &bvh.leaves[(c & !LEAF) as usize];
+            for &id in leaf.id.iter().filter(|&&id| id != EMPTY) {
+                seen[id as usize] += 1;
+                assert!(tris[id as usize].iter().all(|&p| inside(p)), "triangle {id} outside its leaf's box");
+            }
+            return;
+        }
+        let node = &bvh.nodes[c as usize];
+        for k in (0..WIDTH).filter(|&k| node.child[k] != EMPTY) {
+            let b = |side: usize| Vec3::new(node.bound(side, 0, k), node.bound(side, 1, k), node.bound(side, 2, k));
+            assert!(inside(b(0)) && inside(b(1)), "a child's box outside its parent's");
+            check(bvh, tris, node.child[k], b(0), b(1), seen);
+        }
+    }
+
+    #[test]
+    fn a_tree_built_in_parallel_holds_every_triangle_once_inside_its_boxes() {
+        // Past build::PARALLEL (32K): the top of the tree is built on several threads.
+        let n = 100_000;
+        let tris = soup(n);
+        let bvh = build(&tris);
+        let mut seen = vec![0u32; n as usize];
+        check(&bvh, &tris, bvh.root, Vec3::NEG_INFINITY, Vec3::INFINITY, &mut seen);
+        assert!(seen.iter().all(|&k| k == 1), "every triangle in exactly one leaf");
+        for k in 0..100 {
+            let o = Vec3A::new(random(k * 3 + 50_000), random(k * 3 + 50_001), 2.0);
+            let ray = Ray::new(o, Vec3A::NEG_Z, 0.0, f32::INFINITY);
+            assert_eq!(bvh.closest(&ray, |_, _| true).map(|h| (h.index, h.t)), brute(&tris, &ray), "ray {k}");
+        }
+    }
+
     #[test]
     fn degenerate_and_broken_triangles_build_and_trace_without_trouble() {
         // A thousand copies of one triangle: every centroid in one place.
