@@ -1,9 +1,11 @@
 //! glray's own BVH over triangles, the accelerator every ray of a frame goes through.
 //!
-//! `WIDTH` (four) children per node, their boxes stored axis by axis so that one SIMD test
+//! `WIDTH` (eight) children per node, their boxes stored axis by axis so that one SIMD test
 //! (glam's `Vec4`: SSE on x86-64, NEON on aarch64, plain floats elsewhere; nothing beyond the
-//! target's baseline, since the library runs on whatever node loads it) meets four at once; leaves of up to four
-//! triangles, stored the same way (corner and edges precomputed) and tested at once. `build`
+//! target's baseline, since the library runs on whatever node loads it) meets four at once;
+//! eight rather than four halves the tree's depth, and so the dependent misses of a walk
+//! (docs/performance.md). Leaves of up to four triangles, stored the same way (corner and
+//! edges precomputed) and tested at once. `build`
 //! makes it (binned SAH). Why not obvhs's CWBVH: its generic single-ray traversal was half of
 //! every frame's profile, 4x slower per ray than Embree's, and its PLOC build 3-4x slower than
 //! Embree's with 3x the memory (docs/performance.md).
@@ -24,7 +26,7 @@ const EMPTY: u32 = u32::MAX;
 /// A subtree of at most this many triangles is one leaf.
 const LEAF_SIZE: u32 = 4;
 /// Children per node, tested four at a time (one SIMD test per group of four).
-const WIDTH: usize = 4;
+const WIDTH: usize = 8;
 const GROUPS: usize = WIDTH / 4;
 
 /// `WIDTH` children, in groups of four: `bounds[g][0]` the minimum corners and `bounds[g][1]`
