@@ -10,6 +10,7 @@
 //! every frame's profile, 4x slower per ray than Embree's, and its PLOC build 3-4x slower than
 //! Embree's with 3x the memory (docs/performance.md).
 
+mod boxes;
 mod build;
 mod packet;
 
@@ -18,6 +19,8 @@ use std::mem::MaybeUninit;
 use glam::{Vec3, Vec3A, Vec4};
 use glray_core::prefetch;
 use obvhs::ray::Ray;
+
+use boxes::{Boxes, Sse};
 
 /// A child reference with this bit set is a leaf (the rest: its index in `leaves`).
 const LEAF: u32 = 1 << 31;
@@ -29,32 +32,32 @@ const LEAF_SIZE: u32 = 4;
 const WIDTH: usize = 8;
 const GROUPS: usize = WIDTH / 4;
 
-/// `WIDTH` children, in groups of four: `bounds[g][0]` the minimum corners and `bounds[g][1]`
-/// the maximum of children 4g..4g+4, per axis, one child per lane. Aligned so that a node is
-/// whole cache lines.
+/// `WIDTH` children: `bounds[0][axis]` their minimum corners along `axis` and `bounds[1][axis]`
+/// their maximum, one child per lane, in groups of four (`WIDTH` floats in a row, for the
+/// 256-bit test). Aligned so that a node is whole cache lines.
 #[derive(Clone, Copy)]
 #[repr(C, align(64))]
 struct Node {
-    bounds: [[[Vec4; 3]; 2]; GROUPS],
+    bounds: [[[Vec4; GROUPS]; 3]; 2],
     child: [u32; WIDTH],
 }
 
 impl Node {
     const EMPTY: Node =
-        Node { bounds: [[[Vec4::INFINITY; 3], [Vec4::NEG_INFINITY; 3]]; GROUPS], child: [EMPTY; WIDTH] };
+        Node { bounds: [[[Vec4::INFINITY; GROUPS]; 3], [[Vec4::NEG_INFINITY; GROUPS]; 3]], child: [EMPTY; WIDTH] };
 
     /// Child `k`'s box.
     fn set_bounds(&mut self, k: usize, lo: Vec3A, hi: Vec3A) {
         for axis in 0..3 {
-            self.bounds[k / 4][0][axis][k % 4] = lo[axis];
-            self.bounds[k / 4][1][axis][k % 4] = hi[axis];
+            self.bounds[0][axis][k / 4][k % 4] = lo[axis];
+            self.bounds[1][axis][k / 4][k % 4] = hi[axis];
         }
     }
 
     /// Side `side` (0: minimum, 1: maximum) of child `k`'s box along `axis`.
     #[inline(always)]
     fn bound(&self, side: usize, axis: usize, k: usize) -> f32 {
-        self.bounds[k / 4][side][axis][k % 4]
+        self.bounds[side][axis][k / 4][k % 4]
     }
 }
 
@@ -149,25 +152,6 @@ impl Prepared {
             tmin: ray.tmin,
         }
     }
-}
-
-/// Which of the node's boxes the ray meets within [tmin, tmax] (bit per child), and where it
-/// enters each.
-#[inline(always)]
-fn hit_boxes(node: &Node, r: &Prepared, tmax: f32) -> (u32, [f32; WIDTH]) {
-    let mut mask = 0;
-    let mut entry = [0.0; WIDTH];
-    for (g, bounds) in node.bounds.iter().enumerate() {
-        let slab = |axis: usize, side: usize| (bounds[side][axis] - r.origin[axis]) * r.inverse[axis];
-        let near = |axis: usize| slab(axis, r.near[axis]);
-        let far = |axis: usize| slab(axis, 1 - r.near[axis]);
-        let tnear = near(0).max(near(1)).max(near(2).max(Vec4::splat(r.tmin)));
-        // Widened by a few ulps so that rounding in the slabs cannot lose a box the ray grazes.
-        let tfar = far(0).min(far(1)).min(far(2).min(Vec4::splat(tmax))) * (1.0 + 4.0 * f32::EPSILON);
-        mask |= tnear.cmple(tfar).bitmask() << (4 * g);
-        entry[4 * g..4 * g + 4].copy_from_slice(&tnear.to_array());
-    }
-    (mask, entry)
 }
 
 /// How far outside a triangle's edges (in barycentric units) a hit still counts: a ray through
@@ -288,19 +272,21 @@ impl TriBvh {
     /// `leaf` may shorten `tmax`, or return true to stop the walk. `NEAREST`: children in the
     /// order the ray meets them (what a closest hit wants: a near hit prunes what lies behind);
     /// without, in any order (any hit will do).
+    /// `B`: how the node's boxes are tested (see `boxes`).
     #[inline(always)]
-    fn walk<const NEAREST: bool>(&self, ray: &Ray, mut leaf: impl FnMut(&Tri4, &Prepared, &mut f32) -> bool) {
+    fn walk<const NEAREST: bool, B: Boxes>(&self, ray: &Ray, mut leaf: impl FnMut(&Tri4, &Prepared, &mut f32) -> bool) {
         if self.root == EMPTY {
             return;
         }
         let r = Prepared::new(ray);
+        let boxes = B::new(&r);
         let mut tmax = ray.tmax;
         let mut stack: Stack<(u32, f32)> = Stack::new();
         let mut cur = self.root;
         loop {
             if cur & LEAF == 0 {
                 let node = &self.nodes[cur as usize];
-                let (mask, tnear) = hit_boxes(node, &r, tmax);
+                let (mask, tnear) = boxes.hit(node, tmax);
                 if mask != 0 {
                     let rest = mask & (mask - 1);
                     if rest == 0 {
@@ -356,9 +342,59 @@ impl TriBvh {
     /// The closest hit in [tmin, tmax] among triangles `accept` takes (given the triangle's
     /// index and the determinant of the hit, see `hit_triangles`).
     #[inline]
-    pub fn closest(&self, ray: &Ray, mut accept: impl FnMut(u32, f32) -> bool) -> Option<TriHit> {
+    pub fn closest(&self, ray: &Ray, accept: impl FnMut(u32, f32) -> bool) -> Option<TriHit> {
+        #[cfg(target_arch = "x86_64")]
+        if boxes::avx_available() {
+            // SAFETY: the CPU has AVX (checked just now).
+            return unsafe { self.closest_avx(ray, accept) };
+        }
+        self.closest_with::<Sse>(ray, accept)
+    }
+
+    /// Whether any triangle lies along the ray within [tmin, tmax].
+    #[inline]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if boxes::avx_available() {
+            // SAFETY: the CPU has AVX (checked just now).
+            return unsafe { self.occluded_avx(ray) };
+        }
+        self.occluded_with::<Sse>(ray)
+    }
+
+    /// Every hit within [tmin, tmax], in no particular order: `visit(hit, det)`.
+    #[inline]
+    pub fn each_hit(&self, ray: &Ray, mut visit: impl FnMut(TriHit, f32)) {
+        self.walk::<false, Sse>(ray, |tri, r, tmax| {
+            let (mut mask, t, det) = hit_triangles(tri, r, *tmax);
+            let (t, det) = (t.to_array(), det.to_array());
+            while mask != 0 {
+                let k = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                visit(tri.hit(k, t[k]), det[k]);
+            }
+            false
+        });
+    }
+
+    /// `closest`, the whole walk compiled for AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn closest_avx(&self, ray: &Ray, accept: impl FnMut(u32, f32) -> bool) -> Option<TriHit> {
+        self.closest_with::<boxes::Avx>(ray, accept)
+    }
+
+    /// `occluded`, the whole walk compiled for AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn occluded_avx(&self, ray: &Ray) -> bool {
+        self.occluded_with::<boxes::Avx>(ray)
+    }
+
+    #[inline(always)]
+    fn closest_with<B: Boxes>(&self, ray: &Ray, mut accept: impl FnMut(u32, f32) -> bool) -> Option<TriHit> {
         let mut best = None;
-        self.walk::<true>(ray, |tri, r, tmax| {
+        self.walk::<true, B>(ray, |tri, r, tmax| {
             let (mut mask, t, det) = hit_triangles(tri, r, *tmax);
             if mask == 0 {
                 return false;
@@ -377,30 +413,14 @@ impl TriBvh {
         best
     }
 
-    /// Whether any triangle lies along the ray within [tmin, tmax].
-    #[inline]
-    pub fn occluded(&self, ray: &Ray) -> bool {
+    #[inline(always)]
+    fn occluded_with<B: Boxes>(&self, ray: &Ray) -> bool {
         let mut hit = false;
-        self.walk::<false>(ray, |tri, r, tmax| {
+        self.walk::<false, B>(ray, |tri, r, tmax| {
             hit = hit_triangles(tri, r, *tmax).0 != 0;
             hit
         });
         hit
-    }
-
-    /// Every hit within [tmin, tmax], in no particular order: `visit(hit, det)`.
-    #[inline]
-    pub fn each_hit(&self, ray: &Ray, mut visit: impl FnMut(TriHit, f32)) {
-        self.walk::<false>(ray, |tri, r, tmax| {
-            let (mut mask, t, det) = hit_triangles(tri, r, *tmax);
-            let (t, det) = (t.to_array(), det.to_array());
-            while mask != 0 {
-                let k = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                visit(tri.hit(k, t[k]), det[k]);
-            }
-            false
-        });
     }
 }
 
@@ -538,6 +558,47 @@ mod tests {
         // Nothing but broken triangles: an empty tree.
         let bvh = build(&[[Vec3::NAN; 3]; 3]);
         assert!(bvh.closest(&ray, |_, _| true).is_none());
+    }
+
+    #[test]
+    fn the_wide_box_test_finds_what_the_baseline_finds_bit_for_bit() {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if !boxes::avx_available() {
+                eprintln!("no AVX on this CPU: only the baseline box test runs here");
+                return;
+            }
+            let tris = soup(5000);
+            let bvh = build(&tris);
+            for k in 0..3000u32 {
+                let o = Vec3A::new(random(k * 7 + 1), random(k * 7 + 2), random(k * 7 + 3)) * 1.4 - 0.2;
+                // Every fourth ray along an axis (infinite inverse components), the rest anywhere.
+                let d = match k % 4 {
+                    0 => [Vec3A::X, Vec3A::NEG_Y, Vec3A::Z][(k / 4 % 3) as usize],
+                    _ => (Vec3A::new(random(k * 7 + 4), random(k * 7 + 5), random(k * 7 + 6)) - 0.5).normalize(),
+                };
+                let tmax = if k % 3 == 0 { 0.3 } else { f32::INFINITY };
+                let ray = Ray::new(o, d, 0.0, tmax);
+                // Node by node: the same boxes met, entered at the same distance.
+                let r = Prepared::new(&ray);
+                let (sse, avx) = (Sse::new(&r), boxes::Avx::new(&r));
+                for node in bvh.nodes.iter().step_by(17) {
+                    let (m0, e0) = sse.hit(node, tmax);
+                    let (m1, e1) = avx.hit(node, tmax);
+                    assert_eq!((m0, e0.map(f32::to_bits)), (m1, e1.map(f32::to_bits)), "ray {k}");
+                }
+                let baseline = bvh.closest_with::<Sse>(&ray, |_, _| true);
+                // SAFETY: AVX checked above.
+                let wide = unsafe { bvh.closest_avx(&ray, |_, _| true) };
+                assert_eq!(
+                    wide.map(|h| (h.index, h.t.to_bits())),
+                    baseline.map(|h| (h.index, h.t.to_bits())),
+                    "ray {k}"
+                );
+                assert_eq!(unsafe { bvh.occluded_avx(&ray) }, bvh.occluded_with::<Sse>(&ray), "ray {k}");
+                assert_eq!(baseline.is_some(), bvh.occluded_with::<Sse>(&ray), "ray {k}");
+            }
+        }
     }
 
     #[test]

@@ -1,0 +1,121 @@
+//! How a walk tests one ray against a node's `WIDTH` (eight) boxes: `Sse`, two groups of four
+//! with the x86-64 baseline's (or NEON's) 128-bit vectors, everywhere; `Avx`, all eight at once
+//! with 256-bit vectors, on CPUs that have them (checked at run time: the library runs on
+//! whatever node loads it). Both do the same IEEE operations in the same order, so they find
+//! the same boxes bit for bit: a frame's tiles are the same picture whichever node traced them.
+
+use glam::Vec4;
+
+use super::{Node, Prepared, GROUPS, WIDTH};
+
+/// A ray made ready to meet a node's boxes.
+pub(super) trait Boxes {
+    fn new(ray: &Prepared) -> Self;
+    /// Which of the node's boxes the ray meets within [tmin, tmax] (bit per child), and where
+    /// it enters each.
+    fn hit(&self, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]);
+}
+
+/// The slab test: per child, the ray's entry (the farthest of its near planes and tmin) and
+/// exit (the nearest far plane and tmax), widened by a few ulps so that rounding in the slabs
+/// cannot lose a box the ray grazes.
+const WIDEN: f32 = 1.0 + 4.0 * f32::EPSILON;
+
+/// 128-bit vectors, four children per test.
+pub(super) struct Sse {
+    origin: [Vec4; 3],
+    inverse: [Vec4; 3],
+    near: [usize; 3],
+    tmin: Vec4,
+}
+
+impl Boxes for Sse {
+    #[inline(always)]
+    fn new(r: &Prepared) -> Sse {
+        Sse { origin: r.origin, inverse: r.inverse, near: r.near, tmin: Vec4::splat(r.tmin) }
+    }
+
+    #[inline(always)]
+    fn hit(&self, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
+        let mut mask = 0;
+        let mut entry = [0.0; WIDTH];
+        for g in 0..GROUPS {
+            let slab = |axis: usize, side: usize| (node.bounds[side][axis][g] - self.origin[axis]) * self.inverse[axis];
+            let near = |axis: usize| slab(axis, self.near[axis]);
+            let far = |axis: usize| slab(axis, 1 - self.near[axis]);
+            let tnear = near(0).max(near(1)).max(near(2).max(self.tmin));
+            let tfar = far(0).min(far(1)).min(far(2).min(Vec4::splat(tmax))) * WIDEN;
+            mask |= tnear.cmple(tfar).bitmask() << (4 * g);
+            entry[4 * g..4 * g + 4].copy_from_slice(&tnear.to_array());
+        }
+        (mask, entry)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+pub(super) use avx::{available as avx_available, Avx};
+
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    use std::arch::x86_64::*;
+
+    use super::{Boxes, Node, Prepared, WIDEN, WIDTH};
+
+    const _: () = assert!(WIDTH == 8, "one 256-bit test per node");
+
+    /// Whether this CPU has AVX (and the OS saves its registers); std caches the answer.
+    #[inline(always)]
+    pub fn available() -> bool {
+        std::is_x86_feature_detected!("avx")
+    }
+
+    /// 256-bit vectors, all eight children in one test. Made only where `available()`.
+    pub struct Avx {
+        origin: [__m256; 3],
+        inverse: [__m256; 3],
+        near: [usize; 3],
+        tmin: __m256,
+    }
+
+    impl Boxes for Avx {
+        #[inline(always)]
+        fn new(r: &Prepared) -> Avx {
+            // SAFETY: an `Avx` is made only by walks that checked `available()`.
+            unsafe { new(r) }
+        }
+
+        #[inline(always)]
+        fn hit(&self, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
+            // SAFETY: as in `new`.
+            unsafe { hit(self, node, tmax) }
+        }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx")]
+    unsafe fn new(r: &Prepared) -> Avx {
+        let splat = |v: &[glam::Vec4; 3]| v.map(|lanes| _mm256_set1_ps(lanes.x));
+        Avx { origin: splat(&r.origin), inverse: splat(&r.inverse), near: r.near, tmin: _mm256_set1_ps(r.tmin) }
+    }
+
+    /// `Sse::hit`'s operations, in its order, eight lanes wide.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    unsafe fn hit(a: &Avx, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
+        // SAFETY: a node is 64-byte aligned and each side's axis is 32 bytes at a multiple of 32.
+        let bound = |side: usize, axis: usize| unsafe { _mm256_load_ps(node.bounds[side][axis].as_ptr().cast()) };
+        let slab =
+            |axis: usize, side: usize| _mm256_mul_ps(_mm256_sub_ps(bound(side, axis), a.origin[axis]), a.inverse[axis]);
+        let near = |axis: usize| slab(axis, a.near[axis]);
+        let far = |axis: usize| slab(axis, 1 - a.near[axis]);
+        // glam's max and min are _mm_max_ps(self, other): the same operand order here.
+        let tnear = _mm256_max_ps(_mm256_max_ps(near(0), near(1)), _mm256_max_ps(near(2), a.tmin));
+        let tfar = _mm256_min_ps(_mm256_min_ps(far(0), far(1)), _mm256_min_ps(far(2), _mm256_set1_ps(tmax)));
+        let tfar = _mm256_mul_ps(tfar, _mm256_set1_ps(WIDEN));
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar)) as u32;
+        let mut entry = [0.0f32; WIDTH];
+        // SAFETY: `entry` holds eight floats; the store is unaligned.
+        unsafe { _mm256_storeu_ps(entry.as_mut_ptr(), tnear) };
+        (mask, entry)
+    }
+}
