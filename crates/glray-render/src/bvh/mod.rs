@@ -294,12 +294,14 @@ impl TriBvh {
                         continue;
                     }
                     if !NEAREST {
+                        // Any hit will do and tmax never shrinks: where a child is entered
+                        // does not matter (minus infinity: it is always still reached).
                         let mut m = rest;
                         while m != 0 {
                             let k = m.trailing_zeros() as usize;
                             m &= m - 1;
                             self.prefetch_child(node.child[k]);
-                            stack.push((node.child[k], tnear[k]));
+                            stack.push((node.child[k], f32::NEG_INFINITY));
                         }
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
