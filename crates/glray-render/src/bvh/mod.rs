@@ -34,7 +34,8 @@ const GROUPS: usize = WIDTH / 4;
 
 /// `WIDTH` children: `bounds[0][axis]` their minimum corners along `axis` and `bounds[1][axis]`
 /// their maximum, one child per lane, in groups of four (`WIDTH` floats in a row, for the
-/// 256-bit test). Aligned so that a node is whole cache lines.
+/// 256-bit test); the children fill the slots from the first, unused ones (`EMPTY`, inverted
+/// boxes) last. Aligned so that a node is whole cache lines.
 #[derive(Clone, Copy)]
 #[repr(C, align(64))]
 struct Node {
