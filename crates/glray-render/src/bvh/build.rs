@@ -152,13 +152,28 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
     let extent = centroids.hi - centroids.lo;
     let scale = Vec3A::select(extent.cmpgt(Vec3A::ZERO), Vec3A::splat(BINS as f32 * 0.9999) / extent, Vec3A::ZERO);
     let binning = Binning { origin: centroids.lo, scale };
-    let fill = |bins: &mut Bins, chunk: &[Record]| {
-        for r in chunk {
-            for (axis, b) in binning.bin(r).into_iter().enumerate() {
-                bins.bounds[axis][b].grow(r);
-                bins.count[axis][b] += 1;
-            }
+    let add = |bins: &mut Bins, r: &Record| {
+        for (axis, b) in binning.bin(r).into_iter().enumerate() {
+            bins.bounds[axis][b].grow(r);
+            bins.count[axis][b] += 1;
         }
+    };
+    let fill = |bins: &mut Bins, chunk: &[Record]| {
+        if chunk.len() < 256 {
+            chunk.iter().for_each(|r| add(bins, r));
+            return;
+        }
+        // Neighbouring records mostly fall in the same bins (partitioning keeps them near):
+        // into one set of bins, each would wait for the previous one's store. Two sets,
+        // alternately, halve that chain.
+        let mut other = Bins::new();
+        let mut pairs = chunk.chunks_exact(2);
+        for pair in &mut pairs {
+            add(bins, &pair[0]);
+            add(&mut other, &pair[1]);
+        }
+        pairs.remainder().iter().for_each(|r| add(bins, r));
+        *bins = bins.merge(&other);
     };
     let bins = if records.len() >= PARALLEL {
         records
