@@ -366,15 +366,15 @@ impl<'f> Scene<'f> {
         best
     }
 
-    /// The closest hits of four rays (coherent ones: a 2x2 quad of camera rays), as `closest`
-    /// finds each.
-    pub fn closest4(&self, rays: [Ray; 4]) -> [Option<Hit>; 4] {
+    /// The closest hits of `N` rays (a multiple of four; coherent ones: a block of camera rays),
+    /// as `closest` finds each.
+    pub fn closest_packet<const N: usize>(&self, rays: [Ray; N]) -> [Option<Hit>; N] {
         if self.top.is_some() {
             // Many instances: the top level is walked ray by ray.
             return rays.map(|r| self.closest(r));
         }
         let mut rays = rays;
-        let keep = |best: &mut [Option<Hit>; 4], rays: &mut [Ray; 4], hits: [Option<Hit>; 4]| {
+        let keep = |best: &mut [Option<Hit>; N], rays: &mut [Ray; N], hits: [Option<Hit>; N]| {
             for (j, hit) in hits.into_iter().enumerate() {
                 if let Some(h) = hit {
                     best[j] = Some(h);
@@ -382,15 +382,15 @@ impl<'f> Scene<'f> {
                 }
             }
         };
-        let mut best = [None; 4];
-        let hits = self.bvh.closest4(&rays, |_, _| true);
+        let mut best = [None; N];
+        let hits = self.bvh.closest_packet(&rays, |_, _| true);
         keep(&mut best, &mut rays, hits.map(|h| h.map(|h| self.flat(h))));
         for (k, b) in self.boxes.iter().enumerate() {
             if rays.iter().all(|r| b.intersect_ray(r) == f32::INFINITY) {
                 continue;
             }
             let p = &self.placed[k];
-            let hits = p.bvh.bvh.closest4(&rays.map(|r| p.ray(&r)), |_, det| p.drawn(det));
+            let hits = p.bvh.bvh.closest_packet(&rays.map(|r| p.ray(&r)), |_, det| p.drawn(det));
             keep(&mut best, &mut rays, hits.map(|h| h.map(|h| p.hit(k, h))));
         }
         best
@@ -506,8 +506,10 @@ mod tests {
                 "{m}: {} vs {expected}",
                 hit.normal
             );
-            let four = scene.closest4([r; 4]);
+            let four = scene.closest_packet([r; 4]);
             assert!(four.iter().all(|h| *h == Some(hit)));
+            let eight = scene.closest_packet([r; 8]);
+            assert!(eight.iter().all(|h| *h == Some(hit)));
             let mut all = Vec::new();
             scene.all(r, &mut all);
             assert_eq!(all, [hit]);

@@ -113,14 +113,15 @@ impl Tracer<'_> {
         Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack)
     }
 
-    /// The closest hits of the rays through the centres of four pixels (a 2x2 quad), traced
-    /// together, when the closest hit is what decides a pixel's first sample (None otherwise).
-    pub fn centers(&self, pixels: [(usize, usize); 4]) -> Option<[Option<Hit>; 4]> {
+    /// The closest hits of the rays through the centres of `N` neighbouring pixels (a
+    /// multiple of four), traced together, when the closest hit is what decides a pixel's
+    /// first sample (None otherwise).
+    pub fn centers<const N: usize>(&self, pixels: [(usize, usize); N]) -> Option<[Option<Hit>; N]> {
         if !self.simple || self.pass != 0 {
             return None;
         }
         let rays = pixels.map(|(x, y)| Self::traced(&self.camera.ray(x as f64 + 0.5, y as f64 + 0.5)));
-        Some(self.scene.closest4(rays))
+        Some(self.scene.closest_packet(rays))
     }
 
     /// One camera ray through window position (px, py); `known`, its closest hit if found

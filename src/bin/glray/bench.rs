@@ -200,19 +200,19 @@ fn kernels(frame: &Frame, ao: u32, frames: u32) -> Kernels {
         let r = camera.ray(x as f64 + 0.5, y as f64 + 0.5);
         Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), 0.0, r.t_max as f32)
     };
-    // In 2x2 quads of camera rays, as the renderer traces them.
+    // In 4x2 blocks of camera rays, as the renderer traces them.
     let trace = |records: &mut Vec<Option<HitRecord>>| {
         records.par_chunks_mut(2 * w).enumerate().for_each(|(pair, rows)| {
             let y0 = 2 * pair;
             let two = rows.len() > w;
-            for x0 in (0..w).step_by(2) {
-                let at = |k: usize| ((x0 + (k & 1)).min(w - 1), if two { y0 + (k >> 1) } else { y0 });
-                let rays: [Ray; 4] = std::array::from_fn(|k| {
+            for x0 in (0..w).step_by(4) {
+                let at = |k: usize| ((x0 + k % 4).min(w - 1), if two { y0 + k / 4 } else { y0 });
+                let rays: [Ray; 8] = std::array::from_fn(|k| {
                     let (x, y) = at(k);
                     ray(x, y)
                 });
-                let hits = scene.closest4(rays);
-                for k in 0..4 {
+                let hits = scene.closest_packet(rays);
+                for k in 0..8 {
                     let (x, y) = at(k);
                     rows[(y - y0) * w + x] = record(&rays[k], hits[k]);
                 }

@@ -12,6 +12,7 @@
 
 mod boxes;
 mod build;
+mod lanes;
 mod packet;
 
 use std::mem::MaybeUninit;
@@ -21,6 +22,7 @@ use glray_core::prefetch;
 use obvhs::ray::Ray;
 
 use boxes::{Boxes, Sse};
+use lanes::Lanes;
 
 /// A child reference with this bit set is a leaf (the rest: its index in `leaves`).
 const LEAF: u32 = 1 << 31;
@@ -163,31 +165,32 @@ const EDGE: f32 = 1e-6;
 /// Moller-Trumbore, four (ray, triangle) pairs at once, one per lane: which lanes hit within
 /// [tmin, tmax] (bit per lane), where, and each determinant (its sign says which face the ray
 /// sees: the geometric normal e1 x e2 dotted with the direction is -det). A lane is a ray
-/// against four triangles (`hit_triangles`) or four rays against one (`packet`).
+/// against four triangles (`hit_triangles`) or one of four or eight rays against one triangle
+/// (`packet`).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn moller_trumbore(
-    origin: &[Vec4; 3],
-    direction: &[Vec4; 3],
-    v0: &[Vec4; 3],
-    e1: &[Vec4; 3],
-    e2: &[Vec4; 3],
-    tmin: Vec4,
-    tmax: Vec4,
-) -> (u32, Vec4, Vec4) {
+fn moller_trumbore<L: Lanes<N>, const N: usize>(
+    origin: &[L; 3],
+    direction: &[L; 3],
+    v0: &[L; 3],
+    e1: &[L; 3],
+    e2: &[L; 3],
+    tmin: L,
+    tmax: L,
+) -> (u32, L, L) {
     let [dx, dy, dz] = *direction;
     let [e1x, e1y, e1z] = *e1;
     let [e2x, e2y, e2z] = *e2;
     let (px, py, pz) = (dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x);
     let det = e1x * px + e1y * py + e1z * pz;
-    let inv = Vec4::ONE / det;
+    let inv = L::splat(1.0) / det;
     let (sx, sy, sz) = (origin[0] - v0[0], origin[1] - v0[1], origin[2] - v0[2]);
     let u = (sx * px + sy * py + sz * pz) * inv;
     let (qx, qy, qz) = (sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x);
     let v = (dx * qx + dy * qy + dz * qz) * inv;
     let t = (e2x * qx + e2y * qy + e2z * qz) * inv;
-    let (lo, hi) = (Vec4::splat(-EDGE), Vec4::splat(1.0 + EDGE));
-    let ok = det.cmpne(Vec4::ZERO)
+    let (lo, hi) = (L::splat(-EDGE), L::splat(1.0 + EDGE));
+    let ok = det.cmpne(L::splat(0.0))
         & det.is_finite_mask()
         & u.cmpge(lo)
         & u.cmple(hi)
@@ -195,7 +198,7 @@ fn moller_trumbore(
         & (u + v).cmple(hi)
         & t.cmpge(tmin)
         & t.cmple(tmax);
-    (ok.bitmask(), t, det)
+    (L::bitmask(ok), t, det)
 }
 
 /// One ray against a leaf's four triangles (see `moller_trumbore`).

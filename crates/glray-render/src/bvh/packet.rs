@@ -1,32 +1,48 @@
-//! Four coherent rays through the tree at once (camera rays of a 2x2 pixel quad): one lane per
-//! ray, so a node's box is tested against all four in one SIMD test and the walk's decisions,
-//! branch misses and memory latency are paid once for four rays. Coherent rays visit mostly
-//! the same nodes; a ray that leaves the group's path is simply masked off.
+//! Coherent rays through the tree at once (camera rays of neighbouring pixels): one lane per
+//! ray, so a node's box is tested against all of them in one SIMD test and the walk's
+//! decisions, branch misses and memory latency are paid once for the packet. Coherent rays
+//! visit mostly the same nodes; a ray that leaves the group's path is simply masked off.
+//! Packets of four (a 2x2 quad, `Vec4`) everywhere; of eight (4x2, `F8`) where the CPU has
+//! AVX, else as two of four. Either finds the hits each ray finds alone.
 
-use glam::{BVec4A, Vec4};
+use glam::Vec4;
 use obvhs::ray::Ray;
 
+#[cfg(target_arch = "x86_64")]
+use super::boxes::avx_available;
+use super::lanes::Lanes;
 use super::{insert_farthest_first, moller_trumbore, Node, Stack, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
 
-/// Four rays, one per lane.
-struct Rays4 {
-    origin: [Vec4; 3],
-    direction: [Vec4; 3],
-    inverse: [Vec4; 3],
-    tmin: Vec4,
+/// `N` rays, one per lane.
+struct Rays<L> {
+    origin: [L; 3],
+    direction: [L; 3],
+    inverse: [L; 3],
+    tmin: L,
 }
 
-impl Rays4 {
-    fn new(rays: &[Ray; 4]) -> Rays4 {
-        let lanes = |f: &dyn Fn(&Ray) -> [f32; 3]| {
-            let v = rays.map(|r| f(&r));
-            [0, 1, 2].map(|axis| Vec4::new(v[0][axis], v[1][axis], v[2][axis], v[3][axis]))
-        };
-        Rays4 {
-            origin: lanes(&|r| r.origin.into()),
-            direction: lanes(&|r| r.direction.into()),
-            inverse: lanes(&|r| r.inv_direction.into()),
-            tmin: Vec4::from_array(rays.map(|r| r.tmin)),
+impl<L> Rays<L> {
+    // No closures here or below: a closure over AVX lanes is compiled without AVX and not
+    // inlined into the AVX walk (each lane operation became a call).
+    #[inline(always)]
+    fn new<const N: usize>(rays: &[Ray; N]) -> Rays<L>
+    where
+        L: Lanes<N>,
+    {
+        let (mut o, mut d, mut i, mut tmin) = ([[0.0; N]; 3], [[0.0; N]; 3], [[0.0; N]; 3], [0.0; N]);
+        for (k, r) in rays.iter().enumerate() {
+            for axis in 0..3 {
+                o[axis][k] = r.origin[axis];
+                d[axis][k] = r.direction[axis];
+                i[axis][k] = r.inv_direction[axis];
+            }
+            tmin[k] = r.tmin;
+        }
+        Rays {
+            origin: [L::from_array(o[0]), L::from_array(o[1]), L::from_array(o[2])],
+            direction: [L::from_array(d[0]), L::from_array(d[1]), L::from_array(d[2])],
+            inverse: [L::from_array(i[0]), L::from_array(i[1]), L::from_array(i[2])],
+            tmin: L::from_array(tmin),
         }
     }
 }
@@ -34,24 +50,34 @@ impl Rays4 {
 /// Where each ray enters child `k`'s box, and which rays (a lane each) meet it before their
 /// `tmax`.
 #[inline(always)]
-fn hit_box(node: &Node, k: usize, r: &Rays4, tmax: Vec4) -> (BVec4A, Vec4) {
-    let slab = |axis: usize| {
-        let lo = (Vec4::splat(node.bound(0, axis, k)) - r.origin[axis]) * r.inverse[axis];
-        let hi = (Vec4::splat(node.bound(1, axis, k)) - r.origin[axis]) * r.inverse[axis];
-        (lo.min(hi), lo.max(hi))
-    };
-    let (x, y, z) = (slab(0), slab(1), slab(2));
+fn hit_box<L: Lanes<N>, const N: usize>(node: &Node, k: usize, r: &Rays<L>, tmax: L) -> (L::Mask, L) {
+    let (x, y, z) = (slab(node, k, r, 0), slab(node, k, r, 1), slab(node, k, r, 2));
     let tnear = x.0.max(y.0).max(z.0.max(r.tmin));
-    let tfar = x.1.min(y.1).min(z.1.min(tmax)) * (1.0 + 4.0 * f32::EPSILON);
+    let tfar = x.1.min(y.1).min(z.1.min(tmax)) * L::splat(1.0 + 4.0 * f32::EPSILON);
     (tnear.cmple(tfar), tnear)
 }
 
-/// Triangle `k` of a leaf against the four rays: which rays hit it before their `tmax` (bit
-/// per ray), where, and the determinants (see `moller_trumbore`).
+/// Where the rays cross child `k`'s two planes across `axis`: (nearer, farther). A function,
+/// not a closure: a closure over AVX lanes is not inlined into the AVX walk.
 #[inline(always)]
-fn hit_triangle(tri: &Tri4, k: usize, r: &Rays4, tmax: Vec4) -> (u32, Vec4, Vec4) {
-    let lane = |v: &[Vec4; 3]| [Vec4::splat(v[0][k]), Vec4::splat(v[1][k]), Vec4::splat(v[2][k])];
-    moller_trumbore(&r.origin, &r.direction, &lane(&tri.v0), &lane(&tri.e1), &lane(&tri.e2), r.tmin, tmax)
+fn slab<L: Lanes<N>, const N: usize>(node: &Node, k: usize, r: &Rays<L>, axis: usize) -> (L, L) {
+    let lo = (L::splat(node.bound(0, axis, k)) - r.origin[axis]) * r.inverse[axis];
+    let hi = (L::splat(node.bound(1, axis, k)) - r.origin[axis]) * r.inverse[axis];
+    (lo.min(hi), lo.max(hi))
+}
+
+/// Triangle `k` of a leaf against the rays: which rays hit it before their `tmax` (bit per
+/// ray), where, and the determinants (see `moller_trumbore`).
+#[inline(always)]
+fn hit_triangle<L: Lanes<N>, const N: usize>(tri: &Tri4, k: usize, r: &Rays<L>, tmax: L) -> (u32, L, L) {
+    let (v0, e1, e2) = (lane(&tri.v0, k), lane(&tri.e1, k), lane(&tri.e2, k));
+    moller_trumbore(&r.origin, &r.direction, &v0, &e1, &e2, r.tmin, tmax)
+}
+
+/// Lane `k` of each axis of `v`, in every lane.
+#[inline(always)]
+fn lane<L: Lanes<N>, const N: usize>(v: &[Vec4; 3], k: usize) -> [L; 3] {
+    [L::splat(v[0][k]), L::splat(v[1][k]), L::splat(v[2][k])]
 }
 
 impl TriBvh {
@@ -59,11 +85,45 @@ impl TriBvh {
     #[inline]
     pub fn closest4(&self, rays: &[Ray; 4], accept: impl FnMut(u32, f32) -> bool) -> [Option<TriHit>; 4] {
         #[cfg(target_arch = "x86_64")]
-        if super::boxes::avx_available() {
+        if avx_available() {
             // SAFETY: the CPU has AVX (checked just now).
             return unsafe { self.closest4_avx(rays, accept) };
         }
-        self.closest4_with(rays, accept)
+        self.packet::<Vec4, 4>(rays, accept)
+    }
+
+    /// The closest hit of each of eight rays, as `closest` would find it for each alone.
+    #[inline]
+    pub fn closest8(&self, rays: &[Ray; 8], mut accept: impl FnMut(u32, f32) -> bool) -> [Option<TriHit>; 8] {
+        #[cfg(target_arch = "x86_64")]
+        if avx_available() {
+            // SAFETY: the CPU has AVX (checked just now).
+            return unsafe { self.closest8_avx(rays, accept) };
+        }
+        let [a, b]: [[Ray; 4]; 2] = [std::array::from_fn(|k| rays[k]), std::array::from_fn(|k| rays[4 + k])];
+        let (a, b) = (self.closest4(&a, &mut accept), self.closest4(&b, &mut accept));
+        std::array::from_fn(|k| if k < 4 { a[k] } else { b[k - 4] })
+    }
+
+    /// The closest hit of each of `N` rays (a multiple of four): eight at once where `N` is
+    /// eight, else four by four.
+    #[inline]
+    pub fn closest_packet<const N: usize>(
+        &self,
+        rays: &[Ray; N],
+        mut accept: impl FnMut(u32, f32) -> bool,
+    ) -> [Option<TriHit>; N] {
+        const { assert!(N % 4 == 0, "packets of fours") };
+        let mut out = [None; N];
+        if let Ok(eight) = <&[Ray; 8]>::try_from(&rays[..]) {
+            out.copy_from_slice(&self.closest8(eight, accept));
+        } else {
+            for (rays, out) in rays.chunks_exact(4).zip(out.chunks_exact_mut(4)) {
+                let four: &[Ray; 4] = rays.try_into().expect("chunks of four");
+                out.copy_from_slice(&self.closest4(four, &mut accept));
+            }
+        }
+        out
     }
 
     /// `closest4` compiled for AVX: the same operations (so the same hits), three-operand and
@@ -71,29 +131,47 @@ impl TriBvh {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     unsafe fn closest4_avx(&self, rays: &[Ray; 4], accept: impl FnMut(u32, f32) -> bool) -> [Option<TriHit>; 4] {
-        self.closest4_with(rays, accept)
+        self.packet::<Vec4, 4>(rays, accept)
     }
 
+    /// `closest8` with eight AVX lanes.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn closest8_avx(&self, rays: &[Ray; 8], accept: impl FnMut(u32, f32) -> bool) -> [Option<TriHit>; 8] {
+        self.packet::<super::lanes::F8, 8>(rays, accept)
+    }
+
+    /// The packet walk, `N` rays in the `N` lanes of `L`.
     #[inline(always)]
-    fn closest4_with(&self, rays: &[Ray; 4], mut accept: impl FnMut(u32, f32) -> bool) -> [Option<TriHit>; 4] {
-        let mut best = [None; 4];
+    fn packet<L: Lanes<N>, const N: usize>(
+        &self,
+        rays: &[Ray; N],
+        mut accept: impl FnMut(u32, f32) -> bool,
+    ) -> [Option<TriHit>; N] {
+        let mut best = [None; N];
         if self.root == EMPTY {
             return best;
         }
-        let r = Rays4::new(rays);
-        let mut tmax = Vec4::from_array(rays.map(|r| r.tmax));
+        let r = Rays::<L>::new(rays);
+        let mut tmax = [0.0; N];
+        for (t, r) in tmax.iter_mut().zip(rays) {
+            *t = r.tmax;
+        }
+        let mut tmax = L::from_array(tmax);
+        let infinity = L::splat(f32::INFINITY);
         // Entries: a subtree and where each ray enters its box (infinity: the ray missed it).
-        let mut stack: Stack<(u32, Vec4)> = Stack::new();
-        let mut cur = (self.root, Vec4::splat(f32::NEG_INFINITY));
+        let mut stack: Stack<(u32, L)> = Stack::new();
+        let mut cur = (self.root, L::splat(f32::NEG_INFINITY));
         loop {
             let active = cur.1.cmple(tmax);
-            if active.any() {
+            let active_bits = L::bitmask(active);
+            if active_bits != 0 {
                 if cur.0 & LEAF == 0 {
                     let node = &self.nodes[cur.0 as usize];
-                    // The children some active ray meets, nearest (for the nearest ray) last.
-                    // All the boxes first, then the children met: a branch per child on
-                    // whether any ray met it mispredicted at nearly every child.
-                    let mut entered = [Vec4::INFINITY; WIDTH];
+                    // All the boxes first, then the children met, nearest (for the nearest
+                    // ray) last: a branch per child on whether any ray met it mispredicted at
+                    // nearly every child.
+                    let mut entered = [infinity; WIDTH];
                     let mut met = 0u32;
                     for (k, entry) in entered.iter_mut().enumerate() {
                         // Children fill the node from the first slot: an empty one ends them.
@@ -102,10 +180,10 @@ impl TriBvh {
                         }
                         let (mask, tnear) = hit_box(node, k, &r, tmax);
                         let mask = mask & active;
-                        *entry = Vec4::select(mask, tnear, Vec4::INFINITY);
-                        met |= (mask.any() as u32) << k;
+                        *entry = L::select(mask, tnear, infinity);
+                        met |= ((L::bitmask(mask) != 0) as u32) << k;
                     }
-                    let mut hits = [(0.0f32, (0u32, Vec4::ZERO)); WIDTH];
+                    let mut hits = [(0.0f32, (0u32, infinity)); WIDTH];
                     let mut n = 0;
                     while met != 0 {
                         let k = met.trailing_zeros() as usize;
@@ -128,7 +206,7 @@ impl TriBvh {
                             break;
                         }
                         let (mut mask, t, det) = hit_triangle(tri, k, &r, tmax);
-                        mask &= active.bitmask();
+                        mask &= active_bits;
                         if mask == 0 {
                             continue;
                         }
@@ -142,7 +220,7 @@ impl TriBvh {
                                 best[lane] = Some(tri.hit(k, ts[lane]));
                             }
                         }
-                        tmax = Vec4::from_array(bound);
+                        tmax = L::from_array(bound);
                     }
                 }
             }
@@ -165,8 +243,7 @@ mod tests {
         hash(&[seed]) as f32 / u32::MAX as f32
     }
 
-    #[test]
-    fn four_rays_at_once_find_what_each_finds_alone() {
+    fn soup() -> TriBvh {
         let tris: Vec<[Vec3; 3]> = (0..3000)
             .map(|i| {
                 let c = Vec3::new(random(i * 9), random(i * 9 + 1), random(i * 9 + 2));
@@ -175,24 +252,53 @@ mod tests {
                 })
             })
             .collect();
-        let bvh = TriBvh::build(tris.len(), |i| tris[i]);
+        TriBvh::build(tris.len(), |i| tris[i])
+    }
+
+    /// Packet `k` of `N` nearly parallel rays, and now and then one that goes its own way or
+    /// ends early.
+    fn packet<const N: usize>(k: u32) -> [Ray; N] {
+        let o = Vec3A::new(random(k * 5 + 50_000), random(k * 5 + 50_001), 2.0);
+        std::array::from_fn(|j| {
+            let spread = if k % 7 == 0 { 0.5 } else { 0.002 };
+            let target = Vec3A::new(
+                random(k * 5 + 50_002) + spread * (j % 4) as f32,
+                random(k * 5 + 50_003) + spread * (j / 4) as f32,
+                0.0,
+            );
+            let tmax = if j == 3 && k % 3 == 0 { 1.9 } else { f32::INFINITY };
+            Ray::new(o, (target - o).normalize(), 0.0, tmax)
+        })
+    }
+
+    fn bits<const N: usize>(hits: [Option<TriHit>; N]) -> [Option<(u32, u32)>; N] {
+        hits.map(|h| h.map(|h| (h.index, h.t.to_bits())))
+    }
+
+    #[test]
+    fn four_rays_at_once_find_what_each_finds_alone() {
+        let bvh = soup();
         for k in 0..400u32 {
-            // A quad of nearly parallel rays, and now and then one that goes its own way.
-            let o = Vec3A::new(random(k * 5 + 50_000), random(k * 5 + 50_001), 2.0);
-            let rays: [Ray; 4] = std::array::from_fn(|j| {
-                let spread = if k % 7 == 0 { 0.5 } else { 0.002 };
-                let target = Vec3A::new(random(k * 5 + 50_002) + spread * j as f32, random(k * 5 + 50_003), 0.0);
-                let tmax = if j == 3 && k % 3 == 0 { 1.9 } else { f32::INFINITY };
-                Ray::new(o, (target - o).normalize(), 0.0, tmax)
-            });
+            let rays: [Ray; 4] = packet(k);
             let alone = rays.map(|r| bvh.closest(&r, |_, _| true));
             assert_eq!(bvh.closest4(&rays, |_, _| true), alone, "quad {k}");
             // The baseline walk, whatever this CPU would choose: the same hits, bit for bit.
-            let bits = |hits: [Option<TriHit>; 4]| hits.map(|h| h.map(|h| (h.index, h.t.to_bits())));
-            assert_eq!(bits(bvh.closest4_with(&rays, |_, _| true)), bits(alone), "quad {k}, baseline");
+            assert_eq!(bits(bvh.packet::<Vec4, 4>(&rays, |_, _| true)), bits(alone), "quad {k}, baseline");
             // With a filter (odd triangles only) too.
             let alone = rays.map(|r| bvh.closest(&r, |i, _| i % 2 == 1));
             assert_eq!(bvh.closest4(&rays, |i, _| i % 2 == 1), alone, "quad {k}, filtered");
+        }
+    }
+
+    #[test]
+    fn eight_rays_at_once_find_what_each_finds_alone_bit_for_bit() {
+        let bvh = soup();
+        for k in 0..400u32 {
+            let rays: [Ray; 8] = packet(k);
+            let alone = rays.map(|r| bvh.closest(&r, |_, _| true));
+            assert_eq!(bits(bvh.closest8(&rays, |_, _| true)), bits(alone), "packet {k}");
+            let alone = rays.map(|r| bvh.closest(&r, |i, _| i % 2 == 1));
+            assert_eq!(bits(bvh.closest8(&rays, |i, _| i % 2 == 1)), bits(alone), "packet {k}, filtered");
         }
     }
 }
