@@ -17,9 +17,9 @@ pub(super) trait Boxes {
 }
 
 /// The slab test: per child, the ray's entry (the farthest of its near planes and tmin) and
-/// exit (the nearest far plane and tmax), widened by a few ulps so that rounding in the slabs
-/// cannot lose a box the ray grazes.
-const WIDEN: f32 = 1.0 + 4.0 * f32::EPSILON;
+/// exit (the nearest far plane and tmax), widened by this factor (a few ulps) so that rounding
+/// in the slabs cannot lose a box the ray grazes. The packet walk widens by it too.
+pub(super) const WIDEN: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// 128-bit vectors, four children per test.
 pub(super) struct Sse {

@@ -1,12 +1,12 @@
 //! glray's own BVH over triangles, the accelerator every ray of a frame goes through.
 //!
 //! `WIDTH` (eight) children per node, their boxes stored axis by axis so that one SIMD test
-//! (glam's `Vec4`: SSE on x86-64, NEON on aarch64, plain floats elsewhere; nothing beyond the
-//! target's baseline, since the library runs on whatever node loads it) meets four at once;
-//! eight rather than four halves the tree's depth, and so the dependent misses of a walk
-//! (docs/performance.md). Leaves of up to four triangles, stored the same way (corner and
-//! edges precomputed) and tested at once. `build`
-//! makes it (binned SAH). Why not obvhs's CWBVH: its generic single-ray traversal was half of
+//! (glam's `Vec4`: SSE on x86-64, NEON on aarch64, plain floats elsewhere: the target's
+//! baseline, since the library runs on whatever node loads it) meets four at once, or all
+//! eight with AVX where the CPU has it (chosen at run time, the same hits bit for bit:
+//! `boxes`, `lanes`); eight rather than four halves the tree's depth, and so the dependent
+//! misses of a walk (docs/performance.md). Leaves of up to four triangles, stored the same way
+//! (corner and edges precomputed) and tested at once. `build` makes it (binned SAH). Why not obvhs's CWBVH: its generic single-ray traversal was half of
 //! every frame's profile, 4x slower per ray than Embree's, and its PLOC build 3-4x slower than
 //! Embree's with 3x the memory (docs/performance.md).
 
@@ -30,7 +30,8 @@ const LEAF: u32 = 1 << 31;
 const EMPTY: u32 = u32::MAX;
 /// A subtree of at most this many triangles is one leaf.
 const LEAF_SIZE: u32 = 4;
-/// Children per node, tested four at a time (one SIMD test per group of four).
+/// Children per node, tested four at a time (one 128-bit test per group of four) or, with
+/// AVX, all at once.
 const WIDTH: usize = 8;
 const GROUPS: usize = WIDTH / 4;
 

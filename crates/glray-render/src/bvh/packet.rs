@@ -10,6 +10,7 @@ use obvhs::ray::Ray;
 
 #[cfg(target_arch = "x86_64")]
 use super::boxes::avx_available;
+use super::boxes::WIDEN;
 use super::lanes::Lanes;
 use super::{insert_farthest_first, moller_trumbore, Node, Stack, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
 
@@ -53,7 +54,7 @@ impl<L> Rays<L> {
 fn hit_box<L: Lanes<N>, const N: usize>(node: &Node, k: usize, r: &Rays<L>, tmax: L) -> (L::Mask, L) {
     let (x, y, z) = (slab(node, k, r, 0), slab(node, k, r, 1), slab(node, k, r, 2));
     let tnear = x.0.max(y.0).max(z.0.max(r.tmin));
-    let tfar = x.1.min(y.1).min(z.1.min(tmax)) * L::splat(1.0 + 4.0 * f32::EPSILON);
+    let tfar = x.1.min(y.1).min(z.1.min(tmax)) * L::splat(WIDEN);
     (tnear.cmple(tfar), tnear)
 }
 
@@ -92,21 +93,8 @@ impl TriBvh {
         self.packet::<Vec4, 4>(rays, accept)
     }
 
-    /// The closest hit of each of eight rays, as `closest` would find it for each alone.
-    #[inline]
-    pub fn closest8(&self, rays: &[Ray; 8], mut accept: impl FnMut(u32, f32) -> bool) -> [Option<TriHit>; 8] {
-        #[cfg(target_arch = "x86_64")]
-        if avx_available() {
-            // SAFETY: the CPU has AVX (checked just now).
-            return unsafe { self.closest8_avx(rays, accept) };
-        }
-        let [a, b]: [[Ray; 4]; 2] = [std::array::from_fn(|k| rays[k]), std::array::from_fn(|k| rays[4 + k])];
-        let (a, b) = (self.closest4(&a, &mut accept), self.closest4(&b, &mut accept));
-        std::array::from_fn(|k| if k < 4 { a[k] } else { b[k - 4] })
-    }
-
-    /// The closest hit of each of `N` rays (a multiple of four): eight at once where `N` is
-    /// eight, else four by four.
+    /// The closest hit of each of `N` rays (a multiple of four), as `closest` would find it for
+    /// each alone: eight at once where `N` is eight and the CPU has AVX, else four by four.
     #[inline]
     pub fn closest_packet<const N: usize>(
         &self,
@@ -115,13 +103,15 @@ impl TriBvh {
     ) -> [Option<TriHit>; N] {
         const { assert!(N % 4 == 0, "packets of fours") };
         let mut out = [None; N];
-        if let Ok(eight) = <&[Ray; 8]>::try_from(&rays[..]) {
-            out.copy_from_slice(&self.closest8(eight, accept));
-        } else {
-            for (rays, out) in rays.chunks_exact(4).zip(out.chunks_exact_mut(4)) {
-                let four: &[Ray; 4] = rays.try_into().expect("chunks of four");
-                out.copy_from_slice(&self.closest4(four, &mut accept));
-            }
+        #[cfg(target_arch = "x86_64")]
+        if let (true, Ok(eight)) = (avx_available(), <&[Ray; 8]>::try_from(&rays[..])) {
+            // SAFETY: the CPU has AVX (checked just now).
+            out.copy_from_slice(&unsafe { self.closest8_avx(eight, accept) });
+            return out;
+        }
+        for (rays, out) in rays.chunks_exact(4).zip(out.chunks_exact_mut(4)) {
+            let four: &[Ray; 4] = rays.try_into().expect("chunks of four");
+            out.copy_from_slice(&self.closest4(four, &mut accept));
         }
         out
     }
@@ -134,7 +124,7 @@ impl TriBvh {
         self.packet::<Vec4, 4>(rays, accept)
     }
 
-    /// `closest8` with eight AVX lanes.
+    /// `closest_packet` of eight rays in eight AVX lanes.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     unsafe fn closest8_avx(&self, rays: &[Ray; 8], accept: impl FnMut(u32, f32) -> bool) -> [Option<TriHit>; 8] {
@@ -296,9 +286,9 @@ mod tests {
         for k in 0..400u32 {
             let rays: [Ray; 8] = packet(k);
             let alone = rays.map(|r| bvh.closest(&r, |_, _| true));
-            assert_eq!(bits(bvh.closest8(&rays, |_, _| true)), bits(alone), "packet {k}");
+            assert_eq!(bits(bvh.closest_packet(&rays, |_, _| true)), bits(alone), "packet {k}");
             let alone = rays.map(|r| bvh.closest(&r, |i, _| i % 2 == 1));
-            assert_eq!(bits(bvh.closest8(&rays, |i, _| i % 2 == 1)), bits(alone), "packet {k}, filtered");
+            assert_eq!(bits(bvh.closest_packet(&rays, |i, _| i % 2 == 1)), bits(alone), "packet {k}, filtered");
         }
     }
 }
