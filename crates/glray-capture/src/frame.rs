@@ -249,13 +249,16 @@ impl Frame {
     }
 
     /// A triangle as the rasterizer would have drawn it; None for an instance's triangle that
-    /// is culled or has no area on the screen.
+    /// is culled or has no area on the screen. An instance's triangle on an untextured surface
+    /// has zero texture coordinates (see `Instance::triangle`).
     #[inline]
     pub fn triangle(&self, id: TriangleId) -> Option<Triangle> {
         if id.instance == TriangleId::FLAT {
             return self.triangles.get(id.index as usize).copied();
         }
-        self.instances.get(id.instance as usize)?.triangle(id.index as usize, &self.lightings)
+        let instance = self.instances.get(id.instance as usize)?;
+        let textured = self.surfaces.get(instance.surface as usize).is_none_or(|s| s.texturing.is_some());
+        instance.triangle(id.index as usize, &self.lightings, textured)
     }
 
     /// Starts loading what `triangle(id)` will read, without waiting for it: `vertices` false,

@@ -102,9 +102,11 @@ impl Instance {
         !culled(Some(cull), front)
     }
 
-    /// Triangle `index` as the rasterizer would have drawn it; None if culled.
+    /// Triangle `index` as the rasterizer would have drawn it; None if culled. Without
+    /// `texcoords` (its surface does not texture), its texture coordinates are left zero: three
+    /// corners through the texture matrix that nothing would read, for every hit.
     #[inline]
-    pub fn triangle(&self, index: usize, lightings: &[Lighting]) -> Option<Triangle> {
+    pub fn triangle(&self, index: usize, lightings: &[Lighting], texcoords: bool) -> Option<Triangle> {
         let m = &self.mesh;
         let clip = self.clip(index);
         let front = window_facing(clip, self.front_ccw).unwrap_or(true);
@@ -147,7 +149,7 @@ impl Instance {
             positions: vs.map(|v| v.0.as_vec3()),
             colors: [0, 1, 2].map(|k| pick(k).1),
             secondary: [0, 1, 2].map(|k| pick(k).2),
-            texcoords: corners.map(tex),
+            texcoords: if texcoords { corners.map(tex) } else { [Vec2::ZERO; 3] },
             surface: self.surface,
             sequence: self.sequence,
             camera: self.camera,
@@ -161,6 +163,6 @@ impl Instance {
 
     /// Every triangle of the instance that is drawn.
     pub fn triangles(&self, lightings: &[Lighting]) -> Vec<Triangle> {
-        (0..self.mesh.triangles.len()).filter_map(|i| self.triangle(i, lightings)).collect()
+        (0..self.mesh.triangles.len()).filter_map(|i| self.triangle(i, lightings, true)).collect()
     }
 }
