@@ -72,7 +72,7 @@ impl Default for Effects {
 /// A ray from `p` along `d` that starts past the surface it leaves.
 pub(crate) fn leaving(p: Vec3, n: Vec3, d: Vec3, eps: f32, tmax: f32) -> Ray {
     let o = p + n * eps * n.dot(d).signum();
-    Ray::new(o.into(), d.into(), 0.0, tmax)
+    crate::bvh::ray(o.into(), d.into(), 0.0, tmax)
 }
 
 /// Where a secondary ray starts: the point, its surface's normal, and the draw it is on (whose

@@ -31,7 +31,12 @@ pub struct Rendered {
 
 fn to_u8(c: Vec4) -> [u8; 4] {
     // Halves round to even, as llvmpipe converts to 8-bit unorm (0.3 clears to 76, not 77).
-    c.to_array().map(|x| (x.clamp(0.0, 1.0) * 255.0).round_ties_even() as u8)
+    // Adding and taking away 2^23 rounds a float in [0, 2^23) to an integer in the current
+    // rounding mode (to nearest, ties to even): `round_ties_even` without SSE4.1 is a call
+    // into libm per channel. NaN clamps to NaN and converts to 0, as before.
+    const SHIFT: f32 = (1u32 << 23) as f32;
+    let x = c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0;
+    ((x + SHIFT) - SHIFT).to_array().map(|x| x as u8)
 }
 
 fn from_u8(c: &[u8]) -> Vec4 {
@@ -280,6 +285,7 @@ impl Job<'_> {
         let x1 = ((v.x as i64 + v.width as i64).max(0) as usize).min(w);
         let rows_done = AtomicUsize::new(0);
         let progress = Progress::new(self.progress, h);
+        let one_sample = self.options.effects.samples <= 1;
         let inside = |y: usize| (y as i64) >= v.y as i64 && (y as i64) < v.y as i64 + v.height as i64;
         // Rows go in pairs, pixels in blocks of 4x2: the camera rays of a block are traced
         // together (eight to a packet where the CPU has AVX, else two packets of four).
@@ -310,9 +316,15 @@ impl Job<'_> {
                         if repeated || !inside(py) {
                             continue;
                         }
+                        let center = centers.as_ref().map(|c| c[k]);
+                        if one_sample && matches!(center, Some(None)) {
+                            // Known to miss with no other sample to take: the pixel keeps
+                            // what it held (most pixels of many frames). Its ray counts.
+                            scratch.rays.set(scratch.rays.get() + 1);
+                            continue;
+                        }
                         let at = (py - y0) * w + px;
                         let under = from_u8(&rows[4 * at..4 * at + 4]);
-                        let center = centers.map(|c| c[k]);
                         if let Some((color, d)) = tracer.pixel(px, py, under, drows[at] as f64, center, &mut scratch) {
                             rows[4 * at..4 * at + 4].copy_from_slice(&to_u8(color));
                             if let Some(c) = crows.as_deref_mut() {

@@ -146,7 +146,7 @@ impl Placed<'_> {
         // A linear map keeps the ray's parameter: t is the same in both spaces.
         let o = self.to_object.transform_point3a(r.origin);
         let d = self.to_object.transform_vector3a(r.direction);
-        Ray::new(o, d, r.tmin, r.tmax)
+        crate::bvh::ray(o, d, r.tmin, r.tmax)
     }
 
     /// A hit on the instance's mesh as a hit of the scene.

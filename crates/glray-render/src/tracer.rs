@@ -44,15 +44,21 @@ pub(crate) struct Scratch {
 /// The triangle the last camera ray hit: neighbouring pixels mostly hit the same one, and an
 /// instance's triangle is made (lit, faced) when it is needed. Lent, not copied (a triangle
 /// with its lighting is a few hundred bytes).
+/// The id and the triangle are apart, so that the triangle is made where it is kept (in a
+/// tuple with its id it was copied twice more, a few percent of a frame).
 #[derive(Default)]
-struct LastTriangle(Option<(TriangleId, Option<Triangle>)>);
+struct LastTriangle {
+    id: Option<TriangleId>,
+    triangle: Option<Triangle>,
+}
 
 impl LastTriangle {
     fn get(&mut self, frame: &Frame, id: TriangleId) -> Option<&Triangle> {
-        if !matches!(self.0, Some((last, _)) if last == id) {
-            self.0 = Some((id, frame.triangle(id)));
+        if self.id != Some(id) {
+            self.id = Some(id);
+            self.triangle = frame.triangle(id);
         }
-        self.0.as_ref().and_then(|(_, t)| t.as_ref())
+        self.triangle.as_ref()
     }
 }
 
@@ -110,7 +116,7 @@ impl Tracer<'_> {
         // GL keeps what lies exactly on the near and far planes (backgrounds are often drawn at
         // z = 1): a hair of slack keeps float rounding from dropping them.
         let slack = (r.t_max * 1e-4) as f32;
-        Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack)
+        crate::bvh::ray(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack)
     }
 
     /// The closest hits of the rays through the centres of `N` neighbouring pixels (a

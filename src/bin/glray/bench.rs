@@ -198,7 +198,7 @@ fn kernels(frame: &Frame, ao: u32, frames: u32) -> Kernels {
     };
     let ray = |x: usize, y: usize| {
         let r = camera.ray(x as f64 + 0.5, y as f64 + 0.5);
-        Ray::new(r.origin.as_vec3a(), r.direction.as_vec3a(), 0.0, r.t_max as f32)
+        glray_render::bvh::ray(r.origin.as_vec3a(), r.direction.as_vec3a(), 0.0, r.t_max as f32)
     };
     // In 4x2 blocks of camera rays, as the renderer traces them.
     let trace = |records: &mut Vec<Option<HitRecord>>| {
