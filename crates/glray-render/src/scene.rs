@@ -269,11 +269,14 @@ impl<'f> Scene<'f> {
     /// Whether anything lies along the ray in [tmin, tmax] (culled faces too: they are still
     /// there to cast shadows and occlude; lines and points as solids, but those of draw
     /// `own`, where the ray starts).
+    #[inline]
     pub fn occluded(&self, ray: Ray, own: Option<u32>) -> bool {
-        if self.solid_blocks(ray, own) {
+        // Each part is asked only when it holds something: every shadow and AO ray comes
+        // here, and most scenes have no solids, or no flat triangles beside their instances.
+        if self.solid_bvh.is_some() && self.solid_blocks(ray, own) {
             return true;
         }
-        if self.bvh.occluded(&ray) {
+        if !self.bvh.is_empty() && self.bvh.occluded(&ray) {
             return true;
         }
         self.visit_instances(ray, true, |r, k| {
@@ -304,6 +307,7 @@ impl<'f> Scene<'f> {
     /// geometry blocks it; a surface drawn with blending lets 1 - alpha through (its colours'
     /// alpha where the ray crosses it), one with the alpha test all or nothing, as GL would
     /// draw that fragment. Solids of draw `own` do not count, as for `occluded`.
+    #[inline]
     pub fn transmittance(&self, ray: Ray, own: Option<u32>) -> f32 {
         if !self.translucent {
             return if self.occluded(ray, own) { 0.0 } else { 1.0 };

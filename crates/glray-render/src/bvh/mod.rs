@@ -358,6 +358,12 @@ impl TriBvh {
         }
     }
 
+    /// Whether the tree holds no triangle.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.root == EMPTY
+    }
+
     /// The closest hit in [tmin, tmax] among triangles `accept` takes (given the triangle's
     /// index and the determinant of the hit, see `hit_triangles`).
     #[inline]
