@@ -276,11 +276,17 @@ impl Frame {
         }
         let Some(mesh) = self.instances.get(id.instance as usize).map(|i| &i.mesh) else { return };
         let Some(corners) = mesh.triangles.get(id.index as usize) else { return };
-        if !vertices {
-            prefetch::line(corners);
-            return;
-        }
-        for &v in corners {
+        // A sequential mesh's corners need no indices: its vertices go on the first call.
+        let corners = match (mesh.is_sequential(), vertices) {
+            (false, false) => {
+                prefetch::line(corners);
+                return;
+            }
+            (false, true) => *corners,
+            (true, false) => mesh.corner_indices(id.index as usize),
+            (true, true) => return,
+        };
+        for v in corners {
             if let Some(p) = mesh.positions.get(v as usize) {
                 prefetch::line(p);
             }

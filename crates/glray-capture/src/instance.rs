@@ -89,7 +89,7 @@ impl Instance {
     #[inline]
     fn clip(&self, index: usize) -> [DVec4; 3] {
         let m = &self.mesh;
-        m.triangles[index].map(|i| self.object_to_clip * m.position(i))
+        m.corner_indices(index).map(|i| self.object_to_clip * m.position(i))
     }
 
     /// Whether a triangle a camera ray meets is drawn at all (not culled), from the dot product
@@ -114,7 +114,7 @@ impl Instance {
             return None;
         }
         let face = usize::from(!front);
-        let corners = m.triangles[index];
+        let corners = m.corner_indices(index);
         let lighting = lightings.get(self.lighting as usize).filter(|_| self.lighting != NO_LIGHTING);
         // What the vertex stage makes of vertex i: eye position, colours (when `lit`: flat
         // shading lights only the provoking vertex), normal, base colour.
