@@ -309,7 +309,7 @@ impl Job<'_> {
                         frame.prefetch_triangle(hit.id, vertices);
                     }
                 }
-                for (pixels, centers) in blocks {
+                for (pixels, centers) in &blocks {
                     for (k, &(px, py)) in pixels.iter().enumerate() {
                         // A block cut by the image's last columns or row repeats pixels.
                         let repeated = (k % 4 > 0 && px == pixels[k - 1].0) || (k >= 4 && py == y0);
