@@ -275,6 +275,20 @@ impl Out {
 /// to be built, with their lanes.
 type Made<'r> = (Node, [u8; WIDTH], Vec<(usize, &'r mut [Record], usize, Centroids)>);
 
+/// The splits of `ranges` (disjoint, in order, as (start, end, centroids) in `records`), each
+/// on its own slice, in parallel: None for a range of a leaf's worth, which is not split.
+fn splits_of(records: &mut [Record], ranges: &[(usize, usize, Centroids)]) -> Vec<Option<(Part, Part)>> {
+    let mut slices = Vec::with_capacity(ranges.len());
+    let (mut rest, mut at) = (records, 0);
+    for &(s, e, c) in ranges {
+        let (_, tail) = std::mem::take(&mut rest).split_at_mut(s - at);
+        let (part, tail) = tail.split_at_mut(e - s);
+        slices.push((part, c));
+        (rest, at) = (tail, e);
+    }
+    slices.into_par_iter().map(|(part, c)| (part.len() as u32 > LEAF_SIZE).then(|| split(part, c))).collect()
+}
+
 fn node(records: &mut [Record], first: usize, centroids: Centroids) -> Made<'_> {
     // Children as (start, end, bounds, centroids) in `records`, in order; split the one with
     // the largest surface (of those with more than a leaf's worth) until there are WIDTH.
@@ -282,6 +296,28 @@ fn node(records: &mut [Record], first: usize, centroids: Centroids) -> Made<'_> 
     let ((mid, lb, lc), (_, rb, rc)) = split(records, centroids);
     kids.push((0, mid, lb, lc));
     kids.push((mid, records.len(), rb, rc));
+    // A big range's next two levels of splits are made ahead, two and then four at a time in
+    // parallel (one after another, the top node's seven partitions were the build's longest
+    // stretch on one thread). The choice below still takes them in its own order; one it never
+    // takes only left its range partitioned, which the child's own build does not mind. What
+    // is made ahead depends on the range's length alone, so the tree does not depend on the
+    // number of threads.
+    let mut ahead: Vec<((usize, usize), (Part, Part))> = Vec::new();
+    if records.len() >= PARALLEL {
+        let mut level: Vec<(usize, usize, Centroids)> = kids.iter().map(|&(s, e, _, c)| (s, e, c)).collect();
+        for _ in 0..2 {
+            let made = splits_of(records, &level);
+            let mut next = Vec::new();
+            for (&(s, e, _), made) in level.iter().zip(made) {
+                let Some(split) = made else { continue };
+                let ((mid, _, lc), (_, _, rc)) = split;
+                next.push((s, s + mid, lc));
+                next.push((s + mid, e, rc));
+                ahead.push(((s, e), split));
+            }
+            level = next;
+        }
+    }
     while kids.len() < WIDTH {
         let Some((k, _)) = kids
             .iter()
@@ -292,7 +328,8 @@ fn node(records: &mut [Record], first: usize, centroids: Centroids) -> Made<'_> 
             break;
         };
         let (s, e, _, c) = kids[k];
-        let ((mid, lb, lc), (_, rb, rc)) = split(&mut records[s..e], c);
+        let made = ahead.iter().find(|(range, _)| *range == (s, e)).map(|(_, split)| *split);
+        let ((mid, lb, lc), (_, rb, rc)) = made.unwrap_or_else(|| split(&mut records[s..e], c));
         kids[k] = (s, s + mid, lb, lc);
         kids.insert(k + 1, (s + mid, e, rb, rc));
     }

@@ -573,6 +573,34 @@ mod tests {
             let ray = Ray::new(o, Vec3A::NEG_Z, 0.0, f32::INFINITY);
             assert_eq!(bvh.closest(&ray, |_, _| true).map(|h| (h.index, h.t)), brute(&tris, &ray), "ray {k}");
         }
+        // The same tree, bit for bit, on one thread or three (the splits made ahead in
+        // parallel depend on the ranges alone), so that every node of a cluster traces the same.
+        // Read from the root down: where the threads put their subtrees in the node vector
+        // depends on which finished first, and does not matter.
+        fn bits(t: &TriBvh, at: u32, out: &mut Vec<u32>) {
+            if at == EMPTY {
+            } else if at & LEAF != 0 {
+                let l = &t.leaves[(at & !LEAF) as usize];
+                let corners = [l.v0, l.e1, l.e2].into_iter().flatten().flat_map(|v| v.to_array().map(f32::to_bits));
+                out.extend(corners.chain(l.id));
+            } else {
+                let n = &t.nodes[at as usize];
+                out.extend(n.bounds.iter().flatten().flatten().flat_map(|v| v.to_array().map(f32::to_bits)));
+                for c in n.child {
+                    out.push(c & LEAF);
+                    bits(t, c, out);
+                }
+            }
+        }
+        let tree = |t: &TriBvh| {
+            let mut out = Vec::new();
+            bits(t, t.root, &mut out);
+            out
+        };
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            assert!(tree(&pool.install(|| build(&tris))) == tree(&bvh), "{threads} threads build another tree");
+        }
     }
 
     #[test]
