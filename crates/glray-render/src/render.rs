@@ -16,7 +16,7 @@ use crate::progress::Progress;
 use crate::resolve::closest_hit_suffices;
 use crate::scene::{Meshes, Scene};
 use crate::signature::signature;
-use crate::tracer::{Scratch, Tracer};
+use crate::tracer::{count, Scratch, Tracer};
 
 /// A rendered frame, laid out as GL's framebuffer: rows bottom-up.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,7 +33,7 @@ fn to_u8(c: Vec4) -> [u8; 4] {
     // Halves round to even, as llvmpipe converts to 8-bit unorm (0.3 clears to 76, not 77).
     // Adding and taking away 2^23 rounds a float in [0, 2^23) to an integer in the current
     // rounding mode (to nearest, ties to even): `round_ties_even` without SSE4.1 is a call
-    // into libm per channel. NaN clamps to NaN and converts to 0, as before.
+    // into libm per channel. A NaN channel still comes out 0.
     const SHIFT: f32 = (1u32 << 23) as f32;
     let x = c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0;
     ((x + SHIFT) - SHIFT).to_array().map(|x| x as u8)
@@ -320,7 +320,7 @@ impl Job<'_> {
                         if one_sample && matches!(center, Some(None)) {
                             // Known to miss with no other sample to take: the pixel keeps
                             // what it held (most pixels of many frames). Its ray counts.
-                            scratch.rays.set(scratch.rays.get() + 1);
+                            count(&scratch.rays, 1);
                             continue;
                         }
                         let at = (py - y0) * w + px;

@@ -62,7 +62,8 @@ impl LastTriangle {
     }
 }
 
-fn count(rays: &Cell<u64>, n: u64) {
+/// Adds `n` rays to a thread's count (for the statistics).
+pub(crate) fn count(rays: &Cell<u64>, n: u64) {
     rays.set(rays.get() + n);
 }
 
