@@ -116,12 +116,12 @@ impl Instance {
         let face = usize::from(!front);
         let corners = m.corner_indices(index);
         let lighting = lightings.get(self.lighting as usize).filter(|_| self.lighting != NO_LIGHTING);
-        // What the vertex stage makes of vertex i: eye position, colours (when `lit`: flat
-        // shading lights only the provoking vertex), normal, base colour.
         // What `Context::instances` lets through: an affine modelview and positions with w = 1,
         // so eye w is 1 and the division by it can go (the same numbers: glam's affine
         // transform adds the same products, and the division was by exactly 1).
         let affine = self.modelview.row(3) == DVec4::W && m.ws.is_none();
+        // What the vertex stage makes of vertex i: eye position, colours (when `lit`: flat
+        // shading lights only the provoking vertex), normal, base colour.
         let vertex = |i: u32, lit: bool| {
             let p = if affine {
                 self.modelview.transform_point3(m.positions[i as usize].as_dvec3())

@@ -271,12 +271,10 @@ impl<'f> Scene<'f> {
     /// `own`, where the ray starts).
     #[inline]
     pub fn occluded(&self, ray: Ray, own: Option<u32>) -> bool {
-        // Each part is asked only when it holds something: every shadow and AO ray comes
-        // here, and most scenes have no solids, or no flat triangles beside their instances.
-        if self.solid_bvh.is_some() && self.solid_blocks(ray, own) {
+        if self.solid_blocks(ray, own) {
             return true;
         }
-        if !self.bvh.is_empty() && self.bvh.occluded(&ray) {
+        if self.bvh.occluded(&ray) {
             return true;
         }
         self.visit_instances(ray, true, |r, k| {
@@ -289,7 +287,9 @@ impl<'f> Scene<'f> {
         })
     }
 
-    /// Whether a line or point solid lies along the ray (not those of draw `own`).
+    /// Whether a line or point solid lies along the ray (not those of draw `own`). Inlined:
+    /// every shadow and AO ray asks, and most scenes have no solids.
+    #[inline]
     fn solid_blocks(&self, ray: Ray, own: Option<u32>) -> bool {
         self.solid_bvh.as_ref().is_some_and(|bvh| {
             !bvh.ray_traverse_miss(ray, |r, slot| {

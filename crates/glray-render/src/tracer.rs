@@ -44,6 +44,7 @@ pub(crate) struct Scratch {
 /// The triangle the last camera ray hit: neighbouring pixels mostly hit the same one, and an
 /// instance's triangle is made (lit, faced) when it is needed. Lent, not copied (a triangle
 /// with its lighting is a few hundred bytes).
+///
 /// The id and the triangle are apart, so that the triangle is made where it is kept (in a
 /// tuple with its id it was copied twice more, a few percent of a frame).
 #[derive(Default)]
