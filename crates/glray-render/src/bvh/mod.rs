@@ -14,8 +14,7 @@ mod boxes;
 mod build;
 mod lanes;
 mod packet;
-
-use std::mem::MaybeUninit;
+mod stack;
 
 use glam::{Vec3, Vec3A, Vec4};
 use glray_core::prefetch;
@@ -23,6 +22,7 @@ use obvhs::ray::Ray;
 
 use boxes::{Boxes, Sse};
 use lanes::Lanes;
+use stack::{Fixed, Pending, Spilling};
 
 /// obvhs's `Ray::new`, the same ray bit for bit, with the three reciprocals of the direction
 /// in one SIMD division instead of three divisions and three branches: every camera ray is made
@@ -233,93 +233,57 @@ fn insert_farthest_first<T: Copy, const N: usize>(hits: &mut [(f32, T); N], n: u
     hits[j] = entry;
 }
 
-/// A traversal stack: a fixed array (no allocation or clearing per walk), spilling into a Vec
-/// for the rare tree deeper than it holds.
-struct Stack<T> {
-    items: [MaybeUninit<T>; 192],
-    len: usize,
-    spill: Vec<T>,
-}
-
-impl<T: Copy> Stack<T> {
-    #[inline(always)]
-    fn new() -> Stack<T> {
-        Stack { items: [const { MaybeUninit::uninit() }; 192], len: 0, spill: Vec::new() }
-    }
-
-    #[inline(always)]
-    fn push(&mut self, entry: T) {
-        if self.len < self.items.len() {
-            self.items[self.len].write(entry);
-            self.len += 1;
-        } else {
-            self.spill.push(entry);
-        }
-    }
-
-    #[inline(always)]
-    fn pop(&mut self) -> Option<T> {
-        if let Some(e) = self.spill.pop() {
-            Some(e)
-        } else if self.len > 0 {
-            self.len -= 1;
-            // SAFETY: entries below `len` were written by `push` and not popped since.
-            Some(unsafe { self.items[self.len].assume_init() })
-        } else {
-            None
-        }
-    }
-}
-
 /// A BVH over triangles; hits report the index each triangle had in the slice it was built from.
 pub struct TriBvh {
     nodes: Vec<Node>,
     leaves: Vec<Tri4>,
     root: u32,
+    /// Whether a walk's pending subtrees always fit a `Fixed` stack (`stack::most_pending`).
+    shallow: bool,
 }
 
 impl TriBvh {
     /// The tree over `count` triangles, whose corners `corners` gives by index.
     pub fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> TriBvh {
         let (nodes, leaves, root) = build::build(count, corners);
-        TriBvh { nodes, leaves, root }
+        let shallow = stack::most_pending(&nodes, root) <= stack::FIXED;
+        TriBvh { nodes, leaves, root, shallow }
     }
 
-    /// Walks the tree, offering `leaf` each leaf the ray reaches within the current `tmax`;
-    /// `leaf` may shorten `tmax`, or return true to stop the walk. `NEAREST`: children in the
-    /// order the ray meets them (what a closest hit wants: a near hit prunes what lies behind);
-    /// without, in any order (any hit will do).
-    /// `B`: how the node's boxes are tested (see `boxes`).
+    /// Walks the tree children nearest first (what a closest hit wants: a near hit prunes what
+    /// lies behind), offering `leaf` each leaf the ray reaches within the current `tmax`, which
+    /// `leaf` may shorten. `B`: how the node's boxes are tested (see `boxes`).
     #[inline(always)]
-    fn walk<const NEAREST: bool, B: Boxes>(&self, ray: &Ray, mut leaf: impl FnMut(&Tri4, &Prepared, &mut f32) -> bool) {
+    fn walk_nearest<B: Boxes>(&self, ray: &Ray, leaf: impl FnMut(&Tri4, &Prepared, &mut f32)) {
         if self.root == EMPTY {
             return;
         }
+        if self.shallow {
+            self.walk_nearest_on::<B, Fixed<_>>(ray, leaf)
+        } else {
+            self.walk_nearest_on::<B, Spilling<_>>(ray, leaf)
+        }
+    }
+
+    /// `walk_nearest`, keeping the subtrees it will come back to (and where the ray enters
+    /// each) on a stack `S`.
+    #[inline(always)]
+    fn walk_nearest_on<B: Boxes, S: Pending<(u32, f32)>>(
+        &self,
+        ray: &Ray,
+        mut leaf: impl FnMut(&Tri4, &Prepared, &mut f32),
+    ) {
         let r = Prepared::new(ray);
         let boxes = B::new(&r);
         let mut tmax = ray.tmax;
-        let mut stack: Stack<(u32, f32)> = Stack::new();
+        let mut stack = S::new();
         let mut cur = self.root;
         loop {
             if cur & LEAF == 0 {
                 let node = &self.nodes[cur as usize];
                 let (mask, tnear) = boxes.hit(node, tmax);
                 if mask != 0 {
-                    let rest = mask & (mask - 1);
-                    if rest == 0 {
-                        cur = node.child[mask.trailing_zeros() as usize];
-                        continue;
-                    }
-                    if !NEAREST {
-                        // Any hit will do and tmax never shrinks: where a child is entered
-                        // does not matter (minus infinity: it is always still reached).
-                        let mut m = rest;
-                        while m != 0 {
-                            let k = m.trailing_zeros() as usize;
-                            m &= m - 1;
-                            self.prefetch_child(node.child[k]);
-                            stack.push((node.child[k], f32::NEG_INFINITY));
-                        }
+                    if mask & (mask - 1) == 0 {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
@@ -341,8 +305,8 @@ impl TriBvh {
                     cur = hits[n - 1].1;
                     continue;
                 }
-            } else if leaf(&self.leaves[(cur & !LEAF) as usize], &r, &mut tmax) {
-                return;
+            } else {
+                leaf(&self.leaves[(cur & !LEAF) as usize], &r, &mut tmax);
             }
             // The next subtree the ray still reaches.
             loop {
@@ -354,6 +318,54 @@ impl TriBvh {
                     Some(_) => continue,
                     None => return,
                 }
+            }
+        }
+    }
+
+    /// Walks the tree in whatever order comes cheapest (any hit will do), offering `leaf` each
+    /// leaf the ray reaches within [tmin, tmax]; `leaf` returns true to stop the walk.
+    #[inline(always)]
+    fn walk_any<B: Boxes>(&self, ray: &Ray, leaf: impl FnMut(&Tri4, &Prepared, f32) -> bool) {
+        if self.root == EMPTY {
+            return;
+        }
+        if self.shallow {
+            self.walk_any_on::<B, Fixed<_>>(ray, leaf)
+        } else {
+            self.walk_any_on::<B, Spilling<_>>(ray, leaf)
+        }
+    }
+
+    /// `walk_any`, keeping the subtrees it will come back to on a stack `S`: only which, since
+    /// tmax never shrinks and every one pushed is still reached.
+    #[inline(always)]
+    fn walk_any_on<B: Boxes, S: Pending<u32>>(&self, ray: &Ray, mut leaf: impl FnMut(&Tri4, &Prepared, f32) -> bool) {
+        let r = Prepared::new(ray);
+        let boxes = B::new(&r);
+        let tmax = ray.tmax;
+        let mut stack = S::new();
+        let mut cur = self.root;
+        loop {
+            if cur & LEAF == 0 {
+                let node = &self.nodes[cur as usize];
+                let (mut mask, _) = boxes.hit(node, tmax);
+                if mask != 0 {
+                    cur = node.child[mask.trailing_zeros() as usize];
+                    mask &= mask - 1;
+                    while mask != 0 {
+                        let c = node.child[mask.trailing_zeros() as usize];
+                        mask &= mask - 1;
+                        self.prefetch_child(c);
+                        stack.push(c);
+                    }
+                    continue;
+                }
+            } else if leaf(&self.leaves[(cur & !LEAF) as usize], &r, tmax) {
+                return;
+            }
+            match stack.pop() {
+                Some(c) => cur = c,
+                None => return,
             }
         }
     }
@@ -390,8 +402,8 @@ impl TriBvh {
     /// Every hit within [tmin, tmax], in no particular order: `visit(hit, det)`.
     #[inline]
     pub fn each_hit(&self, ray: &Ray, mut visit: impl FnMut(TriHit, f32)) {
-        self.walk::<false, Sse>(ray, |tri, r, tmax| {
-            let (mut mask, t, det) = hit_triangles(tri, r, *tmax);
+        self.walk_any::<Sse>(ray, |tri, r, tmax| {
+            let (mut mask, t, det) = hit_triangles(tri, r, tmax);
             let (t, det) = (t.to_array(), det.to_array());
             while mask != 0 {
                 let k = mask.trailing_zeros() as usize;
@@ -419,10 +431,10 @@ impl TriBvh {
     #[inline(always)]
     fn closest_with<B: Boxes>(&self, ray: &Ray, mut accept: impl FnMut(u32, f32) -> bool) -> Option<TriHit> {
         let mut best = None;
-        self.walk::<true, B>(ray, |tri, r, tmax| {
+        self.walk_nearest::<B>(ray, |tri, r, tmax| {
             let (mut mask, t, det) = hit_triangles(tri, r, *tmax);
             if mask == 0 {
-                return false;
+                return;
             }
             let (t, det) = (t.to_array(), det.to_array());
             while mask != 0 {
@@ -433,7 +445,6 @@ impl TriBvh {
                     best = Some(tri.hit(k, t[k]));
                 }
             }
-            false
         });
         best
     }
@@ -441,8 +452,8 @@ impl TriBvh {
     #[inline(always)]
     fn occluded_with<B: Boxes>(&self, ray: &Ray) -> bool {
         let mut hit = false;
-        self.walk::<false, B>(ray, |tri, r, tmax| {
-            hit = hit_triangles(tri, r, *tmax).0 != 0;
+        self.walk_any::<B>(ray, |tri, r, tmax| {
+            hit = hit_triangles(tri, r, tmax).0 != 0;
             hit
         });
         hit
@@ -509,9 +520,12 @@ mod tests {
 
     #[test]
     fn the_tree_finds_what_testing_every_triangle_finds() {
-        for n in [1, 3, 4, 5, 17, 2000] {
+        // Each tree walked with the fixed stack its depth allows, then with the spilling one.
+        for (n, spilling) in [1, 3, 4, 5, 17, 2000].into_iter().flat_map(|n| [(n, false), (n, true)]) {
             let tris = soup(n);
-            let bvh = build(&tris);
+            let mut bvh = build(&tris);
+            assert!(bvh.shallow);
+            bvh.shallow = !spilling;
             for k in 0..500 {
                 let o = Vec3A::new(random(k * 7 + 100_000), random(k * 7 + 100_001), 2.0);
                 let target = Vec3A::new(random(k * 7 + 100_002), random(k * 7 + 100_003), 0.0);
@@ -672,22 +686,6 @@ mod tests {
                 assert_eq!(baseline.is_some(), bvh.occluded_with::<Sse>(&ray), "ray {k}");
             }
         }
-    }
-
-    #[test]
-    fn the_stack_spills_past_its_array_and_still_pops_last_in_first_out() {
-        let mut stack: Stack<(u32, f32)> = Stack::new();
-        for k in 0..500u32 {
-            stack.push((k, k as f32));
-        }
-        for k in (0..500u32).rev() {
-            assert_eq!(stack.pop(), Some((k, k as f32)));
-        }
-        assert_eq!(stack.pop(), None);
-        // And again after a spill: the array is reused.
-        stack.push((7, 0.5));
-        assert_eq!(stack.pop(), Some((7, 0.5)));
-        assert_eq!(stack.pop(), None);
     }
 
     #[test]

@@ -12,7 +12,8 @@ use obvhs::ray::Ray;
 use super::boxes::avx_available;
 use super::boxes::WIDEN;
 use super::lanes::Lanes;
-use super::{insert_farthest_first, moller_trumbore, Node, Stack, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
+use super::stack::{Fixed, Pending, Spilling};
+use super::{insert_farthest_first, moller_trumbore, Node, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
 
 /// `N` rays, one per lane.
 struct Rays<L> {
@@ -136,12 +137,26 @@ impl TriBvh {
     fn packet<L: Lanes<N>, const N: usize>(
         &self,
         rays: &[Ray; N],
+        accept: impl FnMut(u32, f32) -> bool,
+    ) -> [Option<TriHit>; N] {
+        if self.root == EMPTY {
+            return [None; N];
+        }
+        if self.shallow {
+            self.packet_on::<L, N, Fixed<_>>(rays, accept)
+        } else {
+            self.packet_on::<L, N, Spilling<_>>(rays, accept)
+        }
+    }
+
+    /// `packet`, keeping its pending subtrees on a stack `S`.
+    #[inline(always)]
+    fn packet_on<L: Lanes<N>, const N: usize, S: Pending<(u32, L)>>(
+        &self,
+        rays: &[Ray; N],
         mut accept: impl FnMut(u32, f32) -> bool,
     ) -> [Option<TriHit>; N] {
         let mut best = [None; N];
-        if self.root == EMPTY {
-            return best;
-        }
         let r = Rays::<L>::new(rays);
         let mut tmax = [0.0; N];
         for (t, r) in tmax.iter_mut().zip(rays) {
@@ -150,7 +165,7 @@ impl TriBvh {
         let mut tmax = L::from_array(tmax);
         let infinity = L::splat(f32::INFINITY);
         // Entries: a subtree and where each ray enters its box (infinity: the ray missed it).
-        let mut stack: Stack<(u32, L)> = Stack::new();
+        let mut stack = S::new();
         let mut cur = (self.root, L::splat(f32::NEG_INFINITY));
         loop {
             let active = cur.1.cmple(tmax);
@@ -290,5 +305,17 @@ mod tests {
             let alone = rays.map(|r| bvh.closest(&r, |i, _| i % 2 == 1));
             assert_eq!(bits(bvh.closest_packet(&rays, |i, _| i % 2 == 1)), bits(alone), "packet {k}, filtered");
         }
+    }
+
+    #[test]
+    fn a_packet_finds_the_same_hits_with_the_spilling_stack() {
+        let mut bvh = soup();
+        let rays: Vec<[Ray; 8]> = (0..400u32).map(packet).collect();
+        let fixed: Vec<_> = rays.iter().map(|r| bits(bvh.closest_packet(r, |_, _| true))).collect();
+        assert!(bvh.shallow);
+        bvh.shallow = false;
+        let spilling: Vec<_> = rays.iter().map(|r| bits(bvh.closest_packet(r, |_, _| true))).collect();
+        assert_eq!(fixed, spilling);
+        assert!(fixed.iter().flatten().any(Option::is_some));
     }
 }
