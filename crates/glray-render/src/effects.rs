@@ -4,7 +4,7 @@
 use glam::{DVec3, Vec3};
 use glray_capture::lighting::Light;
 
-use crate::sampling::{Hemisphere, Sampler};
+use crate::sampling::{cosine_local, Hemisphere, Sampler};
 use crate::scene::Scene;
 use obvhs::ray::Ray;
 
@@ -90,13 +90,7 @@ pub fn occlusion(scene: &Scene, at: &Origin, count: u32, distance: f32, eps: f32
         return 0.0;
     }
     let around = Hemisphere::around(at.n);
-    let hidden: f32 = (0..count)
-        .map(|_| {
-            let d = around.cosine(s.next2());
-            1.0 - scene.transmittance(leaving(at.p, at.n, d, eps, distance), Some(at.draw))
-        })
-        .sum();
-    hidden / count as f32
+    scene.hidden(at, &around, count, distance, eps, || cosine_local(s.next2())) / count as f32
 }
 
 /// How much of `light` reaches the point (0 to 1).

@@ -2,7 +2,7 @@
 //! where it is used (pixel, sample number, purpose, bounce), never of the thread or the order
 //! the work runs in, so that an image is the same for any number of threads (DESIGN.md rule 2).
 
-use glam::{Vec2, Vec3};
+use glam::{Affine3A, Vec2, Vec3};
 
 /// A well-mixed 32-bit hash of a few words (the PCG output permutation over a running state).
 pub fn hash(words: &[u32]) -> u32 {
@@ -71,11 +71,31 @@ impl Hemisphere {
     /// length by construction: x^2 + y^2 + z^2 = u.x + (1 - u.x).
     #[inline]
     pub fn cosine(&self, u: Vec2) -> Vec3 {
-        let r = u.x.sqrt();
-        let (sin, cos) = (std::f32::consts::TAU * u.y).sin_cos();
-        let z = (1.0 - u.x).max(0.0).sqrt();
-        self.t * (r * cos) + self.b * (r * sin) + self.n * z
+        self.at(cosine_local(u))
     }
+
+    /// The direction whose coordinates along the basis (tangent, bitangent, normal) are `l`.
+    #[inline]
+    pub fn at(&self, l: Vec3) -> Vec3 {
+        self.t * l.x + self.b * l.y + self.n * l.z
+    }
+
+    /// The hemisphere's basis taken through the linear map `m`: `at` then gives `m` applied to
+    /// the direction this hemisphere's `at` gives (no longer unit or orthogonal, unless `m`
+    /// is a rotation), for walking a ray in the object space of an instance.
+    pub fn mapped(&self, m: &Affine3A) -> Hemisphere {
+        let map = |v: Vec3| m.transform_vector3(v);
+        Hemisphere { t: map(self.t), b: map(self.b), n: map(self.n) }
+    }
+}
+
+/// A cosine-weighted direction about +z (see `Hemisphere::cosine`).
+#[inline]
+pub fn cosine_local(u: Vec2) -> Vec3 {
+    let r = u.x.sqrt();
+    let (sin, cos) = (std::f32::consts::TAU * u.y).sin_cos();
+    let z = (1.0 - u.x).max(0.0).sqrt();
+    Vec3::new(r * cos, r * sin, z)
 }
 
 #[cfg(test)]

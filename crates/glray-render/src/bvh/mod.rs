@@ -250,6 +250,11 @@ impl TriBvh {
         TriBvh { nodes, leaves, root, shallow }
     }
 
+    /// Whether the tree holds no triangle.
+    pub fn is_empty(&self) -> bool {
+        self.root == EMPTY
+    }
+
     /// Walks the tree children nearest first (what a closest hit wants: a near hit prunes what
     /// lies behind), offering `leaf` each leaf the ray reaches within the current `tmax`, which
     /// `leaf` may shorten. `B`: how the node's boxes are tested (see `boxes`).
