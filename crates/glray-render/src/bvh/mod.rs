@@ -73,7 +73,10 @@ impl Node {
     /// Side `side` (0: minimum, 1: maximum) of child `k`'s box along `axis`.
     #[inline(always)]
     fn bound(&self, side: usize, axis: usize, k: usize) -> f32 {
-        self.bounds[side][axis][k / 4][k % 4]
+        // Through the lanes as an array: `Vec4`'s own indexing picks a lane through a jump
+        // table, an indirect branch per box in the packet walk.
+        let lanes: &[f32; 4] = self.bounds[side][axis][k / 4].as_ref();
+        lanes[k % 4]
     }
 }
 
@@ -251,6 +254,7 @@ impl TriBvh {
     }
 
     /// Whether the tree holds no triangle.
+    #[inline]
     pub fn is_empty(&self) -> bool {
         self.root == EMPTY
     }
@@ -260,7 +264,7 @@ impl TriBvh {
     /// `leaf` may shorten. `B`: how the node's boxes are tested (see `boxes`).
     #[inline(always)]
     fn walk_nearest<B: Boxes>(&self, ray: &Ray, leaf: impl FnMut(&Tri4, &Prepared, &mut f32)) {
-        if self.root == EMPTY {
+        if self.is_empty() {
             return;
         }
         if self.shallow {
@@ -331,7 +335,7 @@ impl TriBvh {
     /// leaf the ray reaches within [tmin, tmax]; `leaf` returns true to stop the walk.
     #[inline(always)]
     fn walk_any<B: Boxes>(&self, ray: &Ray, leaf: impl FnMut(&Tri4, &Prepared, f32) -> bool) {
-        if self.root == EMPTY {
+        if self.is_empty() {
             return;
         }
         if self.shallow {
