@@ -47,6 +47,15 @@ const LEAF_SIZE: u32 = 4;
 const WIDTH: usize = 8;
 const GROUPS: usize = WIDTH / 4;
 
+/// Lane `k` of `v`, read through its lanes as an array: `Vec4`'s own indexing picks a lane
+/// through a jump table when `k` is not a constant, an indirect branch per box or triangle in
+/// the packet walk.
+#[inline(always)]
+fn lane(v: &Vec4, k: usize) -> f32 {
+    let lanes: &[f32; 4] = v.as_ref();
+    lanes[k]
+}
+
 /// `WIDTH` children: `bounds[0][axis]` their minimum corners along `axis` and `bounds[1][axis]`
 /// their maximum, one child per lane, in groups of four (`WIDTH` floats in a row, for the
 /// 256-bit test); the children fill the slots from the first, unused ones (`EMPTY`, inverted
@@ -73,10 +82,7 @@ impl Node {
     /// Side `side` (0: minimum, 1: maximum) of child `k`'s box along `axis`.
     #[inline(always)]
     fn bound(&self, side: usize, axis: usize, k: usize) -> f32 {
-        // Through the lanes as an array: `Vec4`'s own indexing picks a lane through a jump
-        // table, an indirect branch per box in the packet walk.
-        let lanes: &[f32; 4] = self.bounds[side][axis][k / 4].as_ref();
-        lanes[k % 4]
+        lane(&self.bounds[side][axis][k / 4], k % 4)
     }
 }
 
@@ -112,8 +118,8 @@ impl Tri4 {
     /// where looking it up later through the mesh's indices would be two more misses per hit.
     #[inline(always)]
     fn normal(&self, k: usize) -> Vec3 {
-        let lane = |v: &[Vec4; 3]| Vec3::new(v[0][k], v[1][k], v[2][k]);
-        lane(&self.e1).cross(lane(&self.e2))
+        let at = |v: &[Vec4; 3]| Vec3::new(lane(&v[0], k), lane(&v[1], k), lane(&v[2], k));
+        at(&self.e1).cross(at(&self.e2))
     }
 
     #[inline(always)]

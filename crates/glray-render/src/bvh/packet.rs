@@ -79,7 +79,7 @@ fn hit_triangle<L: Lanes<N>, const N: usize>(tri: &Tri4, k: usize, r: &Rays<L>, 
 /// Lane `k` of each axis of `v`, in every lane.
 #[inline(always)]
 fn lane<L: Lanes<N>, const N: usize>(v: &[Vec4; 3], k: usize) -> [L; 3] {
-    [L::splat(v[0][k]), L::splat(v[1][k]), L::splat(v[2][k])]
+    [L::splat(super::lane(&v[0], k)), L::splat(super::lane(&v[1], k)), L::splat(super::lane(&v[2], k))]
 }
 
 impl TriBvh {
