@@ -403,7 +403,7 @@ impl TriBvh {
     pub fn occluded(&self, ray: &Ray) -> bool {
         // An empty tree (a scene's flat triangles, often none beside its instances) answers
         // here, before a call into the walk for every shadow and AO ray.
-        if self.root == EMPTY {
+        if self.is_empty() {
             return false;
         }
         #[cfg(target_arch = "x86_64")]

@@ -139,7 +139,7 @@ impl TriBvh {
         rays: &[Ray; N],
         accept: impl FnMut(u32, f32) -> bool,
     ) -> [Option<TriHit>; N] {
-        if self.root == EMPTY {
+        if self.is_empty() {
             return [None; N];
         }
         if self.shallow {
