@@ -212,34 +212,35 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
         fill(&mut b, records);
         b
     };
-    // The cheapest plane over the three axes: A(left) * blocks(left) + A(right) * blocks(right).
-    let mut best: Option<(f32, usize, usize, Bounds, Bounds)> = None;
-    for axis in 0..3 {
-        if extent[axis] <= 0.0 {
-            continue;
-        }
-        let mut right = [(Bounds::EMPTY, 0u32); BINS];
+    // The cheapest plane over the three axes, A(left) * blocks(left) + A(right) * blocks(right),
+    // the first of equal ones. Every plane's cost first, then the least: choosing as it went,
+    // the sweep branched on each cost against the best so far, which mispredicted often (the
+    // sweep is a split's fixed cost, paid in full by the many small ranges near the leaves).
+    let mut costs = [[f32::INFINITY; BINS]; 3];
+    for (axis, costs) in costs.iter_mut().enumerate() {
+        let bounds = &bins.bounds[axis];
+        let count = &bins.count[axis];
+        let mut right = [0.0f32; BINS];
         let mut acc = (Bounds::EMPTY, 0u32);
         for b in (1..BINS).rev() {
-            acc = (acc.0.union(bins.bounds[axis][b]), acc.1 + bins.count[axis][b]);
-            right[b] = acc;
+            acc = (acc.0.union(bounds[b]), acc.1 + count[b]);
+            right[b] = if acc.1 == 0 { f32::INFINITY } else { acc.0.half_area() * blocks(acc.1) };
         }
         let mut left = (Bounds::EMPTY, 0u32);
-        for (b, &(rb, rn)) in right.iter().enumerate().skip(1) {
-            left = (left.0.union(bins.bounds[axis][b - 1]), left.1 + bins.count[axis][b - 1]);
-            if left.1 == 0 || rn == 0 {
-                continue;
-            }
-            let cost = left.0.half_area() * blocks(left.1) + rb.half_area() * blocks(rn);
-            if best.is_none_or(|(c, ..)| cost < c) {
-                best = Some((cost, axis, b, left.0, rb));
-            }
+        for b in 1..BINS {
+            left = (left.0.union(bounds[b - 1]), left.1 + count[b - 1]);
+            let cost = left.0.half_area() * blocks(left.1) + right[b];
+            costs[b] = if left.1 == 0 { f32::INFINITY } else { cost };
         }
     }
-    let Some((_, axis, plane, lb, rb)) = best else {
+    let least = costs.as_flattened().iter().fold(f32::INFINITY, |a, &c| a.min(c));
+    let Some(at) = costs.as_flattened().iter().position(|&c| c == least).filter(|_| least < f32::INFINITY) else {
         // Every centroid in one place.
         return halve(records);
     };
+    let (axis, plane) = (at / BINS, at % BINS);
+    let union = |bins: &[Bounds]| bins.iter().fold(Bounds::EMPTY, |acc, &b| acc.union(b));
+    let (lb, rb) = (union(&bins.bounds[axis][..plane]), union(&bins.bounds[axis][plane..]));
     let (i, lc, rc) = partition(records, |r| binning.bin_on(r, axis) < plane);
     if i == 0 || i == records.len() {
         // Cannot happen (the bins counted both sides with the same arithmetic), but an empty
