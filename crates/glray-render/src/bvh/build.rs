@@ -539,8 +539,9 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
         }
     }
     drop(records);
+    // In parallel from a few thousand leaves on (each reads its triangles' corners from the
+    // mesh: 7% of a 98K build, whose 27K leaves were below `PARALLEL`).
     let make = |(leaf, n): &([u32; 4], u8)| Tri4::new(&leaf[..*n as usize], |i| corners(i as usize));
-    let leaves: Vec<Tri4> =
-        if ids.len() >= PARALLEL { ids.par_iter().map(make).collect() } else { ids.iter().map(make).collect() };
+    let leaves: Vec<Tri4> = ids.par_iter().with_min_len(2048).map(make).collect();
     (out.nodes, leaves, root)
 }
