@@ -303,7 +303,8 @@ fn partition(records: &mut [Record], left: impl Fn(&Record) -> bool) -> (usize, 
         for k in 0..pairs {
             records.swap(lo + wrong_lo[start_lo + k] as usize, hi - 1 - wrong_hi[start_hi + k] as usize);
         }
-        (start_lo, count_lo, start_hi, count_hi) = (start_lo + pairs, count_lo - pairs, start_hi + pairs, count_hi - pairs);
+        (start_lo, count_lo, start_hi, count_hi) =
+            (start_lo + pairs, count_lo - pairs, start_hi + pairs, count_hi - pairs);
         if count_lo == 0 {
             lo += BLOCK;
         }
@@ -467,13 +468,19 @@ fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut
 }
 
 /// Builds the subtree over `records` (see `node`) into the tree all threads share: ranges of
-/// `PARALLEL` records or more make their node there and build their children in parallel;
+/// `whole` records or more make their node there and build their children in parallel;
 /// smaller ones are built whole on one thread and appended in one step. (Subtrees returning
 /// their nodes to their parents instead copied every node once per parallel level, and the
 /// vectors' growth left ~100 MB of freed pages in the allocator at 10M triangles: peak memory.)
-fn shared_subtree(records: &mut [Record], first: usize, centroids: Centroids, shared: &Mutex<Out>) -> u32 {
+fn shared_subtree(
+    records: &mut [Record],
+    first: usize,
+    centroids: Centroids,
+    whole: usize,
+    shared: &Mutex<Out>,
+) -> u32 {
     let lock = || shared.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-    if records.len() < PARALLEL {
+    if records.len() < whole {
         let mut local = Out::for_records(records.len());
         let root = subtree(records, first, centroids, &mut local);
         return lock().append(local, root);
@@ -485,8 +492,10 @@ fn shared_subtree(records: &mut [Record], first: usize, centroids: Centroids, sh
         out.lens.push(lens);
         out.nodes.len() - 1
     };
-    let children: Vec<(usize, u32)> =
-        parts.into_par_iter().map(|(lane, part, first, c)| (lane, shared_subtree(part, first, c, shared))).collect();
+    let children: Vec<(usize, u32)> = parts
+        .into_par_iter()
+        .map(|(lane, part, first, c)| (lane, shared_subtree(part, first, c, whole, shared)))
+        .collect();
     let mut out = lock();
     for (lane, child) in children {
         out.nodes[index].child[lane] = child;
@@ -519,12 +528,16 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     }
     let centroids = Centroids::of(&records);
     let shared = Mutex::new(Out::for_records(records.len()));
-    let root = shared_subtree(&mut records, 0, centroids, &shared);
+    // Subtrees are built whole on one thread below a sixteenth of the mesh, between 8K and
+    // `PARALLEL` records: a 98K mesh's eight top subtrees (12K each) were too few and too
+    // uneven to keep two threads busy (8K there: -8% build); bigger meshes gain nothing from
+    // more, smaller tasks (10M: +4%).
+    let whole = (records.len() / 16).clamp(1 << 13, PARALLEL);
+    let root = shared_subtree(&mut records, 0, centroids, whole, &shared);
     let mut out = shared.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner());
     // The leaves, numbered in node order, each as the triangles of its records; the records
     // go before the leaves are made (peak memory).
-    let mut ids: Vec<([u32; 4], u8)> =
-        Vec::with_capacity(out.lens.iter().flatten().filter(|&&len| len > 0).count());
+    let mut ids: Vec<([u32; 4], u8)> = Vec::with_capacity(out.lens.iter().flatten().filter(|&&len| len > 0).count());
     for (node, lens) in out.nodes.iter_mut().zip(&out.lens) {
         for lane in 0..WIDTH {
             if lens[lane] > 0 {
