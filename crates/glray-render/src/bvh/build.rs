@@ -558,3 +558,47 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     let leaves: Vec<Tri4> = ids.par_iter().with_min_len(2048).map(make).collect();
     (out.nodes, leaves, root)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `n` records with scattered boxes, numbered 0..n.
+    fn records(n: usize) -> Vec<Record> {
+        let mut state = 0x2545_f491_u32;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as f32 / u32::MAX as f32
+        };
+        (0..n)
+            .map(|i| {
+                let lo = Vec3::new(next(), next(), next()) * 10.0;
+                let hi = lo + Vec3::new(next(), next(), next());
+                Record { lo: lo.extend(f32::from_bits(i as u32)), hi: hi.extend(0.0) }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn partition_puts_every_left_record_first_keeps_every_record_and_boxes_each_side() {
+        // Below, at and past two blocks, and long enough for blocks left over at both ends.
+        for n in [0, 1, 2, 31, 63, 64, 65, 127, 200, 1000, 4099] {
+            for cut in [0.0, 0.2, 0.5, 0.97, 1.0] {
+                let mut rs = records(n);
+                let left = |r: &Record| r.centroid2().x < 20.0 * cut + 0.5;
+                let (at, lc, rc) = partition(&mut rs, left);
+                assert_eq!(at, rs.iter().filter(|r| left(r)).count(), "n {n} cut {cut}");
+                assert!(rs[..at].iter().all(left) && !rs[at..].iter().any(left), "n {n} cut {cut}");
+                let mut ids: Vec<u32> = rs.iter().map(Record::index).collect();
+                ids.sort_unstable();
+                assert!(ids.iter().copied().eq(0..n as u32), "n {n} cut {cut}: records lost or doubled");
+                for (side, got) in [(&rs[..at], lc), (&rs[at..], rc)] {
+                    let want = Centroids::of(side);
+                    assert_eq!((got.lo, got.hi), (want.lo, want.hi), "n {n} cut {cut}");
+                }
+            }
+        }
+    }
+}
