@@ -109,10 +109,16 @@ impl Binning {
         // compiler see it.
         [x as usize & (BINS - 1), y as usize & (BINS - 1), z as usize & (BINS - 1)]
     }
-    /// `bin(r)[axis]`, computed for that axis alone (the same arithmetic: the same answer).
-    fn bin_on(&self, r: &Record, axis: usize) -> usize {
-        let c = r.centroid2()[axis];
-        ((c - self.origin[axis]) * self.scale[axis]).min((BINS - 1) as f32).max(0.0) as i32 as usize
+
+    /// Whether a record's bin along `axis` is below `plane` (`bin(r)[axis] < plane`, for a
+    /// plane between bins). A bin is the value clamped to 0..BINS - 1 and truncated, so it is
+    /// below a plane between 1 and BINS - 1 exactly when the value is: no conversion, no clamp.
+    /// The record's lane is read as an array (a `Vec3A` indexed by a run-time axis went through
+    /// a jump table, per record).
+    fn below(&self, axis: usize, plane: usize) -> impl Fn(&Record) -> bool {
+        debug_assert!((1..BINS).contains(&plane));
+        let (origin, scale, plane) = (self.origin.to_array()[axis], self.scale.to_array()[axis], plane as f32);
+        move |r| (super::lane(&(r.lo + r.hi), axis) - origin) * scale < plane
     }
 }
 
@@ -241,7 +247,7 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
     let (axis, plane) = (at / BINS, at % BINS);
     let union = |bins: &[Bounds]| bins.iter().fold(Bounds::EMPTY, |acc, &b| acc.union(b));
     let (lb, rb) = (union(&bins.bounds[axis][..plane]), union(&bins.bounds[axis][plane..]));
-    let (i, lc, rc) = partition(records, |r| binning.bin_on(r, axis) < plane);
+    let (i, lc, rc) = partition(records, binning.below(axis, plane));
     if i == 0 || i == records.len() {
         // Cannot happen (the bins counted both sides with the same arithmetic), but an empty
         // side would never end: halve instead.
