@@ -64,7 +64,8 @@ impl Bounds {
 }
 
 const BINS: usize = 16;
-/// Ranges at least this long are binned in parallel, and their subtrees built in parallel.
+/// Ranges at least this long are binned in parallel and make their next splits ahead in
+/// parallel; subtrees are built in parallel from a smaller length on (`whole` in `build`).
 const PARALLEL: usize = 1 << 15;
 
 #[derive(Clone, Copy)]
@@ -128,9 +129,11 @@ fn truncate(v: Vec3A) -> [u32; 3] {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{__m128, __m128i, _mm_cvttps_epi32};
-        // SAFETY: SSE2 is part of x86-64's baseline.
-        let t: __m128i = unsafe { _mm_cvttps_epi32(__m128::from(v)) };
-        let [x, y, z, _]: [u32; 4] = unsafe { std::mem::transmute(t) };
+        // SAFETY: SSE2 is part of x86-64's baseline; a __m128i is four plain 32-bit integers.
+        let [x, y, z, _]: [u32; 4] = unsafe {
+            let t: __m128i = _mm_cvttps_epi32(__m128::from(v));
+            std::mem::transmute(t)
+        };
         [x, y, z]
     }
     #[cfg(not(target_arch = "x86_64"))]
@@ -275,11 +278,11 @@ fn partition(records: &mut [Record], left: impl Fn(&Record) -> bool) -> (usize, 
     let note = |sides: &mut [Centroids; 2], r: &Record, is_left: bool| {
         let c = r.centroid2();
         let on = BVec3A::splat(is_left);
-        let [l, r] = sides;
-        l.lo = l.lo.min(Vec3A::select(on, c, Vec3A::INFINITY));
-        l.hi = l.hi.max(Vec3A::select(on, c, Vec3A::NEG_INFINITY));
-        r.lo = r.lo.min(Vec3A::select(on, Vec3A::INFINITY, c));
-        r.hi = r.hi.max(Vec3A::select(on, Vec3A::NEG_INFINITY, c));
+        let [left_box, right_box] = sides;
+        left_box.lo = left_box.lo.min(Vec3A::select(on, c, Vec3A::INFINITY));
+        left_box.hi = left_box.hi.max(Vec3A::select(on, c, Vec3A::NEG_INFINITY));
+        right_box.lo = right_box.lo.min(Vec3A::select(on, Vec3A::INFINITY, c));
+        right_box.hi = right_box.hi.max(Vec3A::select(on, Vec3A::NEG_INFINITY, c));
     };
     // [lo, hi) is still to be partitioned; `wrong_*[start..start + count]` are the offsets of
     // the misplaced records in the current block at each end (from lo upwards, from hi down).
@@ -359,9 +362,8 @@ struct Out {
 
 impl Out {
     /// Room for the nodes over `records` records: trees here have about one node per 13
-    /// triangles (eight children, leaves of 3.6 on average), so growing from empty copied the
-    /// nodes several times over (5% of a 98K build). Pages reserved and never written cost no
-    /// memory.
+    /// triangles (eight children, leaves of 3.6 on average), so the vectors do not copy their
+    /// nodes as they grow. Pages reserved and never written cost no memory.
     fn for_records(records: usize) -> Out {
         let nodes = records / 8 + 1;
         Out { nodes: Vec::with_capacity(nodes), lens: Vec::with_capacity(nodes) }
