@@ -99,9 +99,9 @@ struct Binning {
 
 impl Binning {
     /// The bins of `r`'s centroid along the three axes. The bins are filled for every record
-    /// of every split, so this is most of the build: one truncation for the three axes (a
-    /// scalar `f32 as i32` is a dozen instructions each, with its NaN and range checks), and
-    /// the indices masked into range, which also drops the bins' bounds checks.
+    /// of every split, the build's largest part: one truncation for the three axes (a scalar
+    /// `f32 as i32` is a dozen instructions each, with its NaN and range checks), and the
+    /// indices masked into range, which also drops the bins' bounds checks.
     #[inline(always)]
     fn bin(&self, r: &Record) -> [usize; 3] {
         let b = ((r.centroid2() - self.origin) * self.scale).min(Vec3A::splat((BINS - 1) as f32)).max(Vec3A::ZERO);
