@@ -23,7 +23,7 @@ use obvhs::ray::RayHit;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
-use crate::bvh::{TriBvh, TriHit};
+use crate::bvh::{TriBvh, TriHit, BUNDLE};
 use crate::effects::{leaving, Origin};
 use crate::sampling::Hemisphere;
 
@@ -344,7 +344,20 @@ impl<'f> Scene<'f> {
         }
         let flat = !self.bvh.is_empty();
         let mut hidden = 0;
-        for _ in 0..count {
+        // Eight rays at a time through each tree as a bundle (`TriBvh::occluded_bundle`: the
+        // same answers as ray by ray); the rest one by one.
+        let mut left = count;
+        while left >= BUNDLE as u32 {
+            let dirs: [Vec3; BUNDLE] = std::array::from_fn(|_| local());
+            let rays = |o: Vec3A, h: &Hemisphere| dirs.map(|l| crate::bvh::ray(o, h.at(l).into(), 0.0, distance));
+            let mut blocked = if flat { self.bvh.occluded_bundle(&rays(start, around), 0) } else { 0 };
+            for (k, o, h) in &near[..n] {
+                blocked = self.placed[*k].bvh.bvh.occluded_bundle(&rays(*o, h), blocked);
+            }
+            hidden += blocked.count_ones();
+            left -= BUNDLE as u32;
+        }
+        for _ in 0..left {
             let l = local();
             let walk = |bvh: &TriBvh, o: Vec3A, h: &Hemisphere| {
                 bvh.occluded(&crate::bvh::ray(o, h.at(l).into(), 0.0, distance))

@@ -12,6 +12,7 @@
 
 mod boxes;
 mod build;
+mod bundle;
 mod lanes;
 mod packet;
 mod stack;
@@ -19,6 +20,8 @@ mod stack;
 use glam::{Vec3, Vec3A, Vec4};
 use glray_core::prefetch;
 use obvhs::ray::Ray;
+
+pub use bundle::BUNDLE;
 
 use boxes::{Boxes, Sse};
 use lanes::Lanes;

@@ -1,0 +1,192 @@
+//! Eight shadow rays through the tree together, each tested alone: the short rays ambient
+//! occlusion sends from one point in every direction reach mostly the same nodes, but not the
+//! same children of them. A coherent packet (`packet`) tests each child against all its rays,
+//! eight tests per node whichever rays are still there (three of eight are, on average, in an
+//! AO walk); a ray alone fetches and decides on every node itself. A bundle does both halves
+//! right: each node is fetched and its children pushed once for the bundle, and each ray still
+//! in it meets the node's eight boxes in one test of its own (`Boxes`), so the work follows the
+//! rays that are left. Which rays meet which child is an 8 x 8 matrix of bits, turned around
+//! in a few operations (`transpose`) into the rays each child takes along.
+
+use obvhs::ray::Ray;
+
+use super::boxes::{Boxes, Sse};
+use super::stack::{Fixed, Pending, Spilling};
+use super::{hit_triangles, Prepared, TriBvh, LEAF, WIDTH};
+
+/// Rays in a bundle: one bit each in a byte.
+pub const BUNDLE: usize = 8;
+
+const _: () = assert!(WIDTH == 8 && BUNDLE == 8, "a node's boxes against a bundle: an 8 x 8 matrix of bits");
+
+/// The 8 x 8 bit matrix `m` (byte `i`, bit `j`: row `i`, column `j`) turned around: byte `j`,
+/// bit `i` (Hacker's Delight, 7-3: swapping ever larger blocks about the diagonal).
+#[inline(always)]
+fn transpose(m: u64) -> u64 {
+    let m = (m & 0xAA55_AA55_AA55_AA55) | ((m & 0x00AA_00AA_00AA_00AA) << 7) | ((m >> 7) & 0x00AA_00AA_00AA_00AA);
+    let m = (m & 0xCCCC_3333_CCCC_3333) | ((m & 0x0000_CCCC_0000_CCCC) << 14) | ((m >> 14) & 0x0000_CCCC_0000_CCCC);
+    (m & 0xF0F0_F0F0_0F0F_0F0F) | ((m & 0x0000_0000_F0F0_F0F0) << 28) | ((m >> 28) & 0x0000_0000_F0F0_F0F0)
+}
+
+impl TriBvh {
+    /// Which of the eight rays (bit per ray) meet a triangle within [tmin, tmax], as
+    /// `occluded` finds for each alone (the same box and triangle tests), but for those
+    /// already known to (bits of `known`: not traced, set in the answer).
+    #[inline]
+    pub fn occluded_bundle(&self, rays: &[Ray; BUNDLE], known: u32) -> u32 {
+        let all = (1u32 << BUNDLE) - 1;
+        if self.is_empty() || known & all == all {
+            return known;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if super::boxes::avx_available() {
+            // SAFETY: the CPU has AVX (checked just now).
+            return unsafe { self.occluded_bundle_avx(rays, known) };
+        }
+        self.bundle_with::<Sse>(rays, known)
+    }
+
+    /// `occluded_bundle`, the whole walk compiled for AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn occluded_bundle_avx(&self, rays: &[Ray; BUNDLE], known: u32) -> u32 {
+        self.bundle_with::<super::boxes::Avx>(rays, known)
+    }
+
+    #[inline(always)]
+    fn bundle_with<B: Boxes>(&self, rays: &[Ray; BUNDLE], known: u32) -> u32 {
+        if self.shallow {
+            self.bundle_on::<B, Fixed<_>>(rays, known)
+        } else {
+            self.bundle_on::<B, Spilling<_>>(rays, known)
+        }
+    }
+
+    /// The bundle's walk: entries on the stack `S` are a subtree and the rays (bits) that
+    /// meet its box; a ray leaves the bundle at its first hit, and the walk ends when all have.
+    #[inline(always)]
+    fn bundle_on<B: Boxes, S: Pending<(u32, u32)>>(&self, rays: &[Ray; BUNDLE], known: u32) -> u32 {
+        let all = (1u32 << BUNDLE) - 1;
+        let mut hidden = known & all;
+        let prepared: [Prepared; BUNDLE] = std::array::from_fn(|r| Prepared::new(&rays[r]));
+        let boxes: [B; BUNDLE] = std::array::from_fn(|r| B::new(&prepared[r]));
+        let tmax: [f32; BUNDLE] = std::array::from_fn(|r| rays[r].tmax);
+        let mut stack = S::new();
+        let mut cur = (self.root, all);
+        loop {
+            let mut active = cur.1 & !hidden;
+            if active != 0 {
+                if cur.0 & LEAF == 0 {
+                    let node = &self.nodes[cur.0 as usize];
+                    // Row r: the children ray r meets; `any`: those some ray meets.
+                    let (mut rows, mut any) = (0u64, 0u32);
+                    while active != 0 {
+                        let r = active.trailing_zeros() as usize;
+                        active &= active - 1;
+                        let (met, _) = boxes[r].hit(node, tmax[r]);
+                        rows |= (met as u64) << (8 * r);
+                        any |= met;
+                    }
+                    if any != 0 {
+                        // Column k: the rays that meet child k.
+                        let columns = transpose(rows);
+                        let take = |k: u32| (node.child[k as usize], (columns >> (8 * k)) as u32 & all);
+                        let k = any.trailing_zeros();
+                        any &= any - 1;
+                        let first = take(k);
+                        while any != 0 {
+                            let k = any.trailing_zeros();
+                            any &= any - 1;
+                            let entry = take(k);
+                            self.prefetch_child(entry.0);
+                            stack.push(entry);
+                        }
+                        cur = first;
+                        continue;
+                    }
+                } else {
+                    let tri = &self.leaves[(cur.0 & !LEAF) as usize];
+                    while active != 0 {
+                        let r = active.trailing_zeros() as usize;
+                        active &= active - 1;
+                        if hit_triangles(tri, &prepared[r], tmax[r]).0 != 0 {
+                            hidden |= 1 << r;
+                        }
+                    }
+                    if hidden == all {
+                        return all;
+                    }
+                }
+            }
+            match stack.pop() {
+                Some(next) => cur = next,
+                None => return hidden,
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Vec3, Vec3A};
+
+    use super::*;
+    use crate::sampling::hash;
+
+    fn random(seed: u32) -> f32 {
+        hash(&[seed]) as f32 / u32::MAX as f32
+    }
+
+    #[test]
+    fn the_transpose_turns_every_bit_about_the_diagonal() {
+        for seed in 0..200u32 {
+            let m = (hash(&[seed, 1]) as u64) << 32 | hash(&[seed, 2]) as u64;
+            let t = transpose(m);
+            for (i, j) in (0..8).flat_map(|i| (0..8).map(move |j| (i, j))) {
+                assert_eq!(m >> (8 * i + j) & 1, t >> (8 * j + i) & 1, "matrix {m:#x}, bit ({i}, {j})");
+            }
+            assert_eq!(transpose(t), m);
+        }
+    }
+
+    #[test]
+    fn a_bundle_finds_what_each_ray_finds_alone() {
+        // A soup of small triangles, and bundles of eight rays from points among them in every
+        // direction, as ambient occlusion sends them: short, long, along the axes.
+        let tris: Vec<[Vec3; 3]> = (0..4000)
+            .map(|i| {
+                let c = Vec3::new(random(i * 9), random(i * 9 + 1), random(i * 9 + 2));
+                [1, 2, 3].map(|k| {
+                    c + 0.05 * Vec3::new(random(i * 9 + 3 * k), random(i * 9 + 3 * k + 1), random(i * 9 + 3 * k + 2))
+                })
+            })
+            .collect();
+        let mut bvh = TriBvh::build(tris.len(), |i| tris[i]);
+        let (mut hidden, mut open) = (0, 0);
+        for spilling in [false, true] {
+            bvh.shallow = !spilling;
+            for b in 0..600u32 {
+                let o = Vec3A::new(random(b * 3 + 70_000), random(b * 3 + 70_001), random(b * 3 + 70_002));
+                let reach = [0.02, 0.1, 0.5, f32::INFINITY][b as usize % 4];
+                let rays: [Ray; BUNDLE] = std::array::from_fn(|r| {
+                    let s = b * 8 + r as u32;
+                    let d = match s % 11 {
+                        0 => Vec3A::NEG_Y,
+                        _ => (Vec3A::new(random(s * 3 + 1), random(s * 3 + 2), random(s * 3 + 3)) - 0.5).normalize(),
+                    };
+                    super::super::ray(o, d, 0.0, reach)
+                });
+                let alone = rays.iter().enumerate().fold(0, |m, (r, ray)| m | (bvh.occluded(ray) as u32) << r);
+                assert_eq!(bvh.occluded_bundle(&rays, 0), alone, "bundle {b}");
+                // Rays already known hidden stay so, and the others are found as before.
+                let known = hash(&[b]) & 0xff;
+                assert_eq!(bvh.occluded_bundle(&rays, known), alone | known, "bundle {b}, known {known:#x}");
+                #[cfg(target_arch = "x86_64")]
+                assert_eq!(bvh.bundle_with::<Sse>(&rays, 0), alone, "bundle {b}, the baseline walk");
+                hidden += alone.count_ones();
+                open += 8 - alone.count_ones();
+            }
+        }
+        assert!(hidden > 500 && open > 500, "both outcomes tested: {hidden} hidden, {open} open");
+    }
+}
