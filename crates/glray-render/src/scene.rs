@@ -344,15 +344,15 @@ impl<'f> Scene<'f> {
         }
         let flat = !self.bvh.is_empty();
         let mut hidden = 0;
-        // Eight rays at a time through each tree as a bundle (`TriBvh::occluded_bundle`: the
+        // Eight rays at a time through each tree as a bundle (`TriBvh::occluded_from`: the
         // same answers as ray by ray); the rest one by one.
         let mut left = count;
         while left >= BUNDLE as u32 {
             let dirs: [Vec3; BUNDLE] = std::array::from_fn(|_| local());
-            let rays = |o: Vec3A, h: &Hemisphere| dirs.map(|l| crate::bvh::ray(o, h.at(l).into(), 0.0, distance));
-            let mut blocked = if flat { self.bvh.occluded_bundle(&rays(start, around), 0) } else { 0 };
+            let along = |h: &Hemisphere| dirs.map(|l| Vec3A::from(h.at(l)));
+            let mut blocked = if flat { self.bvh.occluded_from(start, &along(around), distance, 0) } else { 0 };
             for (k, o, h) in &near[..n] {
-                blocked = self.placed[*k].bvh.bvh.occluded_bundle(&rays(*o, h), blocked);
+                blocked = self.placed[*k].bvh.bvh.occluded_from(*o, &along(h), distance, blocked);
             }
             hidden += blocked.count_ones();
             left -= BUNDLE as u32;

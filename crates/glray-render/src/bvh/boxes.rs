@@ -10,10 +10,18 @@ use super::{Node, Prepared, GROUPS, WIDTH};
 
 /// A ray made ready to meet a node's boxes.
 pub(super) trait Boxes {
+    /// A node's box planes less the origin of the rays that meet it: what rays from one point
+    /// (a bundle's) have in common in their slab tests, worked out once for all of them.
+    type Relative;
     fn new(ray: &Prepared) -> Self;
     /// Which of the node's boxes the ray meets within [tmin, tmax] (bit per child), and where
     /// it enters each.
     fn hit(&self, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]);
+    /// The node's planes less this ray's origin.
+    fn relative(&self, node: &Node) -> Self::Relative;
+    /// `hit`'s mask, from the node's planes less this ray's origin (`relative` of a ray from
+    /// the same point): the same operations on the same values, so the same boxes.
+    fn hit_relative(&self, relative: &Self::Relative, tmax: f32) -> u32;
 }
 
 /// The slab test: per child, the ray's entry (the farthest of its near planes and tmin) and
@@ -30,9 +38,30 @@ pub(super) struct Sse {
 }
 
 impl Boxes for Sse {
+    type Relative = [[[Vec4; GROUPS]; 3]; 2];
+
     #[inline(always)]
     fn new(r: &Prepared) -> Sse {
         Sse { origin: r.origin, inverse: r.inverse, near: r.near, tmin: Vec4::splat(r.tmin) }
+    }
+
+    #[inline(always)]
+    fn relative(&self, node: &Node) -> Self::Relative {
+        std::array::from_fn(|side| std::array::from_fn(|axis| node.bounds[side][axis].map(|b| b - self.origin[axis])))
+    }
+
+    #[inline(always)]
+    fn hit_relative(&self, relative: &Self::Relative, tmax: f32) -> u32 {
+        let mut mask = 0;
+        for g in 0..GROUPS {
+            let slab = |axis: usize, side: usize| relative[side][axis][g] * self.inverse[axis];
+            let near = |axis: usize| slab(axis, self.near[axis]);
+            let far = |axis: usize| slab(axis, 1 - self.near[axis]);
+            let tnear = near(0).max(near(1)).max(near(2).max(self.tmin));
+            let tfar = far(0).min(far(1)).min(far(2).min(Vec4::splat(tmax))) * WIDEN;
+            mask |= tnear.cmple(tfar).bitmask() << (4 * g);
+        }
+        mask
     }
 
     #[inline(always)]
@@ -78,6 +107,8 @@ mod avx {
     }
 
     impl Boxes for Avx {
+        type Relative = [[__m256; 3]; 2];
+
         #[inline(always)]
         fn new(r: &Prepared) -> Avx {
             // SAFETY: an `Avx` is made only by walks that checked `available()`.
@@ -89,6 +120,42 @@ mod avx {
             // SAFETY: as in `new`.
             unsafe { hit(self, node, tmax) }
         }
+
+        #[inline(always)]
+        fn relative(&self, node: &Node) -> Self::Relative {
+            // SAFETY: as in `new`.
+            unsafe { relative(self, node) }
+        }
+
+        #[inline(always)]
+        fn hit_relative(&self, relative: &Self::Relative, tmax: f32) -> u32 {
+            // SAFETY: as in `new`.
+            unsafe { hit_relative(self, relative, tmax) }
+        }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx")]
+    unsafe fn relative(a: &Avx, node: &Node) -> [[__m256; 3]; 2] {
+        // SAFETY: as in `hit`.
+        let less = |side: usize, axis: usize| unsafe {
+            _mm256_sub_ps(_mm256_load_ps(node.bounds[side][axis].as_ptr().cast()), a.origin[axis])
+        };
+        // Written out: `array::from_fn`'s closures would be compiled without AVX.
+        [[less(0, 0), less(0, 1), less(0, 2)], [less(1, 0), less(1, 1), less(1, 2)]]
+    }
+
+    /// `hit`'s operations from the planes less the origin, in its order.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    unsafe fn hit_relative(a: &Avx, relative: &[[__m256; 3]; 2], tmax: f32) -> u32 {
+        let slab = |axis: usize, side: usize| _mm256_mul_ps(relative[side][axis], a.inverse[axis]);
+        let near = |axis: usize| slab(axis, a.near[axis]);
+        let far = |axis: usize| slab(axis, 1 - a.near[axis]);
+        let tnear = _mm256_max_ps(_mm256_max_ps(near(0), near(1)), _mm256_max_ps(near(2), a.tmin));
+        let tfar = _mm256_min_ps(_mm256_min_ps(far(0), far(1)), _mm256_min_ps(far(2), _mm256_set1_ps(tmax)));
+        let tfar = _mm256_mul_ps(tfar, _mm256_set1_ps(WIDEN));
+        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar)) as u32
     }
 
     #[inline]

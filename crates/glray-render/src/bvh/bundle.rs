@@ -10,11 +10,12 @@
 //! takes along. Sixteen (an AO pass's rays per point) rather than eight: 3-9% faster still,
 //! each node serving more rays.
 
+use glam::{Vec3A, Vec4};
 use obvhs::ray::Ray;
 
 use super::boxes::{Boxes, Sse};
 use super::stack::{Fixed, Pending, Spilling};
-use super::{hit_triangles, Prepared, TriBvh, LEAF, WIDTH};
+use super::{moller_trumbore_from, FromOrigin, Prepared, TriBvh, LEAF, WIDTH};
 
 /// Rays in a bundle (a bit each): two groups of eight.
 pub const BUNDLE: usize = 16;
@@ -31,27 +32,29 @@ fn transpose(m: u64) -> u64 {
 }
 
 impl TriBvh {
-    /// Which of the bundle's rays (bit per ray) meet a triangle within [tmin, tmax], as
-    /// `occluded` finds for each alone (the same box and triangle tests), but for those
-    /// already known to (bits of `known`: not traced, set in the answer).
+    /// Which of the bundle's rays (bit per ray), from `origin` along `directions` within
+    /// [0, tmax], meet a triangle, as `occluded` finds for each alone (the same box and
+    /// triangle tests, bit for bit), but for those already known to (bits of `known`: not
+    /// traced, set in the answer).
     #[inline]
-    pub fn occluded_bundle(&self, rays: &[Ray; BUNDLE], known: u32) -> u32 {
+    pub fn occluded_from(&self, origin: Vec3A, directions: &[Vec3A; BUNDLE], tmax: f32, known: u32) -> u32 {
         let all = (1u32 << BUNDLE) - 1;
         if self.is_empty() || known & all == all {
             return known;
         }
+        let rays = directions.map(|d| super::ray(origin, d, 0.0, tmax));
         #[cfg(target_arch = "x86_64")]
         if super::boxes::avx_available() {
             // SAFETY: the CPU has AVX (checked just now).
-            return unsafe { self.occluded_bundle_avx(rays, known) };
+            return unsafe { self.occluded_from_avx(&rays, known) };
         }
-        self.bundle_with::<Sse>(rays, known)
+        self.bundle_with::<Sse>(&rays, known)
     }
 
-    /// `occluded_bundle`, the whole walk compiled for AVX.
+    /// `occluded_from`, the whole walk compiled for AVX.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    unsafe fn occluded_bundle_avx(&self, rays: &[Ray; BUNDLE], known: u32) -> u32 {
+    unsafe fn occluded_from_avx(&self, rays: &[Ray; BUNDLE], known: u32) -> u32 {
         self.bundle_with::<super::boxes::Avx>(rays, known)
     }
 
@@ -64,8 +67,10 @@ impl TriBvh {
         }
     }
 
-    /// The bundle's walk: entries on the stack `S` are a subtree and the rays (bits) that
-    /// meet its box; a ray leaves the bundle at its first hit, and the walk ends when all have.
+    /// The bundle's walk (its rays all from one point): entries on the stack `S` are a
+    /// subtree and the rays (bits) that meet its box; a ray leaves the bundle at its first
+    /// hit, and the walk ends when all have. What the rays' common origin gives (a node's
+    /// planes less it, a leaf's `FromOrigin`) is worked out once per visit.
     #[inline(always)]
     fn bundle_on<B: Boxes, S: Pending<(u32, u32)>>(&self, rays: &[Ray; BUNDLE], known: u32) -> u32 {
         let all = (1u32 << BUNDLE) - 1;
@@ -73,6 +78,7 @@ impl TriBvh {
         let prepared: [Prepared; BUNDLE] = std::array::from_fn(|r| Prepared::new(&rays[r]));
         let boxes: [B; BUNDLE] = std::array::from_fn(|r| B::new(&prepared[r]));
         let tmax: [f32; BUNDLE] = std::array::from_fn(|r| rays[r].tmax);
+        let (origin, tmin) = (&prepared[0].origin, Vec4::splat(rays[0].tmin));
         let mut stack = S::new();
         let mut cur = (self.root, all);
         loop {
@@ -80,13 +86,14 @@ impl TriBvh {
             if active != 0 {
                 if cur.0 & LEAF == 0 {
                     let node = &self.nodes[cur.0 as usize];
+                    let relative = boxes[0].relative(node);
                     // Row r of group g: the children ray 8g + r meets; `any`: those some ray
                     // meets.
                     let (mut rows, mut any) = ([0u64; 2], 0u32);
                     while active != 0 {
                         let r = active.trailing_zeros() as usize;
                         active &= active - 1;
-                        let (met, _) = boxes[r].hit(node, tmax[r]);
+                        let met = boxes[r].hit_relative(&relative, tmax[r]);
                         rows[r / 8] |= (met as u64) << (8 * (r % 8));
                         any |= met;
                     }
@@ -112,10 +119,13 @@ impl TriBvh {
                     }
                 } else {
                     let tri = &self.leaves[(cur.0 & !LEAF) as usize];
+                    let from = FromOrigin::new(origin, &tri.v0, &tri.e1, &tri.e2);
                     while active != 0 {
                         let r = active.trailing_zeros() as usize;
                         active &= active - 1;
-                        if hit_triangles(tri, &prepared[r], tmax[r]).0 != 0 {
+                        let d = &prepared[r].direction;
+                        let (met, _, _) = moller_trumbore_from(d, &tri.e1, &tri.e2, &from, tmin, Vec4::splat(tmax[r]));
+                        if met != 0 {
                             hidden |= 1 << r;
                         }
                     }
@@ -134,7 +144,7 @@ impl TriBvh {
 
 #[cfg(test)]
 mod tests {
-    use glam::{Vec3, Vec3A};
+    use glam::Vec3;
 
     use super::*;
     use crate::sampling::hash;
@@ -174,20 +184,20 @@ mod tests {
             for b in 0..600u32 {
                 let o = Vec3A::new(random(b * 3 + 70_000), random(b * 3 + 70_001), random(b * 3 + 70_002));
                 let reach = [0.02, 0.1, 0.5, f32::INFINITY][b as usize % 4];
-                let rays: [Ray; BUNDLE] = std::array::from_fn(|r| {
+                let directions: [Vec3A; BUNDLE] = std::array::from_fn(|r| {
                     let s = b * BUNDLE as u32 + r as u32;
-                    let d = match s % 11 {
+                    match s % 11 {
                         0 => Vec3A::NEG_Y,
                         _ => (Vec3A::new(random(s * 3 + 1), random(s * 3 + 2), random(s * 3 + 3)) - 0.5).normalize(),
-                    };
-                    super::super::ray(o, d, 0.0, reach)
+                    }
                 });
+                let rays = directions.map(|d| super::super::ray(o, d, 0.0, reach));
                 let alone = rays.iter().enumerate().fold(0, |m, (r, ray)| m | (bvh.occluded(ray) as u32) << r);
-                assert_eq!(bvh.occluded_bundle(&rays, 0), alone, "bundle {b}");
+                assert_eq!(bvh.occluded_from(o, &directions, reach, 0), alone, "bundle {b}");
                 // Rays already known hidden stay so, and the others are found as before.
                 let known = hash(&[b]) & hash(&[b, 1]) & 0xffff;
-                assert_eq!(bvh.occluded_bundle(&rays, known), alone | known, "bundle {b}, known {known:#x}");
-                #[cfg(target_arch = "x86_64")]
+                assert_eq!(bvh.occluded_from(o, &directions, reach, known), alone | known, "bundle {b}, known {known:#x}");
+                // The baseline walk, whatever this CPU would choose.
                 assert_eq!(bvh.bundle_with::<Sse>(&rays, 0), alone, "bundle {b}, the baseline walk");
                 hidden += alone.count_ones();
                 open += BUNDLE as u32 - alone.count_ones();

@@ -203,17 +203,54 @@ fn moller_trumbore<L: Lanes<N>, const N: usize>(
     tmin: L,
     tmax: L,
 ) -> (u32, L, L) {
+    moller_trumbore_from(direction, e1, e2, &FromOrigin::new(origin, v0, e1, e2), tmin, tmax)
+}
+
+/// What Moller-Trumbore works out from the ray's origin and the triangle alone, before the
+/// direction: rays from one point (a bundle's) share it.
+struct FromOrigin<L> {
+    /// origin - v0
+    s: [L; 3],
+    /// s x e1
+    q: [L; 3],
+    /// e2 . q
+    e2q: L,
+}
+
+impl<L: Copy> FromOrigin<L> {
+    #[inline(always)]
+    fn new<const N: usize>(origin: &[L; 3], v0: &[L; 3], e1: &[L; 3], e2: &[L; 3]) -> FromOrigin<L>
+    where
+        L: Lanes<N>,
+    {
+        let [e1x, e1y, e1z] = *e1;
+        let (sx, sy, sz) = (origin[0] - v0[0], origin[1] - v0[1], origin[2] - v0[2]);
+        let (qx, qy, qz) = (sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x);
+        FromOrigin { s: [sx, sy, sz], q: [qx, qy, qz], e2q: e2[0] * qx + e2[1] * qy + e2[2] * qz }
+    }
+}
+
+/// `moller_trumbore` from what the origin gave (`FromOrigin`): the same operations on the same
+/// values, so the same hits bit for bit.
+#[inline(always)]
+fn moller_trumbore_from<L: Lanes<N>, const N: usize>(
+    direction: &[L; 3],
+    e1: &[L; 3],
+    e2: &[L; 3],
+    o: &FromOrigin<L>,
+    tmin: L,
+    tmax: L,
+) -> (u32, L, L) {
     let [dx, dy, dz] = *direction;
     let [e1x, e1y, e1z] = *e1;
     let [e2x, e2y, e2z] = *e2;
+    let ([sx, sy, sz], [qx, qy, qz]) = (o.s, o.q);
     let (px, py, pz) = (dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x);
     let det = e1x * px + e1y * py + e1z * pz;
     let inv = L::splat(1.0) / det;
-    let (sx, sy, sz) = (origin[0] - v0[0], origin[1] - v0[1], origin[2] - v0[2]);
     let u = (sx * px + sy * py + sz * pz) * inv;
-    let (qx, qy, qz) = (sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x);
     let v = (dx * qx + dy * qy + dz * qz) * inv;
-    let t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+    let t = o.e2q * inv;
     let (lo, hi) = (L::splat(-EDGE), L::splat(1.0 + EDGE));
     let ok = det.cmpne(L::splat(0.0))
         & det.is_finite_mask()
