@@ -51,6 +51,8 @@ impl Boxes for Sse {
     }
 
     #[inline(always)]
+    // `g` picks a group three levels down in `relative`, as `hit` does in the node.
+    #[allow(clippy::needless_range_loop)]
     fn hit_relative(&self, relative: &Self::Relative, tmax: f32) -> u32 {
         let mut mask = 0;
         for g in 0..GROUPS {

@@ -196,7 +196,11 @@ mod tests {
                 assert_eq!(bvh.occluded_from(o, &directions, reach, 0), alone, "bundle {b}");
                 // Rays already known hidden stay so, and the others are found as before.
                 let known = hash(&[b]) & hash(&[b, 1]) & 0xffff;
-                assert_eq!(bvh.occluded_from(o, &directions, reach, known), alone | known, "bundle {b}, known {known:#x}");
+                assert_eq!(
+                    bvh.occluded_from(o, &directions, reach, known),
+                    alone | known,
+                    "bundle {b}, known {known:#x}"
+                );
                 // The baseline walk, whatever this CPU would choose.
                 assert_eq!(bvh.bundle_with::<Sse>(&rays, 0), alone, "bundle {b}, the baseline walk");
                 hidden += alone.count_ones();
