@@ -144,14 +144,9 @@ impl TriBvh {
 
 #[cfg(test)]
 mod tests {
-    use glam::Vec3;
-
+    use super::super::tests::{random, soup};
     use super::*;
     use crate::sampling::hash;
-
-    fn random(seed: u32) -> f32 {
-        hash(&[seed]) as f32 / u32::MAX as f32
-    }
 
     #[test]
     fn the_transpose_turns_every_bit_about_the_diagonal() {
@@ -169,14 +164,7 @@ mod tests {
     fn a_bundle_finds_what_each_ray_finds_alone() {
         // A soup of small triangles, and bundles of rays from points among them in every
         // direction, as ambient occlusion sends them: short, long, along the axes.
-        let tris: Vec<[Vec3; 3]> = (0..4000)
-            .map(|i| {
-                let c = Vec3::new(random(i * 9), random(i * 9 + 1), random(i * 9 + 2));
-                [1, 2, 3].map(|k| {
-                    c + 0.05 * Vec3::new(random(i * 9 + 3 * k), random(i * 9 + 3 * k + 1), random(i * 9 + 3 * k + 2))
-                })
-            })
-            .collect();
+        let tris = soup(4000);
         let mut bvh = TriBvh::build(tris.len(), |i| tris[i]);
         let (mut hidden, mut open) = (0, 0);
         for spilling in [false, true] {

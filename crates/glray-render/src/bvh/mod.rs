@@ -520,7 +520,8 @@ mod tests {
     use super::*;
     use crate::sampling::hash;
 
-    fn random(seed: u32) -> f32 {
+    /// A uniform number in [0, 1] from `seed` (the tests of `bvh`'s modules share these).
+    pub(super) fn random(seed: u32) -> f32 {
         hash(&[seed]) as f32 / u32::MAX as f32
     }
 
@@ -531,7 +532,7 @@ mod tests {
     }
 
     /// A soup of small random triangles in the unit cube.
-    fn soup(n: u32) -> Vec<Triangle> {
+    pub(super) fn soup(n: u32) -> Vec<Triangle> {
         (0..n)
             .map(|i| {
                 let c = Vec3::new(random(i * 9), random(i * 9 + 1), random(i * 9 + 2));
