@@ -34,8 +34,8 @@ fn transpose(m: u64) -> u64 {
 impl TriBvh {
     /// Which of the bundle's rays (bit per ray), from `origin` along `directions` within
     /// [0, tmax], meet a triangle, as `occluded` finds for each alone (the same box and
-    /// triangle tests, bit for bit), but for those already known to (bits of `known`: not
-    /// traced, set in the answer).
+    /// triangle tests, bit for bit). Rays already known to be hidden (bits of `known`, from
+    /// another tree) are not traced and are set in the answer.
     #[inline]
     pub fn occluded_from(&self, origin: Vec3A, directions: &[Vec3A; BUNDLE], tmax: f32, known: u32) -> u32 {
         let all = (1u32 << BUNDLE) - 1;
