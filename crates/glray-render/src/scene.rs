@@ -344,8 +344,8 @@ impl<'f> Scene<'f> {
         }
         let flat = !self.bvh.is_empty();
         let mut hidden = 0;
-        // Eight rays at a time through each tree as a bundle (`TriBvh::occluded_from`: the
-        // same answers as ray by ray); the rest one by one.
+        // `BUNDLE` (sixteen) rays at a time through each tree together (`TriBvh::occluded_from`:
+        // the same answers as ray by ray); the rest one by one.
         let mut left = count;
         while left >= BUNDLE as u32 {
             let dirs: [Vec3; BUNDLE] = std::array::from_fn(|_| local());

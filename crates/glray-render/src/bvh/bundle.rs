@@ -67,18 +67,18 @@ impl TriBvh {
         }
     }
 
-    /// The bundle's walk (its rays all from one point): entries on the stack `S` are a
-    /// subtree and the rays (bits) that meet its box; a ray leaves the bundle at its first
-    /// hit, and the walk ends when all have. What the rays' common origin gives (a node's
-    /// planes less it, a leaf's `FromOrigin`) is worked out once per visit.
+    /// The bundle's walk (its rays all from one point, over one [tmin, tmax], as
+    /// `occluded_from` makes them): entries on the stack `S` are a subtree and the rays (bits)
+    /// that meet its box; a ray leaves the bundle at its first hit, and the walk ends when all
+    /// have. What the rays' common origin gives (a node's planes less it, a leaf's
+    /// `FromOrigin`) is worked out once per visit.
     #[inline(always)]
     fn bundle_on<B: Boxes, S: Pending<(u32, u32)>>(&self, rays: &[Ray; BUNDLE], known: u32) -> u32 {
         let all = (1u32 << BUNDLE) - 1;
         let mut hidden = known & all;
         let prepared: [Prepared; BUNDLE] = std::array::from_fn(|r| Prepared::new(&rays[r]));
         let boxes: [B; BUNDLE] = std::array::from_fn(|r| B::new(&prepared[r]));
-        let tmax: [f32; BUNDLE] = std::array::from_fn(|r| rays[r].tmax);
-        let (origin, tmin) = (&prepared[0].origin, Vec4::splat(rays[0].tmin));
+        let (origin, tmin, tmax) = (&prepared[0].origin, Vec4::splat(rays[0].tmin), rays[0].tmax);
         let mut stack = S::new();
         let mut cur = (self.root, all);
         loop {
@@ -93,7 +93,7 @@ impl TriBvh {
                     while active != 0 {
                         let r = active.trailing_zeros() as usize;
                         active &= active - 1;
-                        let met = boxes[r].hit_relative(&relative, tmax[r]);
+                        let met = boxes[r].hit_relative(&relative, tmax);
                         rows[r / 8] |= (met as u64) << (8 * (r % 8));
                         any |= met;
                     }
@@ -120,11 +120,12 @@ impl TriBvh {
                 } else {
                     let tri = &self.leaves[(cur.0 & !LEAF) as usize];
                     let from = FromOrigin::new(origin, &tri.v0, &tri.e1, &tri.e2);
+                    let tmax = Vec4::splat(tmax);
                     while active != 0 {
                         let r = active.trailing_zeros() as usize;
                         active &= active - 1;
                         let d = &prepared[r].direction;
-                        let (met, _, _) = moller_trumbore_from(d, &tri.e1, &tri.e2, &from, tmin, Vec4::splat(tmax[r]));
+                        let (met, _, _) = moller_trumbore_from(d, &tri.e1, &tri.e2, &from, tmin, tmax);
                         if met != 0 {
                             hidden |= 1 << r;
                         }
