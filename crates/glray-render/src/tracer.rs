@@ -38,28 +38,37 @@ pub(crate) struct Scratch {
     hits: Vec<Hit>,
     frags: Vec<(Hit, Fragment)>,
     pub rays: Cell<u64>,
-    last: LastTriangle,
+    recent: RecentTriangles,
 }
 
-/// The triangle the last camera ray hit: neighbouring pixels mostly hit the same one, and an
-/// instance's triangle is made (lit, faced) when it is needed. Lent, not copied (a triangle
-/// with its lighting is a few hundred bytes).
+/// The triangles recent camera rays hit, in a few slots chosen by id: neighbouring pixels
+/// mostly hit the same triangles, in both rows of the blocks a thread shades (a single "last
+/// triangle" lost each one at every change of row), and an instance's triangle is made (lit,
+/// faced) only when it is needed. Lent, not copied (a triangle with its lighting is a few
+/// hundred bytes).
 ///
-/// The id and the triangle are apart, so that the triangle is made where it is kept (in a
+/// The ids and the triangles are apart, so that a triangle is made where it is kept (in a
 /// tuple with its id it was copied twice more, a few percent of a frame).
 #[derive(Default)]
-struct LastTriangle {
-    id: Option<TriangleId>,
-    triangle: Option<Triangle>,
+struct RecentTriangles {
+    ids: [Option<TriangleId>; RECENT],
+    triangles: [Option<Triangle>; RECENT],
 }
 
-impl LastTriangle {
+/// Slots in `RecentTriangles`.
+const RECENT: usize = 16;
+
+impl RecentTriangles {
     fn get(&mut self, frame: &Frame, id: TriangleId) -> Option<&Triangle> {
-        if self.id != Some(id) {
-            self.id = Some(id);
-            self.triangle = frame.triangle(id);
+        // Fibonacci hashing: neighbouring indices (a mesh's neighbouring triangles) spread
+        // over the slots, the top bits of the product choosing one.
+        let key = id.index ^ id.instance.rotate_left(16);
+        let slot = (key.wrapping_mul(0x9E37_79B1) >> (32 - RECENT.trailing_zeros())) as usize;
+        if self.ids[slot] != Some(id) {
+            self.ids[slot] = Some(id);
+            self.triangles[slot] = frame.triangle(id);
         }
-        self.triangle.as_ref()
+        self.triangles[slot].as_ref()
     }
 }
 
@@ -159,7 +168,7 @@ impl Tracer<'_> {
                 Some(hit) => hit,
                 None => self.scene.closest(Self::traced(&r)),
             }?;
-            let t = s.last.get(self.frame, hit.id)?;
+            let t = s.recent.get(self.frame, hit.id)?;
             let f = self.surface(t, at(&hit), r.direction, sampler, &s.rays, 0);
             // Over the last frame (no clear), the depth it left still tests.
             if !self.frame.cleared && f.depth >= depth_under {
@@ -230,5 +239,41 @@ impl Tracer<'_> {
             f.color = (f.color.xyz() * (1.0 - r) + seen.xyz() * r).extend(f.color.w);
         }
         f
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn recent_triangles_lend_each_id_its_own_triangle() {
+        // Triangles told apart by their first corner; ids asked in an order that revisits,
+        // and (more ids than slots) that makes them share slots.
+        let triangle = |i: u32| Triangle {
+            positions: [Vec3::new(i as f32, 0.0, 0.0), Vec3::X, Vec3::Y],
+            colors: [Vec4::ONE; 3],
+            secondary: [Vec3::ZERO; 3],
+            texcoords: [Vec2::ZERO; 3],
+            surface: 0,
+            sequence: 0,
+            camera: 0,
+            clip_w: [1.0; 3],
+            normals: [Vec3::Z; 3],
+            base_colors: [Vec4::ONE; 3],
+            lighting: glray_capture::frame::NO_LIGHTING,
+            back: false,
+        };
+        let frame = Frame { triangles: (0..100).map(triangle).collect(), ..Frame::default() };
+        let mut recent = RecentTriangles::default();
+        let flat = |index: u32| TriangleId { instance: TriangleId::FLAT, index };
+        for step in 0..1000u32 {
+            let index = (step * 37 + step / 7) % 100;
+            let got = recent.get(&frame, flat(index)).copied();
+            assert_eq!(got, Some(triangle(index)), "step {step}, triangle {index}");
+        }
+        // An id past the frame's triangles has none, and does not stay in its slot as one.
+        assert_eq!(recent.get(&frame, flat(100)), None);
+        assert_eq!(recent.get(&frame, flat(99)).copied(), Some(triangle(99)));
     }
 }
