@@ -470,17 +470,34 @@ fn node(records: &mut [Record], first: usize, centroids: Centroids) -> Made<'_> 
     (node, lens, parts)
 }
 
+/// How many of a node's children are leaves (their lengths in `lens`; 0: inner or none).
+fn leaf_children(lens: &[u8; WIDTH]) -> usize {
+    lens.iter().filter(|&&len| len > 0).count()
+}
+
+/// How many subtrees a walk can leave pending below a node with `children` children, the
+/// deepest of which leaves `below` (see `stack::most_pending`): all its children but the one
+/// it goes on with, and then what that one's subtree can leave.
+fn pending(children: usize, below: usize) -> usize {
+    children - 1 + below
+}
+
 /// Builds the subtree over `records` (see `node`) into `out` on this thread: the reference of
-/// its root, an inner node.
-fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut Out) -> u32 {
+/// its root (an inner node), and the most subtrees a walk of it can leave pending (worked out
+/// here, as the tree is made: a pass over the finished tree was 3% of a build).
+fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut Out) -> (u32, usize) {
     let (node, lens, parts) = node(records, first, centroids);
+    let children = leaf_children(&lens) + parts.len();
     let index = out.nodes.len();
     out.nodes.push(node);
     out.lens.push(lens);
+    let mut below = 0;
     for (lane, part, first, c) in parts {
-        out.nodes[index].child[lane] = subtree(part, first, c, out);
+        let (child, most) = subtree(part, first, c, out);
+        out.nodes[index].child[lane] = child;
+        below = below.max(most);
     }
-    index as u32
+    (index as u32, pending(children, below))
 }
 
 /// Builds the subtree over `records` (see `node`) into the tree all threads share: ranges of
@@ -494,33 +511,45 @@ fn shared_subtree(
     centroids: Centroids,
     whole: usize,
     shared: &Mutex<Out>,
-) -> u32 {
+) -> (u32, usize) {
     let lock = || shared.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
     if records.len() < whole {
         let mut local = Out::for_records(records.len());
-        let root = subtree(records, first, centroids, &mut local);
-        return lock().append(local, root);
+        let (root, most) = subtree(records, first, centroids, &mut local);
+        return (lock().append(local, root), most);
     }
     let (node, lens, parts) = node(records, first, centroids);
+    let children = leaf_children(&lens) + parts.len();
     let index = {
         let mut out = lock();
         out.nodes.push(node);
         out.lens.push(lens);
         out.nodes.len() - 1
     };
-    let children: Vec<(usize, u32)> = parts
+    let made: Vec<(usize, (u32, usize))> = parts
         .into_par_iter()
         .map(|(lane, part, first, c)| (lane, shared_subtree(part, first, c, whole, shared)))
         .collect();
     let mut out = lock();
-    for (lane, child) in children {
+    let mut below = 0;
+    for (lane, (child, most)) in made {
         out.nodes[index].child[lane] = child;
+        below = below.max(most);
     }
-    index as u32
+    (index as u32, pending(children, below))
 }
 
-/// The tree over `count` triangles whose corners `corners` gives: (nodes, leaves, root).
-pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> (Vec<Node>, Vec<Tri4>, u32) {
+/// A built tree: its nodes, leaves, root, and the most subtrees a walk of it can leave
+/// pending (`stack::most_pending`).
+pub(super) struct Built {
+    pub nodes: Vec<Node>,
+    pub leaves: Vec<Tri4>,
+    pub root: u32,
+    pub most_pending: usize,
+}
+
+/// The tree over `count` triangles whose corners `corners` gives.
+pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> Built {
     let record = |i: usize| {
         let [a, b, c] = corners(i);
         let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
@@ -536,11 +565,12 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     // min and max happen to drop a NaN in one operand order and keep it in the other).
     records.retain(|r| Vec3A::from_vec4(r.lo).is_finite() && Vec3A::from_vec4(r.hi).is_finite());
     if records.is_empty() {
-        return (Vec::new(), Vec::new(), EMPTY);
+        return Built { nodes: Vec::new(), leaves: Vec::new(), root: EMPTY, most_pending: 0 };
     }
     if records.len() as u32 <= LEAF_SIZE {
         let ids: Vec<u32> = records.iter().map(Record::index).collect();
-        return (Vec::new(), vec![Tri4::new(&ids, |i| corners(i as usize))], LEAF);
+        let leaves = vec![Tri4::new(&ids, |i| corners(i as usize))];
+        return Built { nodes: Vec::new(), leaves, root: LEAF, most_pending: 0 };
     }
     let centroids = Centroids::of(&records);
     let shared = Mutex::new(Out::for_records(records.len()));
@@ -549,30 +579,55 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     // uneven to keep two threads busy (8K there: -8% build); bigger meshes gain nothing from
     // more, smaller tasks (10M: +4%).
     let whole = (records.len() / 16).clamp(1 << 13, PARALLEL);
-    let root = shared_subtree(&mut records, 0, centroids, whole, &shared);
+    let (root, most_pending) = shared_subtree(&mut records, 0, centroids, whole, &shared);
     let mut out = shared.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner());
     // The leaves, numbered in node order, each as the triangles of its records; the records
-    // go before the leaves are made (peak memory).
-    let mut ids: Vec<([u32; 4], u8)> = Vec::with_capacity(out.lens.iter().flatten().filter(|&&len| len > 0).count());
-    for (node, lens) in out.nodes.iter_mut().zip(&out.lens) {
-        for lane in 0..WIDTH {
-            if lens[lane] > 0 {
-                let first = (node.child[lane] & !LEAF) as usize;
-                let mut leaf = [0u32; 4];
-                for (k, r) in records[first..first + lens[lane] as usize].iter().enumerate() {
-                    leaf[k] = r.index();
+    // go before the leaves are made (peak memory). In parallel over runs of nodes, each run
+    // numbering on from its first node's first leaf (one thread numbering them all was 4-5%
+    // of a build), into vectors of the exact length (collecting a parallel iterator's pieces
+    // and joining them raised the 10M peak by 55 MB).
+    let firsts: Vec<u32> = out
+        .lens
+        .iter()
+        .scan(0u32, |next, lens| {
+            let first = *next;
+            *next += leaf_children(lens) as u32;
+            Some(first)
+        })
+        .collect();
+    let total = out.lens.last().map_or(0, leaf_children) + firsts.last().copied().unwrap_or(0) as usize;
+    let (mut ids, mut counts) = (vec![[0u32; 4]; total], vec![0u8; total]);
+    const RUN: usize = 1024;
+    let mut runs = Vec::with_capacity(out.nodes.len().div_ceil(RUN));
+    let (mut ids_left, mut counts_left) = (&mut ids[..], &mut counts[..]);
+    for start in (0..out.nodes.len()).step_by(RUN) {
+        let end = firsts.get(start + RUN).map_or(total, |&f| f as usize);
+        let (run_ids, rest_ids) = std::mem::take(&mut ids_left).split_at_mut(end - firsts[start] as usize);
+        let (run_counts, rest_counts) = std::mem::take(&mut counts_left).split_at_mut(end - firsts[start] as usize);
+        runs.push((firsts[start], run_ids, run_counts));
+        (ids_left, counts_left) = (rest_ids, rest_counts);
+    }
+    out.nodes.par_chunks_mut(RUN).zip(out.lens.par_chunks(RUN)).zip(runs).for_each(|((nodes, lens), run)| {
+        let (first, ids, counts) = run;
+        let mut k = 0;
+        for (node, lens) in nodes.iter_mut().zip(lens) {
+            for lane in (0..WIDTH).filter(|&lane| lens[lane] > 0) {
+                let start = (node.child[lane] & !LEAF) as usize;
+                for (slot, r) in ids[k].iter_mut().zip(&records[start..start + lens[lane] as usize]) {
+                    *slot = r.index();
                 }
-                node.child[lane] = LEAF | ids.len() as u32;
-                ids.push((leaf, lens[lane]));
+                counts[k] = lens[lane];
+                node.child[lane] = LEAF | (first + k as u32);
+                k += 1;
             }
         }
-    }
+    });
     drop(records);
     // In parallel from a few thousand leaves on (each reads its triangles' corners from the
     // mesh: 7% of a 98K build, whose 27K leaves were below `PARALLEL`).
-    let make = |(leaf, n): &([u32; 4], u8)| Tri4::new(&leaf[..*n as usize], |i| corners(i as usize));
-    let leaves: Vec<Tri4> = ids.par_iter().with_min_len(2048).map(make).collect();
-    (out.nodes, leaves, root)
+    let make = |(leaf, &n): (&[u32; 4], &u8)| Tri4::new(&leaf[..n as usize], |i| corners(i as usize));
+    let leaves: Vec<Tri4> = ids.par_iter().zip(&counts).with_min_len(2048).map(make).collect();
+    Built { nodes: out.nodes, leaves, root, most_pending }
 }
 
 #[cfg(test)]
@@ -595,6 +650,18 @@ mod tests {
                 Record { lo: lo.extend(f32::from_bits(i as u32)), hi: hi.extend(0.0) }
             })
             .collect()
+    }
+
+    #[test]
+    fn the_build_counts_the_pending_subtrees_a_walk_of_its_tree_can_leave() {
+        // Serial (under PARALLEL records) and parallel builds, and a tree of one leaf.
+        for n in [3, 1000, 100_000] {
+            let tris = super::super::tests::soup(n);
+            let built = build(tris.len(), |i| tris[i]);
+            let walked = super::super::stack::most_pending(&built.nodes, built.root);
+            assert_eq!(built.most_pending, walked, "{n} triangles");
+            assert!(n < 1000 || walked > 10, "{n} triangles: a tree that deep leaves more pending");
+        }
     }
 
     #[test]

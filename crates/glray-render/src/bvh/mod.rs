@@ -287,16 +287,15 @@ pub struct TriBvh {
     nodes: Vec<Node>,
     leaves: Vec<Tri4>,
     root: u32,
-    /// Whether a walk's pending subtrees always fit a `Fixed` stack (`stack::most_pending`).
+    /// Whether a walk's pending subtrees always fit a `Fixed` stack (`build::Built::most_pending`).
     shallow: bool,
 }
 
 impl TriBvh {
     /// The tree over `count` triangles, whose corners `corners` gives by index.
     pub fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> TriBvh {
-        let (nodes, leaves, root) = build::build(count, corners);
-        let shallow = stack::most_pending(&nodes, root) <= stack::FIXED;
-        TriBvh { nodes, leaves, root, shallow }
+        let build::Built { nodes, leaves, root, most_pending } = build::build(count, corners);
+        TriBvh { nodes, leaves, root, shallow: most_pending <= stack::FIXED }
     }
 
     /// Whether the tree holds no triangle.

@@ -1,12 +1,13 @@
 //! The stacks a walk keeps the subtrees it will visit later on. A walk pushes all but one of
 //! the children a ray meets at each node, so a tree bounds how many entries can ever be
-//! pending at once (`most_pending`); every tree but a pathological one fits `Fixed`, a plain
-//! array whose length stays in a register, and only the others take `Spilling`, which grows
-//! into a Vec. (With one spilling stack for all, its length lived in memory and its spill was
+//! pending at once (`most_pending`, which the build works out as it goes); every tree but a
+//! pathological one fits `Fixed`, a plain array whose length stays in a register, and only
+//! the others take `Spilling`, which grows into a Vec. (With one spilling stack for all, its length lived in memory and its spill was
 //! asked at every pop: 17% of the any-hit walk's instructions, ~5% of an AO pass.)
 
 use std::mem::MaybeUninit;
 
+#[cfg(test)]
 use super::{Node, EMPTY, LEAF};
 
 /// What a walk needs of its stack.
@@ -79,7 +80,10 @@ impl<T: Copy> Pending<T> for Spilling<T> {
 }
 
 /// The most entries a walk of the tree from `root` can have pending: over every path from the
-/// root, the children left behind at each node (all met but one, at most all but one).
+/// root, the children left behind at each node (all met but one, at most all but one). The
+/// build works this out as it makes the tree (`build::Built::most_pending`); this walk of the
+/// finished tree is what the tests hold it to.
+#[cfg(test)]
 pub(super) fn most_pending(nodes: &[Node], root: u32) -> usize {
     let mut most = 0;
     let mut todo = vec![(root, 0usize)];
