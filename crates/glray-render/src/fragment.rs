@@ -188,11 +188,11 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// An unlit, untextured triangle of the frame's first surface and camera.
-    fn plain(positions: [Vec3; 3], clip_w: [f32; 3]) -> Triangle {
+    pub(crate) fn plain(positions: [Vec3; 3], clip_w: [f32; 3]) -> Triangle {
         Triangle {
             positions,
             colors: [Vec4::ZERO; 3],

@@ -250,20 +250,8 @@ mod tests {
     fn recent_triangles_lend_each_id_its_own_triangle() {
         // Triangles told apart by their first corner; ids asked in an order that revisits,
         // and (more ids than slots) that makes them share slots.
-        let triangle = |i: u32| Triangle {
-            positions: [Vec3::new(i as f32, 0.0, 0.0), Vec3::X, Vec3::Y],
-            colors: [Vec4::ONE; 3],
-            secondary: [Vec3::ZERO; 3],
-            texcoords: [Vec2::ZERO; 3],
-            surface: 0,
-            sequence: 0,
-            camera: 0,
-            clip_w: [1.0; 3],
-            normals: [Vec3::Z; 3],
-            base_colors: [Vec4::ONE; 3],
-            lighting: glray_capture::frame::NO_LIGHTING,
-            back: false,
-        };
+        let triangle =
+            |i: u32| crate::fragment::tests::plain([Vec3::new(i as f32, 0.0, 0.0), Vec3::X, Vec3::Y], [1.0; 3]);
         let frame = Frame { triangles: (0..100).map(triangle).collect(), ..Frame::default() };
         let mut recent = RecentTriangles::default();
         let flat = |index: u32| TriangleId { instance: TriangleId::FLAT, index };

@@ -2,8 +2,9 @@
 //! the children a ray meets at each node, so a tree bounds how many entries can ever be
 //! pending at once (`most_pending`, which the build works out as it goes); every tree but a
 //! pathological one fits `Fixed`, a plain array whose length stays in a register, and only
-//! the others take `Spilling`, which grows into a Vec. (With one spilling stack for all, its length lived in memory and its spill was
-//! asked at every pop: 17% of the any-hit walk's instructions, ~5% of an AO pass.)
+//! the others take `Spilling`, which grows into a Vec. (With one spilling stack for all, its
+//! length lived in memory and its spill was asked at every pop: 17% of the any-hit walk's
+//! instructions, ~5% of an AO pass.)
 
 use std::mem::MaybeUninit;
 
