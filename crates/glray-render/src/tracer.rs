@@ -260,7 +260,7 @@ mod tests {
             let got = recent.get(&frame, flat(index)).copied();
             assert_eq!(got, Some(triangle(index)), "step {step}, triangle {index}");
         }
-        // An id past the frame's triangles has none, and does not stay in its slot as one.
+        // An id past the frame's triangles has none; the next id asked still gets its own.
         assert_eq!(recent.get(&frame, flat(100)), None);
         assert_eq!(recent.get(&frame, flat(99)).copied(), Some(triangle(99)));
     }
