@@ -5,6 +5,7 @@ pub mod config;
 pub mod gltypes;
 pub mod image;
 pub mod log;
+pub mod pages;
 pub mod prefetch;
 pub mod reallib;
 pub mod trace;

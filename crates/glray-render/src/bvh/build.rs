@@ -9,6 +9,7 @@
 use std::sync::Mutex;
 
 use glam::{BVec3A, Vec3, Vec3A, Vec4};
+use glray_core::pages;
 use rayon::prelude::*;
 
 use super::{Node, Tri4, EMPTY, LEAF, LEAF_SIZE, WIDTH};
@@ -366,7 +367,7 @@ impl Out {
     /// nodes as they grow. Pages reserved and never written cost no memory.
     fn for_records(records: usize) -> Out {
         let nodes = records / 8 + 1;
-        Out { nodes: Vec::with_capacity(nodes), lens: Vec::with_capacity(nodes) }
+        Out { nodes: pages::huge_vec(nodes), lens: Vec::with_capacity(nodes) }
     }
 
     /// Appends a subtree built elsewhere; returns its root's reference here.
@@ -556,7 +557,9 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
         Record { lo: lo.extend(f32::from_bits(i as u32)), hi: hi.extend(0.0) }
     };
     let mut records: Vec<Record> = if count >= PARALLEL {
-        (0..count).into_par_iter().map(record).collect()
+        let mut records = pages::huge_vec(count);
+        (0..count).into_par_iter().map(record).collect_into_vec(&mut records);
+        records
     } else {
         (0..count).map(record).collect()
     };
@@ -627,7 +630,8 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     // In parallel from a few thousand leaves on (each reads its triangles' corners from the
     // mesh: 7% of a 98K build, whose 27K leaves were below `PARALLEL`).
     let make = |(leaf, &n): (&[u32; 4], &u8)| Tri4::new(&leaf[..n as usize], |i| corners(i as usize));
-    let leaves: Vec<Tri4> = ids.par_iter().zip(&counts).with_min_len(2048).map(make).collect();
+    let mut leaves = pages::huge_vec(total);
+    ids.par_iter().zip(&counts).with_min_len(2048).map(make).collect_into_vec(&mut leaves);
     Built { nodes: out.nodes, leaves, root, most_pending }
 }
 
