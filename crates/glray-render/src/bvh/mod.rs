@@ -131,6 +131,9 @@ impl Tri4 {
     }
 }
 
+/// A tree of more bytes than this is `far`: most of it is out of the caches.
+const FAR: usize = 32 << 20;
+
 impl TriBvh {
     /// Starts loading child `c` (a node or a leaf) that the walk will visit later, so that its
     /// misses overlap the subtree visited first (a deep 10M tree misses on most nodes).
@@ -289,13 +292,16 @@ pub struct TriBvh {
     root: u32,
     /// Whether a walk's pending subtrees always fit a `Fixed` stack (`build::Built::most_pending`).
     shallow: bool,
+    /// Whether the tree is bigger than the caches hold (`FAR`): how a bundle prefetches.
+    far: bool,
 }
 
 impl TriBvh {
     /// The tree over `count` triangles, whose corners `corners` gives by index.
     pub fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> TriBvh {
         let build::Built { nodes, leaves, root, most_pending } = build::build(count, corners);
-        TriBvh { nodes, leaves, root, shallow: most_pending <= stack::FIXED }
+        let bytes = nodes.len() * size_of::<Node>() + leaves.len() * size_of::<Tri4>();
+        TriBvh { nodes, leaves, root, shallow: most_pending <= stack::FIXED, far: bytes > FAR }
     }
 
     /// Whether the tree holds no triangle.
