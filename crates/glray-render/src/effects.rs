@@ -4,7 +4,7 @@
 use glam::{DVec3, Vec3};
 use glray_capture::lighting::Light;
 
-use crate::sampling::{cosine_local, Hemisphere, Sampler};
+use crate::sampling::{Hemisphere, Sampler, Strata};
 use crate::scene::Scene;
 use obvhs::ray::Ray;
 
@@ -84,13 +84,14 @@ pub struct Origin {
 }
 
 /// The fraction of the hemisphere above `at` that geometry closer than `distance` hides, from
-/// `count` cosine-weighted rays (translucent surfaces hide their alpha's share).
+/// `count` cosine-weighted rays, stratified (translucent surfaces hide their alpha's share).
 pub fn occlusion(scene: &Scene, at: &Origin, count: u32, distance: f32, eps: f32, s: &mut Sampler) -> f32 {
     if count == 0 {
         return 0.0;
     }
     let around = Hemisphere::around(at.n);
-    scene.hidden(at, &around, count, distance, eps, || cosine_local(s.next2())) / count as f32
+    let mut strata = Strata::new(count, s.next2());
+    scene.hidden(at, &around, count, distance, eps, || strata.direction()) / count as f32
 }
 
 /// How much of `light` reaches the point (0 to 1).

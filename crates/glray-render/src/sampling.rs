@@ -98,6 +98,92 @@ pub fn cosine_local(u: Vec2) -> Vec3 {
     Vec3::new(r * cos, r * sin, z)
 }
 
+/// A point's `count` cosine-weighted directions about +z (`cosine_local` of each), stratified:
+/// sample i takes cell i of a side x side grid over the unit square (side = ceil(sqrt(count)),
+/// as `stratified`), at the cell's centre shifted by one random offset for the point, wrapping
+/// around (Cranley-Patterson rotation). Each direction is still cosine-distributed, and
+/// together they cover the hemisphere evenly (less noise than independent directions). The
+/// grid's columns share a radius and its rows an angle: a point's 16 directions take four
+/// sines and cosines and eight square roots, where independent ones took sixteen and
+/// thirty-two (`sincosf` was 4% of an AO pass's samples).
+pub struct Strata {
+    count: u32,
+    side: u32,
+    offset: Vec2,
+    /// Per column (when side <= `TABLE`): the radius on the disk and the height, sqrt(u) and
+    /// sqrt(1 - u); per row: the angle's cosine and sine.
+    r: [f32; TABLE],
+    z: [f32; TABLE],
+    cos: [f32; TABLE],
+    sin: [f32; TABLE],
+    next: u32,
+}
+
+/// Grid sides up to this (counts up to its square) are worked out per row and column.
+const TABLE: usize = 16;
+
+impl Strata {
+    /// The directions of one point, its offset `u` (uniform in the unit square).
+    pub fn new(count: u32, u: Vec2) -> Strata {
+        let side = (count as f32).sqrt().ceil().max(1.0) as u32;
+        let mut s = Strata {
+            count,
+            side,
+            offset: u,
+            r: [0.0; TABLE],
+            z: [0.0; TABLE],
+            cos: [0.0; TABLE],
+            sin: [0.0; TABLE],
+            next: 0,
+        };
+        if side as usize <= TABLE {
+            for c in 0..side as usize {
+                let (x, angle) = (s.column(c as u32), s.row(c as u32));
+                (s.r[c], s.z[c]) = (x.sqrt(), (1.0 - x).max(0.0).sqrt());
+                (s.sin[c], s.cos[c]) = angle.sin_cos();
+            }
+        }
+        s
+    }
+
+    /// Column `c`'s u.x: its centre shifted, wrapped into [0, 1).
+    fn column(&self, c: u32) -> f32 {
+        let x = (c as f32 + 0.5) / self.side as f32 + self.offset.x;
+        if x >= 1.0 {
+            x - 1.0
+        } else {
+            x
+        }
+    }
+
+    /// Row `c`'s angle (2 pi u.y; the wrap of u.y is a whole turn).
+    fn row(&self, c: u32) -> f32 {
+        std::f32::consts::TAU * ((c as f32 + 0.5) / self.side as f32 + self.offset.y)
+    }
+
+    /// The next of the point's directions (after `count`, they start over).
+    #[inline]
+    pub fn direction(&mut self) -> Vec3 {
+        let i = self.next % self.count.max(1);
+        self.next += 1;
+        let (cx, cy) = (i % self.side, (i / self.side) % self.side);
+        if self.side as usize <= TABLE {
+            let (cx, cy) = (cx as usize, cy as usize);
+            return Vec3::new(self.r[cx] * self.cos[cy], self.r[cx] * self.sin[cy], self.z[cx]);
+        }
+        self.worked(cx, cy)
+    }
+
+    /// The direction of cell (cx, cy), worked out alone (what the tables hold, for sides
+    /// beyond them).
+    fn worked(&self, cx: u32, cy: u32) -> Vec3 {
+        let (x, angle) = (self.column(cx), self.row(cy));
+        let (sin, cos) = angle.sin_cos();
+        let r = x.sqrt();
+        Vec3::new(r * cos, r * sin, (1.0 - x).max(0.0).sqrt())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -136,5 +222,45 @@ mod tests {
             grid,
             vec![Vec2::new(0.25, 0.25), Vec2::new(0.75, 0.25), Vec2::new(0.25, 0.75), Vec2::new(0.75, 0.75)]
         );
+    }
+
+    #[test]
+    fn a_points_strata_are_cosine_weighted_and_take_every_cell_once() {
+        // Over many points (random offsets), directions are cosine-weighted: unit, above the
+        // disk, E[cos] = 2/3; with 16 rays and 300 (past the tables: worked out per ray).
+        let mut s = Sampler::new(&[11]);
+        for count in [16u32, 300] {
+            let (mut mean_cos, mut n) = (0.0f64, 0);
+            for _ in 0..2000 {
+                let mut strata = Strata::new(count, s.next2());
+                for _ in 0..count {
+                    let d = strata.direction();
+                    assert!(d.z >= 0.0 && (d.length() - 1.0).abs() < 1e-5, "{d}");
+                    mean_cos += d.z as f64;
+                    n += 1;
+                }
+            }
+            let mean_cos = mean_cos / n as f64;
+            assert!((mean_cos - 2.0 / 3.0).abs() < 0.005, "{count} rays: {mean_cos}");
+        }
+        // One point's 16 directions, back on the unit square (u.x = r^2, u.y = angle / 2 pi),
+        // fall one in each cell of the 4 x 4 grid shifted by the point's offset.
+        let offset = Vec2::new(0.37, 0.81);
+        let mut strata = Strata::new(16, offset);
+        let mut cells = [0u32; 16];
+        for _ in 0..16 {
+            let d = strata.direction();
+            let u = Vec2::new(d.x * d.x + d.y * d.y, d.y.atan2(d.x) / std::f32::consts::TAU);
+            let back = (u - offset + Vec2::splat(2.0)).fract();
+            let (cx, cy) = ((back.x * 4.0).floor() as usize % 4, (back.y * 4.0).floor() as usize % 4);
+            cells[cy * 4 + cx] += 1;
+        }
+        assert_eq!(cells, [1; 16]);
+        // The tables give what each cell's direction worked out alone gives, cell by cell.
+        let mut strata = Strata::new(12, offset);
+        for i in 0..12 {
+            let d = strata.direction();
+            assert_eq!(d, strata.worked(i % 4, i / 4), "sample {i}");
+        }
     }
 }
