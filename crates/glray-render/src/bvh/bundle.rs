@@ -35,7 +35,7 @@ impl TriBvh {
     /// What the bundle's walk does on reaching `node`: in a `far` tree, starts loading all
     /// its children at once, before their boxes are tested, so that the child visited next
     /// misses while the sixteen rays' tests run rather than after them (a 10M tree's AO pass
-    /// -19%). In a tree the caches hold that is work for nothing (98K: +7-10%), and only the
+    /// -17%). In a tree the caches hold that is work for nothing (98K: +7-10%), and only the
     /// children pushed for later are loaded (`pushed`). The camera rays' packet walk loses
     /// with it even at 1M (+8%): a coherent packet meets few of a node's children, and the
     /// others' loads only take bandwidth.
