@@ -39,9 +39,19 @@ impl Sampler {
 
 /// Sample `i` of `n` stratified over the unit square (a jittered grid), with `u` the jitter.
 pub fn stratified(i: u32, n: u32, u: Vec2) -> Vec2 {
-    let side = (n as f32).sqrt().ceil().max(1.0) as u32;
-    let (cx, cy) = (i % side, (i / side) % side);
+    let side = grid_side(n);
+    let (cx, cy) = grid_cell(i, side);
     Vec2::new((cx as f32 + u.x) / side as f32, (cy as f32 + u.y) / side as f32)
+}
+
+/// The side of the square grid `n` stratified samples share (the least that holds them all).
+fn grid_side(n: u32) -> u32 {
+    (n as f32).sqrt().ceil().max(1.0) as u32
+}
+
+/// Sample `i`'s cell (column, row) in a grid of `side` x `side`, row by row.
+fn grid_cell(i: u32, side: u32) -> (u32, u32) {
+    (i % side, (i / side) % side)
 }
 
 /// Two unit vectors that make an orthonormal basis with unit `n` (Duff et al. 2017).
@@ -125,7 +135,7 @@ const TABLE: usize = 16;
 impl Strata {
     /// The directions of one point, its offset `u` (uniform in the unit square).
     pub fn new(count: u32, u: Vec2) -> Strata {
-        let side = (count as f32).sqrt().ceil().max(1.0) as u32;
+        let side = grid_side(count);
         let mut s = Strata {
             count,
             side,
@@ -166,7 +176,7 @@ impl Strata {
     pub fn direction(&mut self) -> Vec3 {
         let i = self.next % self.count.max(1);
         self.next += 1;
-        let (cx, cy) = (i % self.side, (i / self.side) % self.side);
+        let (cx, cy) = grid_cell(i, self.side);
         if self.side as usize <= TABLE {
             let (cx, cy) = (cx as usize, cy as usize);
             return Vec3::new(self.r[cx] * self.cos[cy], self.r[cx] * self.sin[cy], self.z[cx]);
