@@ -266,24 +266,14 @@ impl TriBvh {
 
 #[cfg(test)]
 mod tests {
-    use glam::{Vec3, Vec3A};
+    use glam::Vec3A;
 
+    use super::super::tests::random;
     use super::*;
-    use crate::sampling::hash;
 
-    fn random(seed: u32) -> f32 {
-        hash(&[seed]) as f32 / u32::MAX as f32
-    }
-
+    /// The tree over the shared test soup of small triangles.
     fn soup() -> TriBvh {
-        let tris: Vec<[Vec3; 3]> = (0..3000)
-            .map(|i| {
-                let c = Vec3::new(random(i * 9), random(i * 9 + 1), random(i * 9 + 2));
-                [1, 2, 3].map(|k| {
-                    c + 0.04 * Vec3::new(random(i * 9 + 3 * k), random(i * 9 + 3 * k + 1), random(i * 9 + 3 * k + 2))
-                })
-            })
-            .collect();
+        let tris = super::super::tests::soup(3000);
         TriBvh::build(tris.len(), |i| tris[i])
     }
 
