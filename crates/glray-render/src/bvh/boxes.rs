@@ -6,7 +6,8 @@
 
 use glam::Vec4;
 
-use super::{Node, Prepared, GROUPS, WIDTH};
+use super::node::{Node, Planes};
+use super::{Prepared, GROUPS, WIDTH};
 
 /// A ray made ready to meet a node's boxes.
 pub(super) trait Boxes {
@@ -14,13 +15,14 @@ pub(super) trait Boxes {
     /// (a bundle's) have in common in their slab tests, worked out once for all of them.
     type Relative;
     fn new(ray: &Prepared) -> Self;
-    /// Which of the node's boxes the ray meets within [tmin, tmax] (bit per child), and where
-    /// it enters each.
+    /// Which of the node's boxes the ray meets within [tmin, tmax] (bit per child; unused
+    /// slots never), and where it enters each.
     fn hit(&self, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]);
     /// The node's planes less this ray's origin.
     fn relative(&self, node: &Node) -> Self::Relative;
     /// `hit`'s mask, from the node's planes less this ray's origin (`relative` of a ray from
-    /// the same point): the same operations on the same values, so the same boxes.
+    /// the same point): the same operations on the same values, so the same boxes (unused
+    /// slots included: the caller masks them with `Node::occupied`).
     fn hit_relative(&self, relative: &Self::Relative, tmax: f32) -> u32;
 }
 
@@ -38,7 +40,7 @@ pub(super) struct Sse {
 }
 
 impl Boxes for Sse {
-    type Relative = [[[Vec4; GROUPS]; 3]; 2];
+    type Relative = Planes;
 
     #[inline(always)]
     fn new(r: &Prepared) -> Sse {
@@ -47,7 +49,8 @@ impl Boxes for Sse {
 
     #[inline(always)]
     fn relative(&self, node: &Node) -> Self::Relative {
-        std::array::from_fn(|side| std::array::from_fn(|axis| node.bounds[side][axis].map(|b| b - self.origin[axis])))
+        let planes = node.planes();
+        std::array::from_fn(|side| std::array::from_fn(|axis| planes[side][axis].map(|b| b - self.origin[axis])))
     }
 
     #[inline(always)]
@@ -70,8 +73,9 @@ impl Boxes for Sse {
     fn hit(&self, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
         let mut mask = 0;
         let mut entry = [0.0; WIDTH];
+        let planes = node.planes();
         for g in 0..GROUPS {
-            let slab = |axis: usize, side: usize| (node.bounds[side][axis][g] - self.origin[axis]) * self.inverse[axis];
+            let slab = |axis: usize, side: usize| (planes[side][axis][g] - self.origin[axis]) * self.inverse[axis];
             let near = |axis: usize| slab(axis, self.near[axis]);
             let far = |axis: usize| slab(axis, 1 - self.near[axis]);
             let tnear = near(0).max(near(1)).max(near(2).max(self.tmin));
@@ -79,12 +83,12 @@ impl Boxes for Sse {
             mask |= tnear.cmple(tfar).bitmask() << (4 * g);
             entry[4 * g..4 * g + 4].copy_from_slice(&tnear.to_array());
         }
-        (mask, entry)
+        (mask & node.occupied, entry)
     }
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(super) use avx::{available as avx_available, Avx};
+pub(super) use avx::{available as avx_available, plane, Avx};
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
@@ -139,10 +143,7 @@ mod avx {
     #[inline]
     #[target_feature(enable = "avx")]
     unsafe fn relative(a: &Avx, node: &Node) -> [[__m256; 3]; 2] {
-        // SAFETY: as in `hit`.
-        let less = |side: usize, axis: usize| unsafe {
-            _mm256_sub_ps(_mm256_load_ps(node.bounds[side][axis].as_ptr().cast()), a.origin[axis])
-        };
+        let less = |side: usize, axis: usize| _mm256_sub_ps(plane(node, side, axis), a.origin[axis]);
         // Written out: `array::from_fn`'s closures would be compiled without AVX.
         [[less(0, 0), less(0, 1), less(0, 2)], [less(1, 0), less(1, 1), less(1, 2)]]
     }
@@ -171,10 +172,9 @@ mod avx {
     #[inline]
     #[target_feature(enable = "avx")]
     unsafe fn hit(a: &Avx, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
-        // SAFETY: a node is 64-byte aligned and each side's axis is 32 bytes at a multiple of 32.
-        let bound = |side: usize, axis: usize| unsafe { _mm256_load_ps(node.bounds[side][axis].as_ptr().cast()) };
-        let slab =
-            |axis: usize, side: usize| _mm256_mul_ps(_mm256_sub_ps(bound(side, axis), a.origin[axis]), a.inverse[axis]);
+        let slab = |axis: usize, side: usize| {
+            _mm256_mul_ps(_mm256_sub_ps(plane(node, side, axis), a.origin[axis]), a.inverse[axis])
+        };
         let near = |axis: usize| slab(axis, a.near[axis]);
         let far = |axis: usize| slab(axis, 1 - a.near[axis]);
         // glam's max and min are _mm_max_ps(self, other): the same operand order here.
@@ -185,6 +185,21 @@ mod avx {
         let mut entry = [0.0f32; WIDTH];
         // SAFETY: `entry` holds eight floats; the store is unaligned.
         unsafe { _mm256_storeu_ps(entry.as_mut_ptr(), tnear) };
-        (mask, entry)
+        (mask & node.occupied, entry)
+    }
+
+    /// Side `side` of the eight children's boxes along `axis`, decoded as `Node::bound` does
+    /// it (the step count converted exactly, times a power of two, plus the origin: the same
+    /// operations, so the same floats). AVX has no 256-bit integer widening (AVX2 does): two
+    /// 128-bit ones (SSE4.1, which every AVX CPU has).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub unsafe fn plane(node: &Node, side: usize, axis: usize) -> __m256 {
+        let q = node.steps(side, axis);
+        let lo = _mm_cvtepu8_epi32(_mm_cvtsi32_si128(i32::from_le_bytes([q[0], q[1], q[2], q[3]])));
+        let hi = _mm_cvtepu8_epi32(_mm_cvtsi32_si128(i32::from_le_bytes([q[4], q[5], q[6], q[7]])));
+        let steps = _mm256_cvtepi32_ps(_mm256_set_m128i(hi, lo));
+        let step = _mm256_set1_ps(node.step[axis]);
+        _mm256_add_ps(_mm256_set1_ps(node.origin[axis]), _mm256_mul_ps(steps, step))
     }
 }

@@ -12,7 +12,8 @@ use glam::{BVec3A, Vec3, Vec3A, Vec4};
 use glray_core::pages;
 use rayon::prelude::*;
 
-use super::{Node, Tri4, EMPTY, LEAF, LEAF_SIZE, WIDTH};
+use super::node::Node;
+use super::{Tri4, EMPTY, LEAF, LEAF_SIZE, WIDTH};
 
 /// A triangle's box; `lo.w` holds the triangle's index (as bits).
 #[derive(Clone, Copy)]
@@ -446,10 +447,13 @@ fn node(records: &mut [Record], first: usize, centroids: Centroids) -> Made<'_> 
         kids[k] = (s, s + mid, lb, lc);
         kids.insert(k + 1, (s + mid, e, rb, rc));
     }
-    let mut node = Node::EMPTY;
+    let mut boxes = [(Vec3A::ZERO, Vec3A::ZERO); WIDTH];
+    for (b, k) in boxes.iter_mut().zip(&kids) {
+        *b = (k.2.lo, k.2.hi);
+    }
+    let mut node = Node::new(&boxes[..kids.len()]);
     let mut lens = [0u8; WIDTH];
-    for (lane, &(s, e, b, _)) in kids.iter().enumerate() {
-        node.set_bounds(lane, b.lo, b.hi);
+    for (lane, &(s, e, _, _)) in kids.iter().enumerate() {
         if (e - s) as u32 <= LEAF_SIZE {
             node.child[lane] = LEAF | (first + s) as u32;
             lens[lane] = (e - s) as u8;

@@ -124,6 +124,8 @@ impl TriBvh {
                         rows[r / 8] |= (met as u64) << (8 * (r % 8));
                         any |= met;
                     }
+                    // Unused slots' boxes are not boxes (`Node::occupied`).
+                    any &= node.occupied;
                     if any != 0 {
                         // Column k: the rays that meet child k.
                         let columns = rows.map(transpose);

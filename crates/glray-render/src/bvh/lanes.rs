@@ -8,6 +8,8 @@ use std::ops::{Add, BitAnd, Div, Mul, Sub};
 
 use glam::{BVec4A, Vec4};
 
+use super::node::{Node, Planes};
+
 /// `N` floats, one per lane.
 pub(super) trait Lanes<const N: usize>:
     Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
@@ -29,6 +31,10 @@ pub(super) trait Lanes<const N: usize>:
     fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
     /// Bit k set where lane k of `mask` is.
     fn bitmask(mask: Self::Mask) -> u32;
+    /// A node's boxes decoded (`Node::planes`), with these lanes' instructions.
+    fn planes(node: &Node) -> Planes {
+        node.planes()
+    }
 }
 
 impl Lanes<4> for Vec4 {
@@ -103,7 +109,8 @@ mod avx {
     use std::arch::x86_64::*;
     use std::ops::{Add, BitAnd, Div, Mul, Sub};
 
-    use super::Lanes;
+    use super::super::boxes::plane;
+    use super::{Lanes, Node, Planes};
 
     /// Eight lanes of AVX. Made only inside walks compiled for AVX and entered after checking
     /// that the CPU has it (`boxes::avx_available`): every operation below assumes so.
@@ -218,6 +225,19 @@ mod avx {
         fn bitmask(mask: M8) -> u32 {
             // SAFETY: see `F8`.
             unsafe { _mm256_movemask_ps(mask.0) as u32 }
+        }
+
+        /// Eight children's planes a vector at a time (the scalar decode's floats).
+        #[inline(always)]
+        fn planes(node: &Node) -> Planes {
+            let mut planes = [[[glam::Vec4::ZERO; 2]; 3]; 2];
+            for (side, axes) in planes.iter_mut().enumerate() {
+                for (axis, lanes) in axes.iter_mut().enumerate() {
+                    // SAFETY: see `F8`; `lanes` is eight floats in a row.
+                    unsafe { _mm256_storeu_ps(lanes.as_mut_ptr().cast(), plane(node, side, axis)) };
+                }
+            }
+            planes
         }
     }
 }

@@ -1,19 +1,22 @@
 //! glray's own BVH over triangles, the accelerator every ray of a frame goes through.
 //!
-//! `WIDTH` (eight) children per node, their boxes stored axis by axis so that one SIMD test
+//! `WIDTH` (eight) children per node, their boxes quantized to 8-bit steps (`node`: 128
+//! bytes, half the lines a float node takes) and decoded axis by axis so that one SIMD test
 //! (glam's `Vec4`: SSE on x86-64, NEON on aarch64, plain floats elsewhere: the target's
 //! baseline, since the library runs on whatever node loads it) meets four at once, or all
 //! eight with AVX where the CPU has it (chosen at run time, the same hits bit for bit:
 //! `boxes`, `lanes`); eight rather than four halves the tree's depth, and so the dependent
 //! misses of a walk (docs/performance.md). Leaves of up to four triangles, stored the same way
-//! (corner and edges precomputed) and tested at once. `build` makes it (binned SAH). Why not obvhs's CWBVH: its generic single-ray traversal was half of
-//! every frame's profile, 4x slower per ray than Embree's, and its PLOC build 3-4x slower than
-//! Embree's with 3x the memory (docs/performance.md).
+//! (corner and edges precomputed) and tested at once. `build` makes it (binned SAH). Why not
+//! obvhs's CWBVH: its generic single-ray traversal was half of every frame's profile, 4x
+//! slower per ray than Embree's, and its PLOC build 3-4x slower than Embree's with 3x the
+//! memory (docs/performance.md).
 
 mod boxes;
 mod build;
 mod bundle;
 mod lanes;
+mod node;
 mod packet;
 mod stack;
 
@@ -25,6 +28,7 @@ pub use bundle::BUNDLE;
 
 use boxes::{Boxes, Sse};
 use lanes::Lanes;
+use node::Node;
 use stack::{Fixed, Pending, Spilling};
 
 /// obvhs's `Ray::new`, the same ray bit for bit, with the three reciprocals of the direction
@@ -57,36 +61,6 @@ const GROUPS: usize = WIDTH / 4;
 fn lane(v: &Vec4, k: usize) -> f32 {
     let lanes: &[f32; 4] = v.as_ref();
     lanes[k]
-}
-
-/// `WIDTH` children: `bounds[0][axis]` their minimum corners along `axis` and `bounds[1][axis]`
-/// their maximum, one child per lane, in groups of four (`WIDTH` floats in a row, for the
-/// 256-bit test); the children fill the slots from the first, unused ones (`EMPTY`, inverted
-/// boxes) last. Aligned so that a node is whole cache lines.
-#[derive(Clone, Copy)]
-#[repr(C, align(64))]
-struct Node {
-    bounds: [[[Vec4; GROUPS]; 3]; 2],
-    child: [u32; WIDTH],
-}
-
-impl Node {
-    const EMPTY: Node =
-        Node { bounds: [[[Vec4::INFINITY; GROUPS]; 3], [[Vec4::NEG_INFINITY; GROUPS]; 3]], child: [EMPTY; WIDTH] };
-
-    /// Child `k`'s box.
-    fn set_bounds(&mut self, k: usize, lo: Vec3A, hi: Vec3A) {
-        for axis in 0..3 {
-            self.bounds[0][axis][k / 4][k % 4] = lo[axis];
-            self.bounds[1][axis][k / 4][k % 4] = hi[axis];
-        }
-    }
-
-    /// Side `side` (0: minimum, 1: maximum) of child `k`'s box along `axis`.
-    #[inline(always)]
-    fn bound(&self, side: usize, axis: usize, k: usize) -> f32 {
-        lane(&self.bounds[side][axis][k / 4], k % 4)
-    }
 }
 
 /// Up to four triangles, one per lane: first corner, edges to the other two, and the caller's
@@ -614,23 +588,22 @@ mod tests {
         }
     }
 
-    /// Checks the subtree under `c` against `lo..hi` (its box in the parent) and counts its
-    /// triangles in `seen`.
+    /// Checks that every triangle under `c` lies inside `lo..hi` (the boxes on its way from the
+    /// root, intersected: a walk reaches it only through all of them) and counts them in `seen`.
     fn check(bvh: &TriBvh, tris: &[Triangle], c: u32, lo: Vec3, hi: Vec3, seen: &mut [u32]) {
         let inside = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
         if c & LEAF != 0 {
             let leaf = &bvh.leaves[(c & !LEAF) as usize];
             for &id in leaf.id.iter().filter(|&&id| id != EMPTY) {
                 seen[id as usize] += 1;
-                assert!(tris[id as usize].iter().all(|&p| inside(p)), "triangle {id} outside its leaf's box");
+                assert!(tris[id as usize].iter().all(|&p| inside(p)), "triangle {id} outside a box on its way");
             }
             return;
         }
         let node = &bvh.nodes[c as usize];
         for k in (0..WIDTH).filter(|&k| node.child[k] != EMPTY) {
             let b = |side: usize| Vec3::new(node.bound(side, 0, k), node.bound(side, 1, k), node.bound(side, 2, k));
-            assert!(inside(b(0)) && inside(b(1)), "a child's box outside its parent's");
-            check(bvh, tris, node.child[k], b(0), b(1), seen);
+            check(bvh, tris, node.child[k], lo.max(b(0)), hi.min(b(1)), seen);
         }
     }
 
@@ -662,7 +635,7 @@ mod tests {
                 out.extend(corners.chain(l.id));
             } else {
                 let n = &t.nodes[at as usize];
-                out.extend(n.bounds.iter().flatten().flatten().flat_map(|v| v.to_array().map(f32::to_bits)));
+                out.extend(n.planes().iter().flatten().flatten().flat_map(|v| v.to_array().map(f32::to_bits)));
                 for c in n.child {
                     out.push(c & LEAF);
                     bits(t, c, out);

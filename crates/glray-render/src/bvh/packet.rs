@@ -12,8 +12,9 @@ use obvhs::ray::Ray;
 use super::boxes::avx_available;
 use super::boxes::WIDEN;
 use super::lanes::Lanes;
+use super::node::Planes;
 use super::stack::{Fixed, Pending, Spilling};
-use super::{insert_farthest_first, moller_trumbore, Node, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
+use super::{insert_farthest_first, moller_trumbore, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
 
 /// `N` rays, one per lane.
 struct Rays<L> {
@@ -63,13 +64,16 @@ impl<L> Rays<L> {
 /// `tmax`.
 #[inline(always)]
 fn hit_box<L: Lanes<N>, const N: usize, const AGREE: bool>(
-    node: &Node,
+    planes: &Planes,
     k: usize,
     r: &Rays<L>,
     tmax: L,
 ) -> (L::Mask, L) {
-    let (x, y, z) =
-        (slab::<L, N, AGREE>(node, k, r, 0), slab::<L, N, AGREE>(node, k, r, 1), slab::<L, N, AGREE>(node, k, r, 2));
+    let (x, y, z) = (
+        slab::<L, N, AGREE>(planes, k, r, 0),
+        slab::<L, N, AGREE>(planes, k, r, 1),
+        slab::<L, N, AGREE>(planes, k, r, 2),
+    );
     let tnear = x.0.max(y.0).max(z.0.max(r.tmin));
     let tfar = x.1.min(y.1).min(z.1.min(tmax)) * L::splat(WIDEN);
     (tnear.cmple(tfar), tnear)
@@ -82,15 +86,21 @@ fn hit_box<L: Lanes<N>, const N: usize, const AGREE: bool>(
 /// a negative one (1M camera rays -4%). A function, not a closure: a closure over AVX lanes is
 /// not inlined into the AVX walk.
 #[inline(always)]
-fn slab<L: Lanes<N>, const N: usize, const AGREE: bool>(node: &Node, k: usize, r: &Rays<L>, axis: usize) -> (L, L) {
+fn slab<L: Lanes<N>, const N: usize, const AGREE: bool>(planes: &Planes, k: usize, r: &Rays<L>, axis: usize) -> (L, L) {
     if AGREE {
-        let near = (L::splat(node.bound(r.near[axis], axis, k)) - r.origin[axis]) * r.inverse[axis];
-        let far = (L::splat(node.bound(1 - r.near[axis], axis, k)) - r.origin[axis]) * r.inverse[axis];
+        let near = (bound::<L, N>(planes, r.near[axis], axis, k) - r.origin[axis]) * r.inverse[axis];
+        let far = (bound::<L, N>(planes, 1 - r.near[axis], axis, k) - r.origin[axis]) * r.inverse[axis];
         return (near, far);
     }
-    let lo = (L::splat(node.bound(0, axis, k)) - r.origin[axis]) * r.inverse[axis];
-    let hi = (L::splat(node.bound(1, axis, k)) - r.origin[axis]) * r.inverse[axis];
+    let lo = (bound::<L, N>(planes, 0, axis, k) - r.origin[axis]) * r.inverse[axis];
+    let hi = (bound::<L, N>(planes, 1, axis, k) - r.origin[axis]) * r.inverse[axis];
     (lo.min(hi), lo.max(hi))
+}
+
+/// Side `side` of child `k`'s box along `axis`, in every lane.
+#[inline(always)]
+fn bound<L: Lanes<N>, const N: usize>(planes: &Planes, side: usize, axis: usize, k: usize) -> L {
+    L::splat(super::lane(&planes[side][axis][k / 4], k % 4))
 }
 
 /// Triangle `k` of a leaf against the rays: which rays hit it before their `tmax` (bit per
@@ -200,6 +210,7 @@ impl TriBvh {
             if active_bits != 0 {
                 if cur.0 & LEAF == 0 {
                     let node = &self.nodes[cur.0 as usize];
+                    let planes = L::planes(node);
                     // All the boxes first, then the children met, nearest (for the nearest
                     // ray) last: a branch per child on whether any ray met it mispredicted at
                     // nearly every child.
@@ -210,7 +221,7 @@ impl TriBvh {
                         if node.child[k] == EMPTY {
                             break;
                         }
-                        let (mask, tnear) = hit_box::<L, N, AGREE>(node, k, &r, tmax);
+                        let (mask, tnear) = hit_box::<L, N, AGREE>(&planes, k, &r, tmax);
                         let mask = mask & active;
                         *entry = L::select(mask, tnear, infinity);
                         met |= ((L::bitmask(mask) != 0) as u32) << k;
