@@ -554,6 +554,35 @@ mod tests {
     }
 
     #[test]
+    fn rays_from_afar_never_enter_a_nodes_unused_slots() {
+        // A cluster a thousandth wide seen from a million away: an unused slot's decoded box
+        // (inverted by only 255 steps of a tiny node) is thinner than the slab test's widening
+        // there, so only `Node::occupied` keeps the walks out of its `EMPTY` child.
+        let tris: Vec<Triangle> = soup(6).iter().map(|t| t.map(|p| p * 1e-3)).collect();
+        let bvh = build(&tris);
+        for k in 0..200u32 {
+            let target = Vec3A::new(random(k * 5), random(k * 5 + 1), random(k * 5 + 2)) * 1e-3;
+            let from = Vec3A::new(random(k * 5 + 3) - 0.5, random(k * 5 + 4) - 0.5, 1.0).normalize() * 1e6;
+            let ray = Ray::new(from, (target - from).normalize(), 0.0, f32::INFINITY);
+            // At a million away the triangles' distances differ by a few ulps, less than the
+            // ray-triangle test's own rounding there (a box's entry may come out past a hit
+            // inside it: the walk then keeps a hit a few ulps further, as it did with boxes in
+            // floats): hits are compared to that precision.
+            let want = brute(&tris, &ray).map(|h| h.1);
+            let near = |got: Option<f32>| match (got, want) {
+                (Some(a), Some(b)) => (a - b).abs() <= b * 4.0 * f32::EPSILON,
+                (a, b) => a == b,
+            };
+            assert!(near(bvh.closest(&ray, |_, _| true).map(|h| h.t)), "ray {k}: want {want:?}");
+            assert_eq!(bvh.occluded(&ray), want.is_some(), "ray {k}");
+            let packet = bvh.closest_packet(&[ray; 8], |_, _| true);
+            assert!(packet.iter().all(|h| near(h.map(|h| h.t))), "ray {k}: want {want:?}");
+            let hidden = bvh.occluded_from(from, &[ray.direction; BUNDLE], f32::INFINITY, 0);
+            assert_eq!(hidden, if want.is_some() { (1 << BUNDLE) - 1 } else { 0 }, "ray {k}");
+        }
+    }
+
+    #[test]
     fn the_tree_finds_what_testing_every_triangle_finds() {
         // Each tree walked with the fixed stack its depth allows, then with the spilling one.
         for (n, spilling) in [1, 3, 4, 5, 17, 2000].into_iter().flat_map(|n| [(n, false), (n, true)]) {
