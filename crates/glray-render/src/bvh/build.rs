@@ -447,11 +447,7 @@ fn node(records: &mut [Record], first: usize, centroids: Centroids) -> Made<'_> 
         kids[k] = (s, s + mid, lb, lc);
         kids.insert(k + 1, (s + mid, e, rb, rc));
     }
-    let mut boxes = [(Vec3A::ZERO, Vec3A::ZERO); WIDTH];
-    for (b, k) in boxes.iter_mut().zip(&kids) {
-        *b = (k.2.lo, k.2.hi);
-    }
-    let mut node = Node::new(&boxes[..kids.len()]);
+    let mut node = Node::new(kids.iter().map(|k| (k.2.lo, k.2.hi)));
     let mut lens = [0u8; WIDTH];
     for (lane, &(s, e, _, _)) in kids.iter().enumerate() {
         if (e - s) as u32 <= LEAF_SIZE {

@@ -38,29 +38,31 @@ pub(super) struct Node {
 const _: () = assert!(std::mem::size_of::<Node>() == 128, "two cache lines");
 
 impl Node {
-    /// A node over children with boxes `boxes` (at most `WIDTH`, finite), in slots from the
-    /// first; their references are set afterwards (`child`, `EMPTY` until then).
-    pub fn new(boxes: &[(Vec3A, Vec3A)]) -> Node {
-        debug_assert!(boxes.len() <= WIDTH);
-        let mut node = Node {
-            q: [[[255; WIDTH]; 3], [[0; WIDTH]; 3]],
-            origin: [0.0; 3],
-            step: [1.0; 3],
-            occupied: (1u32 << boxes.len()) - 1,
-            child: [EMPTY; WIDTH],
-        };
-        if boxes.is_empty() {
-            return node;
-        }
+    /// A node over children with boxes `boxes` (at most `WIDTH`, finite: minimum and maximum
+    /// corners), in slots from the first; their references are set afterwards (`child`,
+    /// `EMPTY` until then).
+    pub fn new(boxes: impl IntoIterator<Item = (Vec3A, Vec3A)>) -> Node {
         // Every lane made of x, y and z: the builder's boxes carry a triangle index's bits in
         // their fourth lane, a subnormal float, and each SIMD operation on one takes a
         // microcode assist (it tripled this function's time).
         let xyz = |v: Vec3A| Vec3A::new(v.x, v.y, v.z);
         let mut clean = [(Vec3A::ZERO, Vec3A::ZERO); WIDTH];
-        for (c, &(lo, hi)) in clean.iter_mut().zip(boxes) {
-            *c = (xyz(lo), xyz(hi));
+        let mut count = 0;
+        for (lo, hi) in boxes {
+            clean[count] = (xyz(lo), xyz(hi));
+            count += 1;
         }
-        let boxes = &clean[..boxes.len()];
+        let boxes = &clean[..count];
+        let mut node = Node {
+            q: [[[255; WIDTH]; 3], [[0; WIDTH]; 3]],
+            origin: [0.0; 3],
+            step: [1.0; 3],
+            occupied: (1u32 << count) - 1,
+            child: [EMPTY; WIDTH],
+        };
+        if boxes.is_empty() {
+            return node;
+        }
         let origin = boxes.iter().fold(Vec3A::INFINITY, |m, b| m.min(b.0));
         let top = boxes.iter().fold(Vec3A::NEG_INFINITY, |m, b| m.max(b.1));
         let step = Vec3A::from_array(std::array::from_fn(|axis| step_for(origin[axis], top[axis])));
@@ -209,7 +211,7 @@ mod tests {
             (Vec3A::ZERO, Vec3A::new(0.5, 5.0, 0.0)),
         ]);
         for (c, boxes) in cases.iter().enumerate() {
-            let node = Node::new(boxes);
+            let node = Node::new(boxes.iter().copied());
             assert_eq!(node.occupied, (1 << boxes.len()) - 1);
             for (k, (lo, hi)) in boxes.iter().enumerate() {
                 for axis in 0..3 {
