@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Weak};
 use std::time::Duration;
 
-use glam::{Affine3A, DMat4, Mat3, Vec3, Vec3A};
+use glam::{Affine3A, DMat4, Mat3, Vec2, Vec3, Vec3A};
 use glray_capture::frame::{Frame, Solid, TriangleId};
 use glray_capture::instance::Instance;
 use glray_capture::mesh::Mesh;
@@ -73,14 +73,16 @@ fn capsule(s: &Solid, ray: &Ray) -> f32 {
     }
 }
 
-/// A ray's hit: which triangle, where along the ray, its draw's place in drawing order, and
-/// its geometric normal (eye space, e1 x e2 of its corners in drawing order, not normalised).
+/// A ray's hit: which triangle, where along the ray, its draw's place in drawing order, its
+/// geometric normal (eye space, e1 x e2 of its corners in drawing order, not normalised), and
+/// the barycentric weights there of its second and third corners (see `TriHit`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hit {
     pub id: TriangleId,
     pub t: f32,
     pub sequence: u32,
     pub normal: Vec3,
+    pub uv: Vec2,
 }
 
 /// A mesh's BVH (its leaves hold their triangles' corners: a leaf is read from one place
@@ -154,7 +156,7 @@ impl Placed<'_> {
     /// A hit on the instance's mesh as a hit of the scene.
     fn hit(&self, k: usize, h: TriHit) -> Hit {
         let id = TriangleId { instance: k as u32, index: h.index };
-        Hit { id, t: h.t, sequence: self.instance.sequence, normal: self.normal_to_eye * h.normal }
+        Hit { id, t: h.t, sequence: self.instance.sequence, normal: self.normal_to_eye * h.normal, uv: h.uv }
     }
 
     /// Whether a hit (with determinant `det`, see `bvh`) is on a face the instance draws: the
@@ -413,7 +415,7 @@ impl<'f> Scene<'f> {
     /// A hit on the eye-space triangles as a hit of the scene.
     fn flat(&self, h: TriHit) -> Hit {
         let id = TriangleId { instance: TriangleId::FLAT, index: h.index };
-        Hit { id, t: h.t, sequence: self.sequence(id), normal: h.normal }
+        Hit { id, t: h.t, sequence: self.sequence(id), normal: h.normal, uv: h.uv }
     }
 
     /// The closest hit in [tmin, tmax].

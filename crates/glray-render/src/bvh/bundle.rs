@@ -154,7 +154,7 @@ impl TriBvh {
                         let r = active.trailing_zeros() as usize;
                         active &= active - 1;
                         let d = &prepared[r].direction;
-                        let (met, _, _) = moller_trumbore_from(d, &tri.e1, &tri.e2, &from, tmin, tmax);
+                        let met = moller_trumbore_from(d, &tri.e1, &tri.e2, &from, tmin, tmax).mask;
                         if met != 0 {
                             hidden |= 1 << r;
                         }

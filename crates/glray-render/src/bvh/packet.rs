@@ -14,7 +14,7 @@ use super::boxes::WIDEN;
 use super::lanes::Lanes;
 use super::node::Planes;
 use super::stack::{Fixed, Pending, Spilling};
-use super::{insert_farthest_first, moller_trumbore, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
+use super::{insert_farthest_first, moller_trumbore, Crossing, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
 
 /// `N` rays, one per lane.
 struct Rays<L> {
@@ -106,7 +106,7 @@ fn bound<L: Lanes<N>, const N: usize>(planes: &Planes, side: usize, axis: usize,
 /// Triangle `k` of a leaf against the rays: which rays hit it before their `tmax` (bit per
 /// ray), where, and the determinants (see `moller_trumbore`).
 #[inline(always)]
-fn hit_triangle<L: Lanes<N>, const N: usize>(tri: &Tri4, k: usize, r: &Rays<L>, tmax: L) -> (u32, L, L) {
+fn hit_triangle<L: Lanes<N>, const N: usize>(tri: &Tri4, k: usize, r: &Rays<L>, tmax: L) -> Crossing<L> {
     let (v0, e1, e2) = (lane(&tri.v0, k), lane(&tri.e1, k), lane(&tri.e2, k));
     moller_trumbore(&r.origin, &r.direction, &v0, &e1, &e2, r.tmin, tmax)
 }
@@ -248,19 +248,19 @@ impl TriBvh {
                         if tri.id[k] == EMPTY {
                             break;
                         }
-                        let (mut mask, t, det) = hit_triangle(tri, k, &r, tmax);
-                        mask &= active_bits;
+                        let c = hit_triangle(tri, k, &r, tmax);
+                        let mut mask = c.mask & active_bits;
                         if mask == 0 {
                             continue;
                         }
-                        let (ts, dets) = (t.to_array(), det.to_array());
+                        let (ts, dets) = (c.t.to_array(), c.det.to_array());
                         let mut bound = tmax.to_array();
                         while mask != 0 {
                             let lane = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
                             if ts[lane] < bound[lane] && accept(tri.id[k], dets[lane]) {
                                 bound[lane] = ts[lane];
-                                best[lane] = Some(tri.hit(k, ts[lane]));
+                                best[lane] = Some(tri.hit(k, ts[lane], &rays[lane]));
                             }
                         }
                         tmax = L::from_array(bound);
@@ -304,8 +304,9 @@ mod tests {
         })
     }
 
-    fn bits<const N: usize>(hits: [Option<TriHit>; N]) -> [Option<(u32, u32)>; N] {
-        hits.map(|h| h.map(|h| (h.index, h.t.to_bits())))
+    /// The hits' triangles, distances and weights, bit for bit.
+    fn bits<const N: usize>(hits: [Option<TriHit>; N]) -> [Option<[u32; 4]>; N] {
+        hits.map(|h| h.map(|h| [h.index, h.t.to_bits(), h.uv.x.to_bits(), h.uv.y.to_bits()]))
     }
 
     #[test]
