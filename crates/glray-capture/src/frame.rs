@@ -74,6 +74,8 @@ pub struct Lighting {
     /// `lighting::prepare` of the lights and model: what every vertex would otherwise work out
     /// again. Private, so that every `Lighting` is made by `new`, which derives it.
     prepared: Vec<Prepared>,
+    /// Whether the lighting reads a vertex's position (`reads_position`), derived in `new`.
+    positional: bool,
 }
 
 impl Lighting {
@@ -86,7 +88,14 @@ impl Lighting {
         color_material: Option<(u32, u32)>,
     ) -> Lighting {
         let prepared = prepare(&lights, &model);
-        Lighting { lights, model, materials, color_material, prepared }
+        let positional = model.local_viewer || lights.iter().any(|l| l.enabled && l.position.w != 0.0);
+        Lighting { lights, model, materials, color_material, prepared, positional }
+    }
+
+    /// Whether a vertex's lit colour depends on where it is: a light at a point (not at
+    /// infinity) or a local viewer. Otherwise only its normal and material count.
+    pub fn reads_position(&self) -> bool {
+        self.positional
     }
 
     /// The lights made ready for many vertices (`lighting::prepare`), one entry per light.
@@ -263,11 +272,12 @@ impl Frame {
 
     /// Starts loading what `triangle(id)` will read, without waiting for it: `vertices` false,
     /// the triangle (or, for an instance, its vertex indices); true, the vertices those indices
-    /// name (positions, normals, colours), which needs the indices loaded by then. The tracer
-    /// calls both over a row of hits before shading them: on big meshes each hit's vertices
-    /// are cache misses, and these let them overlap instead of stalling one after another.
+    /// name (positions, when `positions`, normals, colours), which needs the indices loaded by
+    /// then. The tracer calls both over a row of hits before shading them: on big meshes each
+    /// hit's vertices are cache misses, and these let them overlap instead of stalling one
+    /// after another.
     #[inline]
-    pub fn prefetch_triangle(&self, id: TriangleId, vertices: bool) {
+    pub fn prefetch_triangle(&self, id: TriangleId, vertices: bool, positions: bool) {
         if id.instance == TriangleId::FLAT {
             if let Some(t) = self.triangles.get(id.index as usize).filter(|_| !vertices) {
                 prefetch::all(t);
@@ -287,7 +297,7 @@ impl Frame {
             (true, true) => return,
         };
         for v in corners {
-            if let Some(p) = mesh.positions.get(v as usize) {
+            if let Some(p) = mesh.positions.get(v as usize).filter(|_| positions) {
                 prefetch::line(p);
             }
             if let Some(n) = mesh.normals.value(v) {

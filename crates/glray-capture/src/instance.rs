@@ -16,6 +16,17 @@ use crate::lighting::light_face;
 use crate::mesh::Mesh;
 use crate::vertex::eye_normal;
 
+/// What the vertex stage makes of one vertex (`Instance::vertex`).
+#[derive(Debug, Clone, Copy)]
+struct Vertex {
+    primary: Vec4,
+    secondary: Vec3,
+    /// Eye-space normal (of the front face).
+    normal: DVec3,
+    /// The colour before lighting.
+    color: Vec4,
+}
+
 /// A mesh drawn once, with the state of that draw.
 #[derive(Debug, Clone)]
 pub struct Instance {
@@ -50,11 +61,16 @@ pub struct Instance {
 /// window, compared with how it winds seen from the eye in object space. With it, a ray from
 /// the eye tells a triangle's facing from the sign of one dot product (`keeps_seen`).
 pub fn facing_flip(modelview: &DMat4, projection: &DMat4) -> bool {
+    (DMat3::from_mat4(*modelview).determinant() < 0.0) != projection_flips(projection)
+}
+
+/// Whether `projection` turns a triangle's winding around on the window, compared with how it
+/// winds seen from the eye in eye space.
+pub fn projection_flips(projection: &DMat4) -> bool {
     // A counter-clockwise triangle facing the eye, in front of it: front unless the projection
     // turns the window around.
     let probe = [DVec4::new(0.0, 0.0, -1.0, 1.0), DVec4::new(0.1, 0.0, -1.0, 1.0), DVec4::new(0.0, 0.1, -1.0, 1.0)];
-    let projection_flips = window_facing(probe.map(|p| *projection * p), true) == Some(false);
-    (DMat3::from_mat4(*modelview).determinant() < 0.0) != projection_flips
+    window_facing(probe.map(|p| *projection * p), true) == Some(false)
 }
 
 impl Instance {
@@ -102,6 +118,87 @@ impl Instance {
         !culled(Some(cull), front)
     }
 
+    /// The instance's lighting, if it draws lit.
+    #[inline]
+    fn lighting<'a>(&self, lightings: &'a [Lighting]) -> Option<&'a Lighting> {
+        lightings.get(self.lighting as usize).filter(|_| self.lighting != NO_LIGHTING)
+    }
+
+    /// Whether object to eye coordinates is an affine map: an affine modelview and positions
+    /// with w = 1 (what `Context::instances` lets through), so that eye w is 1.
+    #[inline]
+    pub fn is_affine(&self) -> bool {
+        self.modelview.row(3) == DVec4::W && self.mesh.ws.is_none()
+    }
+
+    /// Vertex `i`'s eye-space position.
+    #[inline]
+    fn eye(&self, i: u32) -> DVec3 {
+        let m = &self.mesh;
+        // Affine: the division by eye w (exactly 1) can go; glam's affine transform adds the
+        // same products, so the numbers are the same.
+        if self.is_affine() {
+            self.modelview.transform_point3(m.positions[i as usize].as_dvec3())
+        } else {
+            let eye = self.modelview * m.position(i);
+            eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 }
+        }
+    }
+
+    /// What the vertex stage makes of vertex `i` at eye-space point `eye`: its colours, lit
+    /// for `face` when `lit` (flat shading lights only the provoking vertex), its eye normal
+    /// and its colour before lighting.
+    #[inline]
+    fn vertex(&self, i: u32, eye: DVec3, lighting: Option<&Lighting>, lit: bool, face: usize) -> Vertex {
+        let m = &self.mesh;
+        let color = m.colors.at(i).map_or(self.color, |c| c.as_dvec4());
+        let (primary, secondary, normal) = match lighting {
+            Some(l) => {
+                let object_normal = m.normals.at(i).map_or(self.normal, |n| n.as_dvec3());
+                let n = eye_normal(&self.normal_matrix, object_normal, self.normalize, self.rescale_normal);
+                if !lit {
+                    return Vertex { primary: Vec4::ZERO, secondary: Vec3::ZERO, normal: n, color: vec4(color) };
+                }
+                let mats = l.materials(color);
+                let (a, b) = light_face(eye, n, &mats, &l.lights, l.prepared(), &l.model, face);
+                (a, b, n)
+            }
+            None => (color.clamp(DVec4::ZERO, DVec4::ONE), DVec4::ZERO, DVec3::Z),
+        };
+        Vertex { primary: vec4(primary), secondary: vec4(secondary).truncate(), normal, color: vec4(color) }
+    }
+
+    /// The colours of triangle `index`'s corners seen from its front (`front`) or back face,
+    /// primary and secondary: what `triangle` gives it, for a caller that needs nothing else
+    /// (a lit corner's position is transformed only when a light or the viewer is local, and
+    /// is not read otherwise).
+    #[inline]
+    pub fn corner_colors(&self, index: usize, lightings: &[Lighting], front: bool) -> ([Vec4; 3], [Vec3; 3]) {
+        let m = &self.mesh;
+        let lighting = self.lighting(lightings);
+        let face = usize::from(!front);
+        let vertex = |i: u32| {
+            let eye = if lighting.is_some_and(Lighting::reads_position) { self.eye(i) } else { DVec3::ZERO };
+            self.vertex(i, eye, lighting, true, face)
+        };
+        if self.flat {
+            let v = vertex(m.provoking[index]);
+            return ([v.primary; 3], [v.secondary; 3]);
+        }
+        let vs = m.corner_indices(index).map(vertex);
+        (vs.map(|v| v.primary), vs.map(|v| v.secondary))
+    }
+
+    /// Whether a camera ray sees a triangle's front face, from the dot product of its eye-space
+    /// normal (right-handed from its winding) with the ray's eye-space direction, and whether
+    /// the camera's projection flips the window's winding (`projection_flips`): the facing the
+    /// rasterizer would have found on the window, as `keeps_seen` finds it in object space.
+    #[inline]
+    pub fn front_seen(&self, eye_normal_dot_ray: f32, projection_flips: bool) -> bool {
+        let ccw_seen = eye_normal_dot_ray < 0.0;
+        (ccw_seen != projection_flips) == self.front_ccw
+    }
+
     /// Triangle `index` as the rasterizer would have drawn it; None if culled. Without
     /// `texcoords` (its surface does not texture), its texture coordinates are left zero: three
     /// corners through the texture matrix that nothing would read, for every hit.
@@ -115,38 +212,15 @@ impl Instance {
         }
         let face = usize::from(!front);
         let corners = m.corner_indices(index);
-        let lighting = lightings.get(self.lighting as usize).filter(|_| self.lighting != NO_LIGHTING);
-        // What `Context::instances` lets through: an affine modelview and positions with w = 1,
-        // so eye w is 1 and the division by it can go (the same numbers: glam's affine
-        // transform adds the same products, and the division was by exactly 1).
-        let affine = self.modelview.row(3) == DVec4::W && m.ws.is_none();
-        // What the vertex stage makes of vertex i: eye position, colours (when `lit`: flat
-        // shading lights only the provoking vertex), normal, base colour.
-        let vertex = |i: u32, lit: bool| {
-            let p = if affine {
-                self.modelview.transform_point3(m.positions[i as usize].as_dvec3())
-            } else {
-                let eye = self.modelview * m.position(i);
-                eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 }
-            };
-            let color = m.colors.at(i).map_or(self.color, |c| c.as_dvec4());
-            let (primary, secondary, n) = match lighting {
-                Some(l) => {
-                    let object_normal = m.normals.at(i).map_or(self.normal, |n| n.as_dvec3());
-                    let n = eye_normal(&self.normal_matrix, object_normal, self.normalize, self.rescale_normal);
-                    if !lit {
-                        return (p, Vec4::ZERO, Vec3::ZERO, n, vec4(color));
-                    }
-                    let mats = l.materials(color);
-                    let (a, b) = light_face(p, n, &mats, &l.lights, l.prepared(), &l.model, face);
-                    (a, b, n)
-                }
-                None => (color.clamp(DVec4::ZERO, DVec4::ONE), DVec4::ZERO, DVec3::Z),
-            };
-            (p, vec4(primary), vec4(secondary).truncate(), n, vec4(color))
+        let lighting = self.lighting(lightings);
+        let eyes = corners.map(|i| self.eye(i));
+        let vs = [0, 1, 2].map(|k| self.vertex(corners[k], eyes[k], lighting, !self.flat, face));
+        let pv = if self.flat {
+            let i = m.provoking[index];
+            Some(self.vertex(i, self.eye(i), lighting, true, face))
+        } else {
+            None
         };
-        let vs = corners.map(|i| vertex(i, !self.flat));
-        let pv = if self.flat { Some(vertex(m.provoking[index], true)) } else { None };
         let pick = |k: usize| pv.unwrap_or(vs[k]);
         let tex = |i: u32| {
             let t = self.texture_matrix * m.texcoords.at(i).map_or(self.texcoord, |t| t.as_dvec4());
@@ -154,16 +228,16 @@ impl Instance {
             Vec2::new((t.x / q) as f32, (t.y / q) as f32)
         };
         Some(Triangle {
-            positions: vs.map(|v| v.0.as_vec3()),
-            colors: [0, 1, 2].map(|k| pick(k).1),
-            secondary: [0, 1, 2].map(|k| pick(k).2),
+            positions: eyes.map(|p| p.as_vec3()),
+            colors: [0, 1, 2].map(|k| pick(k).primary),
+            secondary: [0, 1, 2].map(|k| pick(k).secondary),
             texcoords: if texcoords { corners.map(tex) } else { [Vec2::ZERO; 3] },
             surface: self.surface,
             sequence: self.sequence,
             camera: self.camera,
             clip_w: clip.map(|c| c.w as f32),
-            normals: vs.map(|v| (if front { v.3 } else { -v.3 }).as_vec3()),
-            base_colors: [0, 1, 2].map(|k| pick(k).4),
+            normals: vs.map(|v| (if front { v.normal } else { -v.normal }).as_vec3()),
+            base_colors: [0, 1, 2].map(|k| pick(k).color),
             lighting: self.lighting,
             back: !front,
         })

@@ -59,7 +59,13 @@ impl Effects {
 
     /// Whether pixels depend on more than the GL look (random samples, secondary rays).
     pub fn beyond_gl(&self) -> bool {
-        self.ao_samples > 0 || self.shadows || self.reflections > 0 || self.samples > 1
+        self.secondary_rays() || self.samples > 1
+    }
+
+    /// Whether rays leave the surfaces camera rays hit (shadows, ambient occlusion,
+    /// reflections).
+    pub fn secondary_rays(&self) -> bool {
+        self.ao_samples > 0 || self.shadows || self.reflections > 0
     }
 }
 

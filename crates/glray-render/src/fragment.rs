@@ -52,13 +52,7 @@ fn barycentric(t: &Triangle, p: DVec3) -> DVec3 {
 /// projected. They are also the fallback when a corner lies behind the eye (the rasterizer
 /// would have clipped the triangle first).
 fn weights(frame: &Frame, t: &Triangle, camera: &Camera, p: DVec3) -> DVec3 {
-    // The same projection and viewport: a triangle carried over from another viewport
-    // (`Frame::unified`) keeps the screen weights.
-    let own = frame
-        .cameras
-        .get(t.camera as usize)
-        .is_some_and(|v| v.viewport == camera.viewport && v.projection == *camera.projection());
-    if own || t.clip_w.iter().any(|w| *w <= 0.0) {
+    if own_camera(frame, t.camera, camera) || t.clip_w.iter().any(|w| *w <= 0.0) {
         return barycentric(t, p);
     }
     let w = t.positions.map(|v| {
@@ -82,6 +76,15 @@ fn weights(frame: &Frame, t: &Triangle, camera: &Camera, p: DVec3) -> DVec3 {
         return barycentric(t, p);
     }
     persp / sum
+}
+
+/// Whether camera `index` of the frame is `camera`: the same projection and viewport. A
+/// triangle carried over from another viewport (`Frame::unified`) keeps its screen weights.
+pub(crate) fn own_camera(frame: &Frame, index: u32, camera: &Camera) -> bool {
+    frame
+        .cameras
+        .get(index as usize)
+        .is_some_and(|v| v.viewport == camera.viewport && v.projection == *camera.projection())
 }
 
 /// The texture level of detail of a triangle: log2 of texels per pixel, from its area on the
@@ -165,8 +168,31 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
             _ => c,
         };
     }
-    c = (c.xyz() + sec).min(Vec3::ONE).extend(c.w);
-    if let Some(fog) = &surface.fog {
+    finish(frame, camera, t.surface, c, sec, p)
+}
+
+/// The fragment of an untextured triangle on surface `surface` at eye-space point `p` from
+/// its corners' colours (`primary`, `secondary`) and the weights `b` of the corners there: GL's
+/// Gouraud shading, which is all `shade` does for such a triangle drawn with the frame's own
+/// camera and lit at its corners, without the rest of the triangle.
+pub fn mixed(
+    frame: &Frame,
+    camera: &Camera,
+    surface: u32,
+    (primary, secondary): &([Vec4; 3], [Vec3; 3]),
+    b: Vec3,
+    p: DVec3,
+) -> Fragment {
+    let c = primary[0] * b.x + primary[1] * b.y + primary[2] * b.z;
+    let sec = secondary[0] * b.x + secondary[1] * b.y + secondary[2] * b.z;
+    finish(frame, camera, surface, c, sec, p)
+}
+
+/// The end of every fragment (OpenGL 2.1, 3.9-3.10): colour `c` (textured already) plus the
+/// secondary colour `sec`, fogged by eye distance as surface `surface` says, at point `p`.
+fn finish(frame: &Frame, camera: &Camera, surface: u32, c: Vec4, sec: Vec3, p: DVec3) -> Fragment {
+    let mut c = (c.xyz() + sec).min(Vec3::ONE).extend(c.w);
+    if let Some(fog) = &frame.surfaces[surface as usize].fog {
         // Mesa's fog coordinate: the eye-space distance along z.
         let z = p.z.abs() as f32;
         let f = match fog.mode {
@@ -184,7 +210,7 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
         .clamp(0.0, 1.0);
         c = (c.xyz() * f + fog.color.xyz() * (1.0 - f)).extend(c.w);
     }
-    Fragment { color: c.clamp(Vec4::ZERO, Vec4::ONE), depth: camera.window_depth(p), eye: p, surface: t.surface }
+    Fragment { color: c.clamp(Vec4::ZERO, Vec4::ONE), depth: camera.window_depth(p), eye: p, surface }
 }
 
 #[cfg(test)]

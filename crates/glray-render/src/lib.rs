@@ -5,6 +5,8 @@
 //!   display-list meshes kept across frames under a top level (obvhs) over their instances;
 //! - `fragment`: a hit as the rasterizer would have produced it: interpolated colour, texture,
 //!   fog, window depth (the GL look);
+//! - `gouraud`: the short way to shade hits on untextured instances when the frame asks for
+//!   the GL look alone (corner colours mixed with the walk's weights);
 //! - `resolve`: per pixel, which fragments survive GL's depth test, alpha test and blending,
 //!   in drawing order;
 //! - `effects`: ambient occlusion, shadows, reflections, samples per pixel, and the presets;
@@ -16,6 +18,7 @@
 pub mod bvh;
 pub mod effects;
 pub mod fragment;
+mod gouraud;
 mod progress;
 pub mod render;
 pub mod resolve;

@@ -12,6 +12,7 @@ use glray_capture::frame::Frame;
 use rayon::prelude::*;
 
 use crate::effects::{Effects, MAX_PASSES};
+use crate::gouraud::Gouraud;
 use crate::progress::Progress;
 use crate::resolve::closest_hit_suffices;
 use crate::scene::{Meshes, Scene};
@@ -237,8 +238,7 @@ impl Job<'_> {
         // they still cast shadows and occlude.
         let flat;
         let instanced = frame.triangle_count() - frame.triangles.len();
-        let e = &self.options.effects;
-        let secondary = e.shadows || e.ao_samples > 0 || e.reflections > 0;
+        let secondary = self.options.effects.secondary_rays();
         let frame = if !secondary && instanced > 0 && instanced <= self.flatten_below {
             flat = Frame { triangles: frame.all_triangles(), instances: Vec::new(), ..frame.clone() };
             &flat
@@ -269,12 +269,14 @@ impl Job<'_> {
         stats.build = start.elapsed();
         let start = Instant::now();
         let diagonal = scene.diagonal().max(1e-6);
+        let simple = closest_hit_suffices(frame);
         let tracer = Tracer {
             frame,
             camera: &camera,
             scene: &scene,
             options: self.options,
-            simple: closest_hit_suffices(frame),
+            simple,
+            gouraud: Gouraud::new(frame, &camera, self.options, simple),
             eps: diagonal * 1e-4,
             ao_distance: diagonal * self.options.effects.ao_distance,
             pass: self.pass,
@@ -306,7 +308,7 @@ impl Job<'_> {
                     .collect();
                 for vertices in [false, true] {
                     for hit in blocks.iter().filter_map(|b| b.1.as_ref()).flatten().flatten() {
-                        frame.prefetch_triangle(hit.id, vertices);
+                        tracer.prefetch(hit.id, vertices);
                     }
                 }
                 for (pixels, centers) in &blocks {
@@ -593,6 +595,83 @@ mod tests {
         v.push(("glEnd", vec![]));
         v.push(("glEndList", vec![]));
         v
+    }
+
+    #[test]
+    fn hits_shaded_from_corner_colours_look_as_the_same_boxes_drawn_immediately() {
+        use glray_core::trace::Value::{self, Blob, Int, F64};
+        type Calls = Vec<(&'static str, Vec<Value<'static>>)>;
+        let floats = |v: [f32; 4]| Blob(Box::leak(v.iter().flat_map(|x| x.to_ne_bytes()).collect::<Box<[u8]>>()));
+        let light_model = |what: i64, value: i64| ("glLightModeli", vec![Int(what), Int(value)]);
+        let two_sided = light_model(0x0B52, 1);
+        let local_light = ("glLightfv", vec![Int(0x4000), Int(0x1203), floats([1.0, 2.0, -3.0, 1.0])]);
+        // Each state, and the state before it in the list whose picture it must change.
+        let states: [(&str, Calls, usize); 7] = [
+            ("a light at infinity", vec![], 0),
+            // GL_CW: every face seen is a back face, lit from behind.
+            ("two-sided lighting of back faces", vec![two_sided.clone(), ("glFrontFace", vec![Int(0x0900)])], 0),
+            (
+                "a local light and viewer, separate specular",
+                vec![
+                    local_light.clone(),
+                    light_model(0x0B51, 1),
+                    light_model(0x81F8, 0x81FA),
+                    ("glMaterialfv", vec![Int(0x0408), Int(0x1202), floats([0.8, 0.7, 0.6, 1.0])]),
+                    ("glMaterialf", vec![Int(0x0408), Int(0x1601), F64(20.0)]),
+                ],
+                0,
+            ),
+            ("a local light", vec![local_light.clone()], 0),
+            // The corners of a face differ under a local light; flat shading takes one.
+            ("flat shading under a local light", vec![local_light, ("glShadeModel", vec![Int(0x1D00)])], 3),
+            ("no lighting", vec![("glDisable", vec![Int(0x0B50)])], 0),
+            (
+                "a projection that mirrors, two-sided",
+                vec![
+                    ("glMatrixMode", vec![Int(0x1701)]),
+                    ("glScalef", vec![F64(-1.0), F64(1.0), F64(1.0)]),
+                    ("glMatrixMode", vec![Int(0x1700)]),
+                    two_sided,
+                ],
+                0,
+            ),
+        ];
+        // The boxes drawn from the list (instances, shaded from their corners' colours), and
+        // with the list's calls made in place (eye-space triangles lit by capture, shaded whole).
+        let draws = |state: &Calls, listed: bool| {
+            let mut calls = state.clone();
+            calls.extend(box_list());
+            for (x, color) in [(-1.2, [1.0, 0.5, 0.0]), (1.2, [0.0, 0.5, 1.0])] {
+                for call in box_calls(x, color) {
+                    if call.0 == "glCallList" && !listed {
+                        calls.extend(box_list().into_iter().filter(|c| !c.0.ends_with("List")));
+                    } else {
+                        calls.push(call);
+                    }
+                }
+            }
+            followed(&calls).take_frame()
+        };
+        let mut pictures = Vec::new();
+        for (what, state, _) in &states {
+            let listed = draws(state, true);
+            let inline = draws(state, false);
+            assert_eq!((listed.instances.len(), inline.instances.len()), (2, 0), "{what}");
+            let camera = Camera::new(listed.projection.unwrap(), listed.viewport.unwrap(), listed.depth_range).unwrap();
+            let short = Gouraud::new(&listed, &camera, &Options::default(), true).expect("the GL look");
+            assert!((0..2).all(|i| short.takes(glray_capture::frame::TriangleId { instance: i, index: 0 })), "{what}");
+            let traced = Renderer { flatten_below: 0, ..Renderer::default() }.render(&listed, 48, 48, None);
+            let reference = render(&inline, 48, 48, None, &Options::default());
+            let differ = traced.rgba.iter().zip(&reference.rgba).filter(|(a, b)| a.abs_diff(**b) > 1).count();
+            assert_eq!(differ, 0, "{what}: the short way and the full way differ");
+            let lit = traced.rgba.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
+            assert!(lit > 300, "{what}: both boxes are seen: {lit} pixels");
+            pictures.push(traced.rgba);
+        }
+        // The states do change the picture (back faces lit from behind, the light's place).
+        for (k, (what, _, before)) in states.iter().enumerate().skip(1) {
+            assert!(pictures[k] != pictures[*before], "{what}: the same picture as {}", states[*before].0);
+        }
     }
 
     #[test]

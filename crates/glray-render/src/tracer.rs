@@ -12,6 +12,7 @@ use obvhs::ray::Ray;
 
 use crate::effects::{leaving, lit_by, occlusion, Origin};
 use crate::fragment::{shade, Fragment};
+use crate::gouraud::{Corners, Gouraud};
 use crate::render::Options;
 use crate::resolve::{in_drawing_order, opaque};
 use crate::sampling::{stratified, Sampler};
@@ -30,6 +31,8 @@ pub(crate) struct Tracer<'a> {
     pub ao_distance: f32,
     /// The progressive-refinement pass: which samples this frame takes.
     pub pass: u32,
+    /// The hits shaded the short way, when the frame asks for the GL look alone.
+    pub gouraud: Option<Gouraud>,
 }
 
 /// Per-thread buffers, reused from pixel to pixel, and the rays traced (for the statistics).
@@ -38,37 +41,47 @@ pub(crate) struct Scratch {
     hits: Vec<Hit>,
     frags: Vec<(Hit, Fragment)>,
     pub rays: Cell<u64>,
-    recent: RecentTriangles,
+    /// What recent camera rays' triangles were made into: whole triangles, and the corners'
+    /// colours of those shaded the short way (`Gouraud`).
+    triangles: Recent<Triangle>,
+    corners: Recent<Corners>,
 }
 
-/// The triangles recent camera rays hit, in a few slots chosen by id: neighbouring pixels
-/// mostly hit the same triangles, in both rows of the blocks a thread shades (a single "last
-/// triangle" lost each one at every change of row), and an instance's triangle is made (lit,
-/// faced) only when it is needed. Lent, not copied (a triangle with its lighting is a few
-/// hundred bytes).
+/// What was made of the triangles recent camera rays hit, in a few slots chosen by id:
+/// neighbouring pixels mostly hit the same triangles, in both rows of the blocks a thread
+/// shades (a single "last triangle" lost each one at every change of row), and an instance's
+/// triangle is made (lit, faced) only when it is needed. Lent, not copied (a triangle with its
+/// lighting is a few hundred bytes).
 ///
-/// The ids and the triangles are apart, so that a triangle is made where it is kept (in a
-/// tuple with its id it was copied twice more, a few percent of a frame).
-#[derive(Default)]
-struct RecentTriangles {
+/// The ids and the values are apart, so that a value is made where it is kept (in a tuple
+/// with its id a triangle was copied twice more, a few percent of a frame).
+pub(crate) struct Recent<T> {
     ids: [Option<TriangleId>; RECENT],
-    triangles: [Option<Triangle>; RECENT],
+    values: [Option<T>; RECENT],
 }
 
-/// Slots in `RecentTriangles`.
+/// Slots in `Recent`.
 const RECENT: usize = 16;
 
-impl RecentTriangles {
-    fn get(&mut self, frame: &Frame, id: TriangleId) -> Option<&Triangle> {
+impl<T> Default for Recent<T> {
+    fn default() -> Self {
+        Recent { ids: [None; RECENT], values: std::array::from_fn(|_| None) }
+    }
+}
+
+impl<T> Recent<T> {
+    /// What was made of triangle `id`, made by `make` if its slot holds another's.
+    #[inline]
+    pub fn get(&mut self, id: TriangleId, make: impl FnOnce() -> Option<T>) -> Option<&T> {
         // Fibonacci hashing: neighbouring indices (a mesh's neighbouring triangles) spread
         // over the slots, the top bits of the product choosing one.
         let key = id.index ^ id.instance.rotate_left(16);
         let slot = (key.wrapping_mul(0x9E37_79B1) >> (32 - RECENT.trailing_zeros())) as usize;
         if self.ids[slot] != Some(id) {
             self.ids[slot] = Some(id);
-            self.triangles[slot] = frame.triangle(id);
+            self.values[slot] = make();
         }
-        self.triangles[slot].as_ref()
+        self.values[slot].as_ref()
     }
 }
 
@@ -130,6 +143,14 @@ impl Tracer<'_> {
         crate::bvh::ray(r.origin.as_vec3a(), r.direction.as_vec3a(), -slack, r.t_max as f32 + slack)
     }
 
+    /// Starts loading what shading a hit on triangle `id` reads (see `Frame::prefetch_triangle`):
+    /// `vertices` false, the triangle or its vertex indices; true, its vertices.
+    #[inline]
+    pub fn prefetch(&self, id: TriangleId, vertices: bool) {
+        let positions = self.gouraud.as_ref().is_none_or(|g| g.reads_positions(id));
+        self.frame.prefetch_triangle(id, vertices, positions);
+    }
+
     /// The closest hits of the rays through the centres of `N` neighbouring pixels (a
     /// multiple of four), traced together, when the closest hit is what decides a pixel's
     /// first sample (None otherwise).
@@ -168,8 +189,15 @@ impl Tracer<'_> {
                 Some(hit) => hit,
                 None => self.scene.closest(Self::traced(&r)),
             }?;
-            let t = s.recent.get(self.frame, hit.id)?;
-            let f = self.surface(t, at(&hit), r.direction, sampler, &s.rays, 0);
+            let f = match &self.gouraud {
+                Some(g) if g.takes(hit.id) => {
+                    g.fragment(self.frame, self.camera, &hit, at(&hit), r.direction, &mut s.corners)?
+                }
+                _ => {
+                    let t = s.triangles.get(hit.id, || self.frame.triangle(hit.id))?;
+                    self.surface(t, at(&hit), r.direction, sampler, &s.rays, 0)
+                }
+            };
             // Over the last frame (no clear), the depth it left still tests.
             if !self.frame.cleared && f.depth >= depth_under {
                 return None;
@@ -247,21 +275,21 @@ mod tests {
     use super::*;
 
     #[test]
-    fn recent_triangles_lend_each_id_its_own_triangle() {
+    fn recent_lends_each_id_what_was_made_of_it() {
         // Triangles told apart by their first corner; ids asked in an order that revisits,
         // and (more ids than slots) that makes them share slots.
         let triangle =
             |i: u32| crate::fragment::tests::plain([Vec3::new(i as f32, 0.0, 0.0), Vec3::X, Vec3::Y], [1.0; 3]);
         let frame = Frame { triangles: (0..100).map(triangle).collect(), ..Frame::default() };
-        let mut recent = RecentTriangles::default();
+        let mut recent = Recent::default();
         let flat = |index: u32| TriangleId { instance: TriangleId::FLAT, index };
         for step in 0..1000u32 {
             let index = (step * 37 + step / 7) % 100;
-            let got = recent.get(&frame, flat(index)).copied();
+            let got = recent.get(flat(index), || frame.triangle(flat(index))).copied();
             assert_eq!(got, Some(triangle(index)), "step {step}, triangle {index}");
         }
         // An id past the frame's triangles has none; the next id asked still gets its own.
-        assert_eq!(recent.get(&frame, flat(100)), None);
-        assert_eq!(recent.get(&frame, flat(99)).copied(), Some(triangle(99)));
+        assert_eq!(recent.get(flat(100), || frame.triangle(flat(100))), None);
+        assert_eq!(recent.get(flat(99), || frame.triangle(flat(99))).copied(), Some(triangle(99)));
     }
 }
