@@ -273,9 +273,9 @@ impl Frame {
     /// Starts loading what `triangle(id)` will read, without waiting for it: `vertices` false,
     /// the triangle (or, for an instance, its vertex indices); true, the vertices those indices
     /// name (positions, when `positions`, normals, colours), which needs the indices loaded by
-    /// then. The tracer calls both over a row of hits before shading them: on big meshes each
-    /// hit's vertices are cache misses, and these let them overlap instead of stalling one
-    /// after another.
+    /// then. The renderer calls both a few hits ahead of shading them (first the indices, then
+    /// the vertices): on big meshes each hit's vertices are cache misses, and these let them
+    /// overlap the shading of the hits before instead of stalling one after another.
     #[inline]
     pub fn prefetch_triangle(&self, id: TriangleId, vertices: bool, positions: bool) {
         if id.instance == TriangleId::FLAT {
