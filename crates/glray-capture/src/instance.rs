@@ -177,8 +177,9 @@ impl Instance {
         let m = &self.mesh;
         let lighting = self.lighting(lightings);
         let face = usize::from(!front);
+        let positional = lighting.is_some_and(Lighting::reads_position);
         let vertex = |i: u32| {
-            let eye = if lighting.is_some_and(Lighting::reads_position) { self.eye(i) } else { DVec3::ZERO };
+            let eye = if positional { self.eye(i) } else { DVec3::ZERO };
             self.vertex(i, eye, lighting, true, face)
         };
         if self.flat {

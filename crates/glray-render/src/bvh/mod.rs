@@ -108,12 +108,12 @@ impl Tri4 {
         let at = |v: &[Vec4; 3]| Vec3::new(lane(&v[0], k), lane(&v[1], k), lane(&v[2], k));
         let (e1, e2) = (at(&self.e1), at(&self.e2));
         let (o, d) = (Vec3::from(ray.origin), Vec3::from(ray.direction));
+        // glam's scalar cross and dot are the SIMD test's operations (its products commute
+        // exactly, its sums go x, y, z in the same order).
         let s = o - at(&self.v0);
-        let q = Vec3::new(s.y * e1.z - s.z * e1.y, s.z * e1.x - s.x * e1.z, s.x * e1.y - s.y * e1.x);
-        let p = Vec3::new(d.y * e2.z - d.z * e2.y, d.z * e2.x - d.x * e2.z, d.x * e2.y - d.y * e2.x);
-        let inv = 1.0 / (e1.x * p.x + e1.y * p.y + e1.z * p.z);
-        let u = (s.x * p.x + s.y * p.y + s.z * p.z) * inv;
-        let v = (d.x * q.x + d.y * q.y + d.z * q.z) * inv;
+        let (q, p) = (s.cross(e1), d.cross(e2));
+        let inv = 1.0 / e1.dot(p);
+        let (u, v) = (s.dot(p) * inv, d.dot(q) * inv);
         TriHit { index: self.id[k], t, normal: self.normal(k), uv: Vec2::new(u, v) }
     }
 }
