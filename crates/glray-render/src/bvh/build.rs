@@ -1,6 +1,7 @@
 //! Building the BVH: top-down binned SAH (the surface area heuristic on 16 bins per axis, as
 //! Embree's "medium" build), splitting each node's range in two, then the larger child again,
-//! until it has `WIDTH` children; ranges of at most `LEAF_SIZE` triangles are leaves.
+//! until it has `WIDTH` children; ranges of at most `LEAF_SIZE` triangles are leaves, and
+//! ranges of up to `MAX_BLOCKS` times that are leaves where the SAH says so (`as_node`).
 //!
 //! Lean on purpose (issue 5: build time and peak memory): one 32-byte record per triangle
 //! (its box, the triangle's index in the box's spare lane) partitioned in place, no binary tree
@@ -13,7 +14,7 @@ use glray_core::pages;
 use rayon::prelude::*;
 
 use super::node::Node;
-use super::{Tri4, EMPTY, LEAF, LEAF_SIZE, WIDTH};
+use super::{leaf_ref, Tri4, EMPTY, LEAF, LEAF_SIZE, MAX_BLOCKS, MAX_LEAVES, WIDTH};
 
 /// A triangle's box; `lo.w` holds the triangle's index (as bits).
 #[derive(Clone, Copy)]
@@ -180,9 +181,20 @@ fn blocks(n: u32) -> f32 {
 /// around its triangles, and the box around their centroids.
 type Part = (usize, Bounds, Centroids);
 
-/// Splits `records` (whose centroids `centroids` bounds) in two by binned SAH. Every split
-/// leaves both parts non-empty.
-fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
+/// The best split of a range found by binning: the plane, the boxes of its two sides, and its
+/// SAH cost (`half_area * blocks` of each side, summed).
+#[derive(Clone, Copy)]
+struct Choice {
+    binning: Binning,
+    axis: usize,
+    plane: usize,
+    bounds: (Bounds, Bounds),
+    cost: f32,
+}
+
+/// The cheapest split of `records` (whose centroids `centroids` bounds) by binned SAH; None when
+/// every centroid is in one place (no plane separates any).
+fn choose(records: &[Record], centroids: Centroids) -> Option<Choice> {
     let extent = centroids.hi - centroids.lo;
     let scale = Vec3A::select(extent.cmpgt(Vec3A::ZERO), Vec3A::splat(BINS as f32 * 0.9999) / extent, Vec3A::ZERO);
     let binning = Binning { origin: centroids.lo, scale };
@@ -245,13 +257,20 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
         }
     }
     let least = costs.as_flattened().iter().fold(f32::INFINITY, |a, &c| a.min(c));
-    let Some(at) = costs.as_flattened().iter().position(|&c| c == least).filter(|_| least < f32::INFINITY) else {
+    let at = costs.as_flattened().iter().position(|&c| c == least).filter(|_| least < f32::INFINITY)?;
+    let (axis, plane) = (at / BINS, at % BINS);
+    let union = |bins: &[Bounds]| bins.iter().fold(Bounds::EMPTY, |acc, &b| acc.union(b));
+    let bounds = (union(&bins.bounds[axis][..plane]), union(&bins.bounds[axis][plane..]));
+    Some(Choice { binning, axis, plane, bounds, cost: least })
+}
+
+/// Splits `records` (whose centroids `centroids` bounds) in two: by `choice`, or in halves
+/// without one. Every split leaves both parts non-empty.
+fn split_by(records: &mut [Record], choice: Option<Choice>) -> (Part, Part) {
+    let Some(Choice { binning, axis, plane, bounds: (lb, rb), .. }) = choice else {
         // Every centroid in one place.
         return halve(records);
     };
-    let (axis, plane) = (at / BINS, at % BINS);
-    let union = |bins: &[Bounds]| bins.iter().fold(Bounds::EMPTY, |acc, &b| acc.union(b));
-    let (lb, rb) = (union(&bins.bounds[axis][..plane]), union(&bins.bounds[axis][plane..]));
     let (i, lc, rc) = partition(records, binning.below(axis, plane));
     if i == 0 || i == records.len() {
         // Cannot happen (the bins counted both sides with the same arithmetic), but an empty
@@ -259,6 +278,27 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
         return halve(records);
     }
     ((i, lb, lc), (i, rb, rc))
+}
+
+/// Splits `records` (whose centroids `centroids` bounds) in two by binned SAH.
+fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
+    split_by(records, choose(records, centroids))
+}
+
+/// The first split of a range a node would give a node of its own (more than `LEAF_SIZE`
+/// triangles; as `split_by` takes it), or None when the range is cheaper as one leaf of up to `MAX_BLOCKS` blocks. The
+/// SAH as Embree weighs it, a node visit costing what a block's test costs: the leaf's area
+/// times its blocks, against its area (the visit) plus its best split's cost. Such leaves save
+/// the walks a node visit, and the dependent miss on it, where a split hardly narrows the range
+/// (docs/performance.md: camera rays at 10M -5%, a quarter fewer nodes).
+fn as_node(records: &[Record], bounds: Bounds, centroids: Centroids) -> Option<Option<Choice>> {
+    let n = records.len() as u32;
+    let choice = choose(records, centroids);
+    if n > LEAF_SIZE * MAX_BLOCKS {
+        return Some(choice);
+    }
+    let area = bounds.half_area();
+    choice.filter(|c| area * blocks(n) > area + c.cost).map(Some)
 }
 
 /// Records looked at together by `partition`, from each end.
@@ -384,10 +424,18 @@ impl Out {
     }
 }
 
-/// A node over `records` (starting at record `first` of all, whose centroids `centroids`
-/// bounds), its children's leaf lengths (0: inner), and the ranges of its inner children, still
-/// to be built, with their lanes.
-type Made<'r> = (Node, [u8; WIDTH], Vec<(usize, &'r mut [Record], usize, Centroids)>);
+/// A range of records still to be made a node: where it starts among all records, the box
+/// around its centroids, and its first split when already chosen (`as_node`).
+#[derive(Clone, Copy)]
+struct Todo {
+    first: usize,
+    centroids: Centroids,
+    split: Option<Option<Choice>>,
+}
+
+/// A node over a range (`Todo`), its children's leaf lengths (0: inner), and the ranges of its
+/// inner children, still to be built, with their lanes.
+type Made<'r> = (Node, [u8; WIDTH], Vec<(usize, &'r mut [Record], Todo)>);
 
 /// The splits of `ranges` (disjoint, in order, as (start, end, centroids) in `records`), each
 /// on its own slice, in parallel: None for a range of a leaf's worth, which is not split.
@@ -403,11 +451,13 @@ fn splits_of(records: &mut [Record], ranges: &[(usize, usize, Centroids)]) -> Ve
     slices.into_par_iter().map(|(part, c)| (part.len() as u32 > LEAF_SIZE).then(|| split(part, c))).collect()
 }
 
-fn node(records: &mut [Record], first: usize, centroids: Centroids) -> Made<'_> {
+fn node(records: &mut [Record], todo: Todo) -> Made<'_> {
+    let Todo { first, centroids, split: known } = todo;
     // Children as (start, end, bounds, centroids) in `records`, in order; split the one with
     // the largest surface (of those with more than a leaf's worth) until there are WIDTH.
     let mut kids: Vec<(usize, usize, Bounds, Centroids)> = Vec::with_capacity(WIDTH);
-    let ((mid, lb, lc), (_, rb, rc)) = split(records, centroids);
+    let choice = known.unwrap_or_else(|| choose(records, centroids));
+    let ((mid, lb, lc), (_, rb, rc)) = split_by(records, choice);
     kids.push((0, mid, lb, lc));
     kids.push((mid, records.len(), rb, rc));
     // A big range's next two levels of splits are made ahead, two and then four at a time in
@@ -449,8 +499,10 @@ fn node(records: &mut [Record], first: usize, centroids: Centroids) -> Made<'_> 
     }
     let mut node = Node::new(kids.iter().map(|k| (k.2.lo, k.2.hi)));
     let mut lens = [0u8; WIDTH];
-    for (lane, &(s, e, _, _)) in kids.iter().enumerate() {
-        if (e - s) as u32 <= LEAF_SIZE {
+    let mut splits = [None; WIDTH];
+    for (lane, &(s, e, b, c)) in kids.iter().enumerate() {
+        splits[lane] = if (e - s) as u32 <= LEAF_SIZE { None } else { as_node(&records[s..e], b, c) };
+        if splits[lane].is_none() {
             node.child[lane] = LEAF | (first + s) as u32;
             lens[lane] = (e - s) as u8;
         }
@@ -459,11 +511,11 @@ fn node(records: &mut [Record], first: usize, centroids: Centroids) -> Made<'_> 
     let mut parts = Vec::with_capacity(WIDTH);
     let mut rest = records;
     let mut at = 0;
-    for (lane, &(s, e, _, c)) in kids.iter().enumerate() {
+    for (lane, &(s, e, _, centroids)) in kids.iter().enumerate() {
         debug_assert_eq!(s, at);
         let (part, tail) = rest.split_at_mut(e - at);
-        if lens[lane] == 0 {
-            parts.push((lane, part, first + s, c));
+        if let Some(split) = splits[lane] {
+            parts.push((lane, part, Todo { first: first + s, centroids, split: Some(split) }));
         }
         rest = tail;
         at = e;
@@ -476,6 +528,11 @@ fn leaf_children(lens: &[u8; WIDTH]) -> usize {
     lens.iter().filter(|&&len| len > 0).count()
 }
 
+/// How many blocks the leaves among a node's children have (their lengths in `lens`).
+fn leaf_blocks(lens: &[u8; WIDTH]) -> u32 {
+    lens.iter().map(|&len| u32::from(len).div_ceil(LEAF_SIZE)).sum()
+}
+
 /// How many subtrees a walk can leave pending below a node with `children` children, the
 /// deepest of which leaves `below` (see `stack::most_pending`): all its children but the one
 /// it goes on with, and then what that one's subtree can leave.
@@ -486,15 +543,15 @@ fn pending(children: usize, below: usize) -> usize {
 /// Builds the subtree over `records` (see `node`) into `out` on this thread: the reference of
 /// its root (an inner node), and the most subtrees a walk of it can leave pending (worked out
 /// here, as the tree is made: a pass over the finished tree was 3% of a build).
-fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut Out) -> (u32, usize) {
-    let (node, lens, parts) = node(records, first, centroids);
+fn subtree(records: &mut [Record], todo: Todo, out: &mut Out) -> (u32, usize) {
+    let (node, lens, parts) = node(records, todo);
     let children = leaf_children(&lens) + parts.len();
     let index = out.nodes.len();
     out.nodes.push(node);
     out.lens.push(lens);
     let mut below = 0;
-    for (lane, part, first, c) in parts {
-        let (child, most) = subtree(part, first, c, out);
+    for (lane, part, todo) in parts {
+        let (child, most) = subtree(part, todo, out);
         out.nodes[index].child[lane] = child;
         below = below.max(most);
     }
@@ -506,20 +563,14 @@ fn subtree(records: &mut [Record], first: usize, centroids: Centroids, out: &mut
 /// smaller ones are built whole on one thread and appended in one step. (Subtrees returning
 /// their nodes to their parents instead copied every node once per parallel level, and the
 /// vectors' growth left ~100 MB of freed pages in the allocator at 10M triangles: peak memory.)
-fn shared_subtree(
-    records: &mut [Record],
-    first: usize,
-    centroids: Centroids,
-    whole: usize,
-    shared: &Mutex<Out>,
-) -> (u32, usize) {
+fn shared_subtree(records: &mut [Record], todo: Todo, whole: usize, shared: &Mutex<Out>) -> (u32, usize) {
     let lock = || shared.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
     if records.len() < whole {
         let mut local = Out::for_records(records.len());
-        let (root, most) = subtree(records, first, centroids, &mut local);
+        let (root, most) = subtree(records, todo, &mut local);
         return (lock().append(local, root), most);
     }
-    let (node, lens, parts) = node(records, first, centroids);
+    let (node, lens, parts) = node(records, todo);
     let children = leaf_children(&lens) + parts.len();
     let index = {
         let mut out = lock();
@@ -527,10 +578,8 @@ fn shared_subtree(
         out.lens.push(lens);
         out.nodes.len() - 1
     };
-    let made: Vec<(usize, (u32, usize))> = parts
-        .into_par_iter()
-        .map(|(lane, part, first, c)| (lane, shared_subtree(part, first, c, whole, shared)))
-        .collect();
+    let made: Vec<(usize, (u32, usize))> =
+        parts.into_par_iter().map(|(lane, part, todo)| (lane, shared_subtree(part, todo, whole, shared))).collect();
     let mut out = lock();
     let mut below = 0;
     for (lane, (child, most)) in made {
@@ -556,6 +605,16 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
         let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
         Record { lo: lo.extend(f32::from_bits(i as u32)), hi: hi.extend(0.0) }
     };
+    // Past what leaf references can index (2^30 blocks), the rest of the mesh is left out,
+    // and said so (a mesh that size is ~34 GB of build records alone).
+    let count = if count > MAX_LEAVES as usize {
+        glray_core::warn!(
+            "a mesh of {count} triangles is more than one BVH holds ({MAX_LEAVES}); the triangles past that are not traced"
+        );
+        MAX_LEAVES as usize
+    } else {
+        count
+    };
     let mut records: Vec<Record> = if count >= PARALLEL {
         let mut records = pages::huge_vec(count);
         (0..count).into_par_iter().map(record).collect_into_vec(&mut records);
@@ -573,7 +632,7 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     if records.len() as u32 <= LEAF_SIZE {
         let ids: Vec<u32> = records.iter().map(Record::index).collect();
         let leaves = vec![Tri4::new(&ids, |i| corners(i as usize))];
-        return Built { nodes: Vec::new(), leaves, root: LEAF, most_pending: 0 };
+        return Built { nodes: Vec::new(), leaves, root: leaf_ref(0, 1), most_pending: 0 };
     }
     let centroids = Centroids::of(&records);
     let shared = Mutex::new(Out::for_records(records.len()));
@@ -582,7 +641,8 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     // uneven to keep two threads busy (8K there: -8% build); bigger meshes gain nothing from
     // more, smaller tasks (10M: +4%).
     let whole = (records.len() / 16).clamp(1 << 13, PARALLEL);
-    let (root, most_pending) = shared_subtree(&mut records, 0, centroids, whole, &shared);
+    let todo = Todo { first: 0, centroids, split: None };
+    let (root, most_pending) = shared_subtree(&mut records, todo, whole, &shared);
     let mut out = shared.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner());
     // The leaves, numbered in node order, each as the triangles of its records; the records
     // go before the leaves are made (peak memory). In parallel over runs of nodes, each run
@@ -595,7 +655,7 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
         .iter()
         .map(|lens| {
             let first = total;
-            total += leaf_children(lens) as u32;
+            total += leaf_blocks(lens);
             first
         })
         .collect();
@@ -617,12 +677,16 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
         for (node, lens) in nodes.iter_mut().zip(lens) {
             for lane in (0..WIDTH).filter(|&lane| lens[lane] > 0) {
                 let start = (node.child[lane] & !LEAF) as usize;
-                for (slot, r) in ids[k].iter_mut().zip(&records[start..start + lens[lane] as usize]) {
-                    *slot = r.index();
+                let range = &records[start..start + lens[lane] as usize];
+                let blocks = range.len().div_ceil(LEAF_SIZE as usize);
+                node.child[lane] = leaf_ref(first + k as u32, blocks as u32);
+                for block in range.chunks(LEAF_SIZE as usize) {
+                    for (slot, r) in ids[k].iter_mut().zip(block) {
+                        *slot = r.index();
+                    }
+                    counts[k] = block.len() as u8;
+                    k += 1;
                 }
-                counts[k] = lens[lane];
-                node.child[lane] = LEAF | (first + k as u32);
-                k += 1;
             }
         }
     });
@@ -655,6 +719,39 @@ mod tests {
                 Record { lo: lo.extend(f32::from_bits(i as u32)), hi: hi.extend(0.0) }
             })
             .collect()
+    }
+
+    /// Records over `tris`, numbered in order.
+    fn records_of(tris: &[[Vec3; 3]]) -> Vec<Record> {
+        let record = |(i, t): (usize, &[Vec3; 3])| {
+            let (lo, hi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+            Record { lo: lo.extend(f32::from_bits(i as u32)), hi: hi.extend(0.0) }
+        };
+        tris.iter().enumerate().map(record).collect()
+    }
+
+    #[test]
+    fn a_range_a_split_hardly_narrows_stays_one_leaf_of_two_blocks() {
+        let tri = |at: Vec3, k: usize| {
+            let d = 0.01 * k as f32;
+            [at + Vec3::new(d, 0.0, 0.0), at + Vec3::new(1.0, d, 0.0), at + Vec3::new(0.0, 1.0, d)]
+        };
+        let verdict = |tris: &[[Vec3; 3]]| {
+            let rs = records_of(tris);
+            as_node(&rs, Bounds::of(&rs), Centroids::of(&rs)).is_some()
+        };
+        // Eight triangles nearly on top of each other: any split leaves two boxes as big as
+        // the whole, so a node would cost a visit for nothing.
+        let heap: Vec<_> = (0..8).map(|k| tri(Vec3::ZERO, k)).collect();
+        assert!(!verdict(&heap), "eight stacked triangles: one leaf");
+        // Two heaps of four far apart: a node halves the area each ray meets.
+        let apart: Vec<_> = (0..8).map(|k| tri(Vec3::new(if k < 4 { 0.0 } else { 50.0 }, 0.0, 0.0), k)).collect();
+        assert!(verdict(&apart), "two heaps apart: a node");
+        // Nine stacked triangles would take three blocks: always a node.
+        let nine: Vec<_> = (0..9).map(|k| tri(Vec3::ZERO, k)).collect();
+        assert!(verdict(&nine), "nine triangles: a node");
+        // Eight in one place exactly (no plane separates any centroid): one leaf, not halves.
+        assert!(!verdict(&[tri(Vec3::ZERO, 0); 8]));
     }
 
     #[test]

@@ -6,8 +6,8 @@
 //! baseline, since the library runs on whatever node loads it) meets four at once, or all
 //! eight with AVX where the CPU has it (chosen at run time, the same hits bit for bit:
 //! `boxes`, `lanes`); eight rather than four halves the tree's depth, and so the dependent
-//! misses of a walk (docs/performance.md). Leaves of up to four triangles, stored the same way
-//! (corner and edges precomputed) and tested at once. `build` makes it (binned SAH). Why not
+//! misses of a walk (docs/performance.md). Leaves of one or two blocks of four triangles, each
+//! block stored the same way (corner and edges precomputed) and tested at once. `build` makes it (binned SAH). Why not
 //! obvhs's CWBVH: its generic single-ray traversal was half of every frame's profile, 4x
 //! slower per ray than Embree's, and its PLOC build 3-4x slower than Embree's with 3x the
 //! memory (docs/performance.md).
@@ -43,12 +43,34 @@ pub fn ray(origin: Vec3A, direction: Vec3A, tmin: f32, tmax: f32) -> Ray {
     Ray { origin, direction, inv_direction, tmin, tmax }
 }
 
-/// A child reference with this bit set is a leaf (the rest: its index in `leaves`).
+/// A child reference with this bit set is a leaf: bit `BLOCKS_AT` and up, how many blocks of
+/// four triangles (`Tri4`) it has, less one; below, the index of its first block in `leaves`.
 const LEAF: u32 = 1 << 31;
+const BLOCKS_AT: u32 = 30;
+/// The most blocks a leaf has (leaves the SAH would make of three or four blocks were a few in
+/// a thousand: a bit for them would halve the blocks a tree can index).
+const MAX_BLOCKS: u32 = 2;
+/// The most blocks a tree can index, and so the most triangles it is built over (a block
+/// holds at least one).
+const MAX_LEAVES: u32 = 1 << BLOCKS_AT;
 /// An unused child slot (its box is inverted: no ray meets it).
 const EMPTY: u32 = u32::MAX;
-/// A subtree of at most this many triangles is one leaf.
+/// A subtree of at most this many triangles is always one leaf (one block); one of up to
+/// `MAX_BLOCKS` blocks is a leaf where the SAH finds that cheaper than a node (`build`).
 const LEAF_SIZE: u32 = 4;
+
+/// The reference to a leaf of `blocks` blocks from `first` on.
+#[inline]
+fn leaf_ref(first: u32, blocks: u32) -> u32 {
+    debug_assert!((1..=MAX_BLOCKS).contains(&blocks) && first < MAX_LEAVES);
+    LEAF | (blocks - 1) << BLOCKS_AT | first
+}
+
+/// The blocks of leaf reference `c`: (first, count).
+#[inline(always)]
+fn leaf_blocks(c: u32) -> (usize, usize) {
+    ((c & (MAX_LEAVES - 1)) as usize, ((c & !LEAF) >> BLOCKS_AT) as usize + 1)
+}
 /// Children per node, tested four at a time (one 128-bit test per group of four) or, with
 /// AVX, all at once.
 const WIDTH: usize = 8;
@@ -130,9 +152,28 @@ impl TriBvh {
             if let Some(node) = self.nodes.get(c as usize) {
                 prefetch::all(node);
             }
-        } else if let Some(leaf) = self.leaves.get((c & !LEAF) as usize) {
-            prefetch::all(leaf);
+        } else {
+            self.leaf(c).iter().for_each(prefetch::all);
         }
+    }
+
+    /// Starts loading child `c`: a node whole, a leaf's first block.
+    #[inline(always)]
+    fn prefetch_first(&self, c: u32) {
+        if c & LEAF == 0 {
+            if let Some(node) = self.nodes.get(c as usize) {
+                prefetch::all(node);
+            }
+        } else if let Some(block) = self.leaves.get(leaf_blocks(c).0) {
+            prefetch::all(block);
+        }
+    }
+
+    /// The blocks of leaf `c`.
+    #[inline(always)]
+    fn leaf(&self, c: u32) -> &[Tri4] {
+        let (first, count) = leaf_blocks(c);
+        &self.leaves[first..first + count]
     }
 }
 
@@ -365,7 +406,9 @@ impl TriBvh {
                     continue;
                 }
             } else {
-                leaf(&self.leaves[(cur & !LEAF) as usize], &r, &mut tmax);
+                for tri in self.leaf(cur) {
+                    leaf(tri, &r, &mut tmax);
+                }
             }
             // The next subtree the ray still reaches.
             loop {
@@ -419,7 +462,7 @@ impl TriBvh {
                     }
                     continue;
                 }
-            } else if leaf(&self.leaves[(cur & !LEAF) as usize], &r, tmax) {
+            } else if self.leaf(cur).iter().any(|tri| leaf(tri, &r, tmax)) {
                 return;
             }
             match stack.pop() {
@@ -654,8 +697,7 @@ mod tests {
     fn check(bvh: &TriBvh, tris: &[Triangle], c: u32, lo: Vec3, hi: Vec3, seen: &mut [u32]) {
         let inside = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
         if c & LEAF != 0 {
-            let leaf = &bvh.leaves[(c & !LEAF) as usize];
-            for &id in leaf.id.iter().filter(|&&id| id != EMPTY) {
+            for &id in bvh.leaf(c).iter().flat_map(|leaf| &leaf.id).filter(|&&id| id != EMPTY) {
                 seen[id as usize] += 1;
                 assert!(tris[id as usize].iter().all(|&p| inside(p)), "triangle {id} outside a box on its way");
             }
@@ -691,9 +733,10 @@ mod tests {
                 return;
             }
             if at & LEAF != 0 {
-                let l = &t.leaves[(at & !LEAF) as usize];
-                let corners = [l.v0, l.e1, l.e2].into_iter().flatten().flat_map(|v| v.to_array().map(f32::to_bits));
-                out.extend(corners.chain(l.id));
+                for l in t.leaf(at) {
+                    let corners = [l.v0, l.e1, l.e2].into_iter().flatten().flat_map(|v| v.to_array().map(f32::to_bits));
+                    out.extend(corners.chain(l.id));
+                }
             } else {
                 let n = &t.nodes[at as usize];
                 out.extend(n.planes().iter().flatten().flatten().flat_map(|v| v.to_array().map(f32::to_bits)));
@@ -712,6 +755,51 @@ mod tests {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             assert!(tree(&pool.install(|| build(&tris))) == tree(&bvh), "{threads} threads build another tree");
         }
+    }
+
+    #[test]
+    fn every_walk_tests_both_blocks_of_a_two_block_leaf() {
+        // Heaps of eight nearly stacked small triangles, scattered: the build keeps many heaps
+        // as leaves of two blocks (`build::as_node`).
+        let tris: Vec<Triangle> = (0..1600u32)
+            .map(|i| {
+                let heap = i / 8;
+                let at = Vec3::new(random(heap * 3 + 1), random(heap * 3 + 2), random(heap * 3 + 3));
+                let d = 0.002 * (i % 8) as f32;
+                [at + Vec3::new(d, 0.0, 0.0), at + Vec3::new(0.03, d, 0.0), at + Vec3::new(0.0, 0.03, d)]
+            })
+            .collect();
+        let bvh = build(&tris);
+        let mut seen = vec![0u32; tris.len()];
+        check(&bvh, &tris, bvh.root, Vec3::NEG_INFINITY, Vec3::INFINITY, &mut seen);
+        assert!(seen.iter().all(|&k| k == 1), "every triangle in exactly one leaf");
+        let two = bvh.nodes.iter().flat_map(|n| n.child).filter(|&c| c != EMPTY && c & LEAF != 0);
+        let two = two.filter(|&c| bvh.leaf(c).len() == 2).count();
+        assert!(two > 20, "only {two} leaves of two blocks");
+        let (mut hits, mut rays) = (0, Vec::new());
+        for k in 0..800u32 {
+            let o = Vec3A::new(random(k * 5 + 20_000), random(k * 5 + 20_001), 2.0);
+            let target = Vec3A::new(random(k * 5 + 20_002), random(k * 5 + 20_003), 0.0) * 1.1;
+            let ray = Ray::new(o, (target - o).normalize(), 0.0, f32::INFINITY);
+            let want = brute(&tris, &ray);
+            hits += want.is_some() as u32;
+            assert_eq!(bvh.closest(&ray, |_, _| true).map(|h| (h.index, h.t)), want, "ray {k}");
+            assert_eq!(bvh.occluded(&ray), want.is_some(), "ray {k}");
+            let mut all = 0;
+            bvh.each_hit(&ray, |_, _| all += 1);
+            let every = (0..tris.len()).filter(|&i| brute(&tris[i..=i], &ray).is_some()).count();
+            assert_eq!(all, every, "ray {k}: every hit");
+            let hidden = bvh.occluded_from(o, &[ray.direction; BUNDLE], f32::INFINITY, 0);
+            assert_eq!(hidden, if want.is_some() { (1 << BUNDLE) - 1 } else { 0 }, "ray {k}");
+            rays.push((ray, want));
+        }
+        for packet in rays.chunks_exact(8) {
+            let found = bvh.closest_packet(&std::array::from_fn::<_, 8, _>(|j| packet[j].0), |_, _| true);
+            for (got, (_, want)) in found.iter().zip(packet) {
+                assert_eq!(got.map(|h| (h.index, h.t)), *want);
+            }
+        }
+        assert!(hits > 100, "only {hits} rays hit");
     }
 
     #[test]

@@ -243,27 +243,28 @@ impl TriBvh {
                         continue;
                     }
                 } else {
-                    let tri = &self.leaves[(cur.0 & !LEAF) as usize];
-                    for k in 0..4 {
-                        if tri.id[k] == EMPTY {
-                            break;
-                        }
-                        let c = hit_triangle(tri, k, &r, tmax);
-                        let mut mask = c.mask & active_bits;
-                        if mask == 0 {
-                            continue;
-                        }
-                        let (ts, dets) = (c.t.to_array(), c.det.to_array());
-                        let mut bound = tmax.to_array();
-                        while mask != 0 {
-                            let lane = mask.trailing_zeros() as usize;
-                            mask &= mask - 1;
-                            if ts[lane] < bound[lane] && accept(tri.id[k], dets[lane]) {
-                                bound[lane] = ts[lane];
-                                best[lane] = Some(tri.hit(k, ts[lane], &rays[lane]));
+                    for tri in self.leaf(cur.0) {
+                        for k in 0..4 {
+                            if tri.id[k] == EMPTY {
+                                break;
                             }
+                            let c = hit_triangle(tri, k, &r, tmax);
+                            let mut mask = c.mask & active_bits;
+                            if mask == 0 {
+                                continue;
+                            }
+                            let (ts, dets) = (c.t.to_array(), c.det.to_array());
+                            let mut bound = tmax.to_array();
+                            while mask != 0 {
+                                let lane = mask.trailing_zeros() as usize;
+                                mask &= mask - 1;
+                                if ts[lane] < bound[lane] && accept(tri.id[k], dets[lane]) {
+                                    bound[lane] = ts[lane];
+                                    best[lane] = Some(tri.hit(k, ts[lane], &rays[lane]));
+                                }
+                            }
+                            tmax = L::from_array(bound);
                         }
-                        tmax = L::from_array(bound);
                     }
                 }
             }
