@@ -43,7 +43,7 @@ pub fn write(dir: &Path, number: u64, frame: &Frame) -> Result<(), String> {
     let mut meshes: Vec<u64> = frame.instances.iter().map(|i| i.mesh.id).collect();
     meshes.sort_unstable();
     meshes.dedup();
-    let lights = frame.lightings.iter().map(|l| l.lights.len()).max().unwrap_or(0);
+    let lights = frame.lightings.iter().map(|l| l.lights().len()).max().unwrap_or(0);
     let json = format!(
         "{{\"frame\":{number},\"triangles\":{},\"frame_triangles\":{},\"meshes\":{},\"instances\":{},\"lights\":{lights},\"surfaces\":{},\"textured_surfaces\":{},\"cameras\":{},\"unsupported_draws\":{},\"width\":{},\"height\":{},\"clear_color\":{:?},\"camera\":{camera}}}\n",
         triangles.len(),

@@ -64,13 +64,15 @@ pub const NO_LIGHTING: u32 = u32::MAX;
 /// The lighting state of a draw, so that the lighting equation can also run per pixel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Lighting {
+    // Every field is private: `prepared` and `positional` are derived from the others in `new`
+    // and would go stale if those changed afterwards.
     /// The enabled lights, in eye coordinates.
-    pub lights: Vec<Light>,
-    pub model: LightModel,
+    lights: Vec<Light>,
+    model: LightModel,
     /// Front and back.
-    pub materials: [Material; 2],
+    materials: [Material; 2],
     /// glColorMaterial's (face, mode) when GL_COLOR_MATERIAL is on.
-    pub color_material: Option<(u32, u32)>,
+    color_material: Option<(u32, u32)>,
     /// `lighting::prepare` of the lights and model: what every vertex would otherwise work out
     /// again. Private, so that every `Lighting` is made by `new`, which derives it.
     prepared: Vec<Prepared>,
@@ -96,6 +98,16 @@ impl Lighting {
     /// infinity) or a local viewer. Otherwise only its normal and material count.
     pub fn reads_position(&self) -> bool {
         self.positional
+    }
+
+    /// The enabled lights, in eye coordinates.
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// The light model.
+    pub fn model(&self) -> &LightModel {
+        &self.model
     }
 
     /// The lights made ready for many vertices (`lighting::prepare`), one entry per light.

@@ -160,7 +160,7 @@ impl Instance {
                     return Vertex { primary: Vec4::ZERO, secondary: Vec3::ZERO, normal: n, color: vec4(color) };
                 }
                 let mats = l.materials(color);
-                let (a, b) = light_face(eye, n, &mats, &l.lights, l.prepared(), &l.model, face);
+                let (a, b) = light_face(eye, n, &mats, l.lights(), l.prepared(), l.model(), face);
                 (a, b, n)
             }
             None => (color.clamp(DVec4::ZERO, DVec4::ONE), DVec4::ZERO, DVec3::Z),

@@ -128,16 +128,16 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
         let (primary, secondary) = match visible {
             Some(reaches) => {
                 let lights: Vec<Light> = l
-                    .lights
+                    .lights()
                     .iter()
                     .map(|x| {
                         let v = reaches(x) as f64;
                         Light { diffuse: x.diffuse * v, specular: x.specular * v, ..*x }
                     })
                     .collect();
-                light_vertex_prepared(p, n, m, &lights, l.prepared(), &l.model)
+                light_vertex_prepared(p, n, m, &lights, l.prepared(), l.model())
             }
-            None => light_vertex_prepared(p, n, m, &l.lights, l.prepared(), &l.model),
+            None => light_vertex_prepared(p, n, m, l.lights(), l.prepared(), l.model()),
         };
         (primary.as_vec4(), secondary.truncate().as_vec3())
     } else {
