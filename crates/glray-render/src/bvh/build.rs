@@ -286,8 +286,8 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
 }
 
 /// The first split of a range a node would give a node of its own (more than `LEAF_SIZE`
-/// triangles; as `split_by` takes it), or None when the range is cheaper as one leaf of up to `MAX_BLOCKS` blocks. The
-/// SAH as Embree weighs it, a node visit costing what a block's test costs: the leaf's area
+/// triangles; as `split_by` takes it), or None when the range is cheaper as one leaf of up to
+/// `MAX_BLOCKS` blocks. The SAH as Embree weighs it, a node visit costing what a block's test costs: the leaf's area
 /// times its blocks, against its area (the visit) plus its best split's cost. Such leaves save
 /// the walks a node visit, and the dependent miss on it, where a split hardly narrows the range
 /// (docs/performance.md: camera rays at 10M -5%, a quarter fewer nodes).
