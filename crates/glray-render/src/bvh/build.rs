@@ -287,10 +287,11 @@ fn split(records: &mut [Record], centroids: Centroids) -> (Part, Part) {
 
 /// The first split of a range a node would give a node of its own (more than `LEAF_SIZE`
 /// triangles; as `split_by` takes it), or None when the range is cheaper as one leaf of up to
-/// `MAX_BLOCKS` blocks. The SAH as Embree weighs it, a node visit costing what a block's test costs: the leaf's area
-/// times its blocks, against its area (the visit) plus its best split's cost. Such leaves save
-/// the walks a node visit, and the dependent miss on it, where a split hardly narrows the range
-/// (docs/performance.md: camera rays at 10M -5%, a quarter fewer nodes).
+/// `MAX_BLOCKS` blocks. The SAH as Embree weighs it, a node visit costing what a block's test
+/// costs: the leaf's area times its blocks, against its area (the visit) plus its best split's
+/// cost. Such leaves save the walks a node visit, and the dependent miss on it, where a split
+/// hardly narrows the range (docs/performance.md: camera rays at 10M -3 to -6%, a quarter
+/// fewer nodes).
 fn as_node(records: &[Record], bounds: Bounds, centroids: Centroids) -> Option<Option<Choice>> {
     let n = records.len() as u32;
     let choice = choose(records, centroids);
@@ -529,7 +530,7 @@ fn leaf_children(lens: &[u8; WIDTH]) -> usize {
 }
 
 /// How many blocks the leaves among a node's children have (their lengths in `lens`).
-fn leaf_blocks(lens: &[u8; WIDTH]) -> u32 {
+fn blocks_of_leaves(lens: &[u8; WIDTH]) -> u32 {
     lens.iter().map(|&len| u32::from(len).div_ceil(LEAF_SIZE)).sum()
 }
 
@@ -655,7 +656,7 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
         .iter()
         .map(|lens| {
             let first = total;
-            total += leaf_blocks(lens);
+            total += blocks_of_leaves(lens);
             first
         })
         .collect();

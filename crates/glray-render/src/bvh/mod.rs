@@ -7,10 +7,10 @@
 //! eight with AVX where the CPU has it (chosen at run time, the same hits bit for bit:
 //! `boxes`, `lanes`); eight rather than four halves the tree's depth, and so the dependent
 //! misses of a walk (docs/performance.md). Leaves of one or two blocks of four triangles, each
-//! block stored the same way (corner and edges precomputed) and tested at once. `build` makes it (binned SAH). Why not
-//! obvhs's CWBVH: its generic single-ray traversal was half of every frame's profile, 4x
-//! slower per ray than Embree's, and its PLOC build 3-4x slower than Embree's with 3x the
-//! memory (docs/performance.md).
+//! block stored the same way (corner and edges precomputed) and tested at once. `build` makes
+//! it (binned SAH). Why not obvhs's CWBVH: its generic single-ray traversal was half of every
+//! frame's profile, 4x slower per ray than Embree's, and its PLOC build 3-4x slower than
+//! Embree's with 3x the memory (docs/performance.md).
 
 mod boxes;
 mod build;
@@ -71,6 +71,7 @@ fn leaf_ref(first: u32, blocks: u32) -> u32 {
 fn leaf_blocks(c: u32) -> (usize, usize) {
     ((c & (MAX_LEAVES - 1)) as usize, ((c & !LEAF) >> BLOCKS_AT) as usize + 1)
 }
+
 /// Children per node, tested four at a time (one 128-bit test per group of four) or, with
 /// AVX, all at once.
 const WIDTH: usize = 8;
