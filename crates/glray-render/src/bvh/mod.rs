@@ -149,12 +149,9 @@ impl TriBvh {
     /// misses overlap the subtree visited first (a deep 10M tree misses on most nodes).
     #[inline(always)]
     fn prefetch_child(&self, c: u32) {
-        if c & LEAF == 0 {
-            if let Some(node) = self.nodes.get(c as usize) {
-                prefetch::all(node);
-            }
-        } else {
-            self.leaf(c).iter().for_each(prefetch::all);
+        self.prefetch_first(c);
+        if c & LEAF != 0 {
+            self.leaf(c).iter().skip(1).for_each(prefetch::all);
         }
     }
 
