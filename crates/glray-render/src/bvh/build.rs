@@ -24,6 +24,12 @@ struct Record {
 }
 
 impl Record {
+    /// Triangle `index`'s record, from its corners.
+    fn new(index: usize, [a, b, c]: [Vec3; 3]) -> Record {
+        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+        Record { lo: lo.extend(f32::from_bits(index as u32)), hi: hi.extend(0.0) }
+    }
+
     fn index(&self) -> u32 {
         self.lo.w.to_bits()
     }
@@ -601,11 +607,7 @@ pub(super) struct Built {
 
 /// The tree over `count` triangles whose corners `corners` gives.
 pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> Built {
-    let record = |i: usize| {
-        let [a, b, c] = corners(i);
-        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
-        Record { lo: lo.extend(f32::from_bits(i as u32)), hi: hi.extend(0.0) }
-    };
+    let record = |i: usize| Record::new(i, corners(i));
     // Past what leaf references can index (2^30 blocks), the rest of the mesh is left out,
     // and said so (a mesh that size is ~34 GB of build records alone).
     let count = if count > MAX_LEAVES as usize {
@@ -722,15 +724,6 @@ mod tests {
             .collect()
     }
 
-    /// Records over `tris`, numbered in order.
-    fn records_of(tris: &[[Vec3; 3]]) -> Vec<Record> {
-        let record = |(i, t): (usize, &[Vec3; 3])| {
-            let (lo, hi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
-            Record { lo: lo.extend(f32::from_bits(i as u32)), hi: hi.extend(0.0) }
-        };
-        tris.iter().enumerate().map(record).collect()
-    }
-
     #[test]
     fn a_range_a_split_hardly_narrows_stays_one_leaf_of_two_blocks() {
         let tri = |at: Vec3, k: usize| {
@@ -738,7 +731,7 @@ mod tests {
             [at + Vec3::new(d, 0.0, 0.0), at + Vec3::new(1.0, d, 0.0), at + Vec3::new(0.0, 1.0, d)]
         };
         let verdict = |tris: &[[Vec3; 3]]| {
-            let rs = records_of(tris);
+            let rs: Vec<Record> = tris.iter().enumerate().map(|(i, &t)| Record::new(i, t)).collect();
             as_node(&rs, Bounds::of(&rs), Centroids::of(&rs)).is_some()
         };
         // Eight triangles nearly on top of each other: any split leaves two boxes as big as
