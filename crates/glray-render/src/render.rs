@@ -15,7 +15,7 @@ use crate::effects::{Effects, MAX_PASSES};
 use crate::gouraud::Gouraud;
 use crate::progress::Progress;
 use crate::resolve::closest_hit_suffices;
-use crate::scene::{Meshes, Scene};
+use crate::scene::{Hit, Meshes, Scene};
 use crate::signature::signature;
 use crate::tracer::{count, Scratch, Tracer};
 
@@ -212,6 +212,14 @@ pub fn render(frame: &Frame, width: u32, height: u32, previous: Option<&Rendered
 /// measured alike, 4 slower).
 const AHEAD: usize = 8;
 
+/// A 4x2 block of pixels whose camera rays are traced together (`Tracer::centers`), and what
+/// they hit where `traced`.
+struct Block {
+    pixels: [(usize, usize); 8],
+    traced: bool,
+    hits: [Option<Hit>; 8],
+}
+
 /// The loads of what shading reads, started `AHEAD` hits ahead of it: hit n's vertex
 /// indices when hit n - 2 AHEAD is shaded, its vertices (which need the indices) at n - AHEAD.
 struct Ahead<'a> {
@@ -341,19 +349,24 @@ impl Job<'_> {
                 let mut scratch = Scratch::default();
                 // The rows' camera rays first, then the shading, with the cache lines a hit's
                 // shading reads (big meshes miss on every hit) loaded ahead of it.
-                let blocks: Vec<_> = (x0..x1)
+                let mut blocks: Vec<Block> = (x0..x1)
                     .step_by(4)
-                    .map(|x| {
-                        let pixels: [(usize, usize); 8] =
-                            std::array::from_fn(|k| ((x + k % 4).min(x1 - 1), if k < 4 { y0 } else { last }));
-                        (pixels, tracer.centers(pixels))
+                    .map(|x| Block {
+                        pixels: std::array::from_fn(|k| ((x + k % 4).min(x1 - 1), if k < 4 { y0 } else { last })),
+                        traced: false,
+                        hits: [None; 8],
                     })
                     .collect();
-                let mut ahead =
-                    Ahead::new(&tracer, blocks.iter().filter_map(|b| b.1.as_ref()).flatten().flatten().map(|h| h.id));
-                for (pixels, centers) in &blocks {
+                for b in &mut blocks {
+                    b.traced = tracer.centers(&b.pixels, &mut b.hits);
+                }
+                let mut ahead = Ahead::new(
+                    &tracer,
+                    blocks.iter().filter(|b| b.traced).flat_map(|b| b.hits.iter().flatten()).map(|h| h.id),
+                );
+                for Block { pixels, traced, hits } in &blocks {
                     for (k, &(px, py)) in pixels.iter().enumerate() {
-                        let center = centers.as_ref().map(|c| c[k]);
+                        let center = traced.then_some(hits[k]);
                         if let Some(Some(_)) = center {
                             ahead.step();
                         }

@@ -146,6 +146,7 @@ struct Placed<'f> {
 }
 
 impl Placed<'_> {
+    #[inline]
     fn ray(&self, r: &Ray) -> Ray {
         // A linear map keeps the ray's parameter: t is the same in both spaces.
         let o = self.to_object.transform_point3a(r.origin);
@@ -154,6 +155,7 @@ impl Placed<'_> {
     }
 
     /// A hit on the instance's mesh as a hit of the scene.
+    #[inline]
     fn hit(&self, k: usize, h: TriHit) -> Hit {
         let id = TriangleId { instance: k as u32, index: h.index };
         Hit { id, t: h.t, sequence: self.instance.sequence, normal: self.normal_to_eye * h.normal, uv: h.uv }
@@ -439,33 +441,36 @@ impl<'f> Scene<'f> {
     }
 
     /// The closest hits of `N` rays (a multiple of four; coherent ones: a block of camera rays),
-    /// as `closest` finds each.
-    pub fn closest_packet<const N: usize>(&self, rays: [Ray; N]) -> [Option<Hit>; N] {
+    /// as `closest` finds each, into `best`.
+    pub fn closest_packet<const N: usize>(&self, rays: &[Ray; N], best: &mut [Option<Hit>; N]) {
         if self.top.is_some() {
             // Many instances: the top level is walked ray by ray.
-            return rays.map(|r| self.closest(r));
-        }
-        let mut rays = rays;
-        let keep = |best: &mut [Option<Hit>; N], rays: &mut [Ray; N], hits: [Option<Hit>; N]| {
-            for (j, hit) in hits.into_iter().enumerate() {
-                if let Some(h) = hit {
-                    best[j] = Some(h);
-                    rays[j].tmax = h.t;
-                }
+            for (b, r) in best.iter_mut().zip(rays) {
+                *b = self.closest(*r);
             }
-        };
-        let mut best = [None; N];
-        let hits = self.bvh.closest_packet(&rays, |_, _| true);
-        keep(&mut best, &mut rays, hits.map(|h| h.map(|h| self.flat(h))));
+            return;
+        }
+        let mut found = [None; N];
+        self.bvh.closest_packet(rays, &mut found, |_, _| true);
+        for (b, h) in best.iter_mut().zip(&found) {
+            *b = h.map(|h| self.flat(h));
+        }
+        // Each ray as far as its closest hit so far: an instance whose box every ray misses
+        // or enters beyond that is passed by.
+        let reach = |best: &[Option<Hit>; N], j: usize| best[j].map_or(rays[j].tmax, |h| h.t);
         for (k, b) in self.boxes.iter().enumerate() {
-            if rays.iter().all(|r| b.intersect_ray(r) == f32::INFINITY) {
+            if (0..N).all(|j| b.intersect_ray(&rays[j]) > reach(best, j)) {
                 continue;
             }
             let p = &self.placed[k];
-            let hits = p.bvh.bvh.closest_packet(&rays.map(|r| p.ray(&r)), |_, det| p.drawn(det));
-            keep(&mut best, &mut rays, hits.map(|h| h.map(|h| p.hit(k, h))));
+            let object = std::array::from_fn(|j| p.ray(&Ray { tmax: reach(best, j), ..rays[j] }));
+            p.bvh.bvh.closest_packet(&object, &mut found, |_, det| p.drawn(det));
+            for (b, h) in best.iter_mut().zip(&found) {
+                if let Some(h) = h {
+                    *b = Some(p.hit(k, *h));
+                }
+            }
         }
-        best
     }
 
     /// Every hit in [tmin, tmax], in no particular order.
@@ -631,9 +636,11 @@ mod tests {
                 "{m}: {} vs {expected}",
                 hit.normal
             );
-            let four = scene.closest_packet([r; 4]);
+            let mut four = [None; 4];
+            scene.closest_packet(&[r; 4], &mut four);
             assert!(four.iter().all(|h| *h == Some(hit)));
-            let eight = scene.closest_packet([r; 8]);
+            let mut eight = [None; 8];
+            scene.closest_packet(&[r; 8], &mut eight);
             assert!(eight.iter().all(|h| *h == Some(hit)));
             let mut all = Vec::new();
             scene.all(r, &mut all);

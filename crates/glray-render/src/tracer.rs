@@ -152,14 +152,15 @@ impl Tracer<'_> {
     }
 
     /// The closest hits of the rays through the centres of `N` neighbouring pixels (a
-    /// multiple of four), traced together, when the closest hit is what decides a pixel's
-    /// first sample (None otherwise).
-    pub fn centers<const N: usize>(&self, pixels: [(usize, usize); N]) -> Option<[Option<Hit>; N]> {
+    /// multiple of four), traced together into `hits`, when the closest hit is what decides a
+    /// pixel's first sample (false otherwise, `hits` untouched).
+    pub fn centers<const N: usize>(&self, pixels: &[(usize, usize); N], hits: &mut [Option<Hit>; N]) -> bool {
         if !self.simple || self.pass != 0 {
-            return None;
+            return false;
         }
         let rays = pixels.map(|(x, y)| Self::traced(&self.camera.ray(x as f64 + 0.5, y as f64 + 0.5)));
-        Some(self.scene.closest_packet(rays))
+        self.scene.closest_packet(&rays, hits);
+        true
     }
 
     /// One camera ray through window position (px, py); `known`, its closest hit if found

@@ -211,7 +211,8 @@ fn kernels(frame: &Frame, ao: u32, frames: u32) -> Kernels {
                     let (x, y) = at(k);
                     ray(x, y)
                 });
-                let hits = scene.closest_packet(rays);
+                let mut hits = [None; 8];
+                scene.closest_packet(&rays, &mut hits);
                 for k in 0..8 {
                     let (x, y) = at(k);
                     rows[(y - y0) * w + x] = record(&rays[k], hits[k]);

@@ -22,6 +22,8 @@ pub(super) trait Lanes<const N: usize>:
     fn min(self, other: Self) -> Self;
     fn max(self, other: Self) -> Self;
     fn min_element(self) -> f32;
+    /// The largest lane (of lanes none of which is NaN).
+    fn max_element(self) -> f32;
     /// Ordered comparisons (false where either is NaN), but `cmpne`, which is true there.
     fn cmple(self, other: Self) -> Self::Mask;
     fn cmpge(self, other: Self) -> Self::Mask;
@@ -68,6 +70,11 @@ impl Lanes<4> for Vec4 {
     #[inline(always)]
     fn min_element(self) -> f32 {
         Vec4::min_element(self)
+    }
+
+    #[inline(always)]
+    fn max_element(self) -> f32 {
+        Vec4::max_element(self)
     }
 
     #[inline(always)]
@@ -185,6 +192,16 @@ mod avx {
         #[inline(always)]
         fn min_element(self) -> f32 {
             self.to_array().into_iter().fold(f32::INFINITY, f32::min)
+        }
+
+        #[inline(always)]
+        fn max_element(self) -> f32 {
+            // SAFETY: see `F8`. Halves, then quarters, then the last two lanes.
+            unsafe {
+                let m = _mm_max_ps(_mm256_castps256_ps128(self.0), _mm256_extractf128_ps::<1>(self.0));
+                let m = _mm_max_ps(m, _mm_movehl_ps(m, m));
+                _mm_cvtss_f32(_mm_max_ss(m, _mm_shuffle_ps::<1>(m, m)))
+            }
         }
 
         #[inline(always)]

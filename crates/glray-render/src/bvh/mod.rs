@@ -15,6 +15,7 @@
 mod boxes;
 mod build;
 mod bundle;
+mod frustum;
 mod lanes;
 mod node;
 mod packet;
@@ -643,7 +644,7 @@ mod tests {
             };
             assert!(near(bvh.closest(&ray, |_, _| true).map(|h| h.t)), "ray {k}: want {want:?}");
             assert_eq!(bvh.occluded(&ray), want.is_some(), "ray {k}");
-            let packet = bvh.closest_packet(&[ray; 8], |_, _| true);
+            let packet = bvh.packet_hits(&[ray; 8], |_, _| true);
             assert!(packet.iter().all(|h| near(h.map(|h| h.t))), "ray {k}: want {want:?}");
             let hidden = bvh.occluded_from(from, &[ray.direction; BUNDLE], f32::INFINITY, 0);
             assert_eq!(hidden, if want.is_some() { (1 << BUNDLE) - 1 } else { 0 }, "ray {k}");
@@ -792,7 +793,7 @@ mod tests {
             rays.push((ray, want));
         }
         for packet in rays.chunks_exact(8) {
-            let found = bvh.closest_packet(&std::array::from_fn::<_, 8, _>(|j| packet[j].0), |_, _| true);
+            let found = bvh.packet_hits(&std::array::from_fn::<_, 8, _>(|j| packet[j].0), |_, _| true);
             for (got, (_, want)) in found.iter().zip(packet) {
                 assert_eq!(got.map(|h| (h.index, h.t)), *want);
             }
