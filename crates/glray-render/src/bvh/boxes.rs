@@ -88,7 +88,7 @@ impl Boxes for Sse {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(super) use avx::{available as avx_available, plane, Avx};
+pub(super) use avx::{available as avx_available, plane, slabs, Avx};
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
@@ -177,15 +177,30 @@ mod avx {
         };
         let near = |axis: usize| slab(axis, a.near[axis]);
         let far = |axis: usize| slab(axis, 1 - a.near[axis]);
+        slabs([near(0), near(1), near(2)], [far(0), far(1), far(2)], a.tmin, tmax, node.occupied)
+    }
+
+    /// The children met, from where a ray crosses their near and far planes along each axis:
+    /// a bit per child met within [tmin, tmax] (of those `occupied`), and where it enters each.
+    /// (The frustum's test ends the same way.)
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub unsafe fn slabs(
+        near: [__m256; 3],
+        far: [__m256; 3],
+        tmin: __m256,
+        tmax: f32,
+        occupied: u32,
+    ) -> (u32, [f32; WIDTH]) {
         // glam's max and min are _mm_max_ps(self, other): the same operand order here.
-        let tnear = _mm256_max_ps(_mm256_max_ps(near(0), near(1)), _mm256_max_ps(near(2), a.tmin));
-        let tfar = _mm256_min_ps(_mm256_min_ps(far(0), far(1)), _mm256_min_ps(far(2), _mm256_set1_ps(tmax)));
+        let tnear = _mm256_max_ps(_mm256_max_ps(near[0], near[1]), _mm256_max_ps(near[2], tmin));
+        let tfar = _mm256_min_ps(_mm256_min_ps(far[0], far[1]), _mm256_min_ps(far[2], _mm256_set1_ps(tmax)));
         let tfar = _mm256_mul_ps(tfar, _mm256_set1_ps(WIDEN));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar)) as u32;
         let mut entry = [0.0f32; WIDTH];
         // SAFETY: `entry` holds eight floats; the store is unaligned.
         unsafe { _mm256_storeu_ps(entry.as_mut_ptr(), tnear) };
-        (mask & node.occupied, entry)
+        (mask & occupied, entry)
     }
 
     /// Side `side` of the eight children's boxes along `axis`, decoded as `Node::bound` does

@@ -22,7 +22,7 @@ mod avx {
 
     use obvhs::ray::Ray;
 
-    use super::super::boxes::{plane, WIDEN};
+    use super::super::boxes::{plane, slabs};
     use super::super::node::Node;
     use super::super::WIDTH;
 
@@ -90,15 +90,8 @@ mod avx {
                 let d = _mm256_sub_ps(plane(node, 1 - self.near[axis], axis), self.far_origin[axis]);
                 _mm256_max_ps(_mm256_mul_ps(d, self.inverse_lo[axis]), _mm256_mul_ps(d, self.inverse_hi[axis]))
             };
-            // As a single ray's test (`boxes`), operand for operand.
-            let tnear = _mm256_max_ps(_mm256_max_ps(near(0), near(1)), _mm256_max_ps(near(2), self.tmin));
-            let tfar = _mm256_min_ps(_mm256_min_ps(far(0), far(1)), _mm256_min_ps(far(2), _mm256_set1_ps(tmax)));
-            let tfar = _mm256_mul_ps(tfar, _mm256_set1_ps(WIDEN));
-            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar)) as u32;
-            let mut entry = [0.0f32; WIDTH];
-            // SAFETY: `entry` holds eight floats; the store is unaligned.
-            unsafe { _mm256_storeu_ps(entry.as_mut_ptr(), tnear) };
-            (mask & node.occupied, entry)
+            // Then as a single ray's test, operand for operand.
+            slabs([near(0), near(1), near(2)], [far(0), far(1), far(2)], self.tmin, tmax, node.occupied)
         }
     }
 

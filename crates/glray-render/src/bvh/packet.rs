@@ -216,8 +216,7 @@ impl TriBvh {
         mut accept: impl FnMut(u32, f32) -> bool,
     ) {
         const ALL: u32 = 0xff;
-        let mut bound = rays.map(|r| r.tmax);
-        let mut tmax = F8::from_array(bound);
+        let mut tmax = F8::from_array(rays.map(|r| r.tmax));
         // The bound the packet's node tests use: the largest of the rays' tmax.
         let mut farthest = tmax.max_element();
         let mut stack = S::new();
@@ -258,30 +257,7 @@ impl TriBvh {
                         continue;
                     }
                 } else {
-                    let mut shortened = false;
-                    for tri in self.leaf(cur.0) {
-                        for k in 0..4 {
-                            if tri.id[k] == EMPTY {
-                                break;
-                            }
-                            let c = hit_triangle(tri, k, &r, tmax);
-                            let mut mask = c.mask & cur.2;
-                            if mask == 0 {
-                                continue;
-                            }
-                            let (ts, dets) = (c.t.to_array(), c.det.to_array());
-                            while mask != 0 {
-                                let lane = mask.trailing_zeros() as usize;
-                                mask &= mask - 1;
-                                if ts[lane] < bound[lane] && accept(tri.id[k], dets[lane]) {
-                                    bound[lane] = ts[lane];
-                                    best[lane] = Some(tri.hit(k, ts[lane], &rays[lane]));
-                                    shortened = true;
-                                }
-                            }
-                            tmax = F8::from_array(bound);
-                        }
-                    }
+                    let shortened = self.leaf_hits(cur.0, cur.2, rays, &r, &mut tmax, best, &mut accept);
                     if shortened {
                         farthest = tmax.max_element();
                     }
@@ -382,29 +358,7 @@ impl TriBvh {
                         continue;
                     }
                 } else {
-                    for tri in self.leaf(cur.0) {
-                        for k in 0..4 {
-                            if tri.id[k] == EMPTY {
-                                break;
-                            }
-                            let c = hit_triangle(tri, k, &r, tmax);
-                            let mut mask = c.mask & active_bits;
-                            if mask == 0 {
-                                continue;
-                            }
-                            let (ts, dets) = (c.t.to_array(), c.det.to_array());
-                            let mut bound = tmax.to_array();
-                            while mask != 0 {
-                                let lane = mask.trailing_zeros() as usize;
-                                mask &= mask - 1;
-                                if ts[lane] < bound[lane] && accept(tri.id[k], dets[lane]) {
-                                    bound[lane] = ts[lane];
-                                    best[lane] = Some(tri.hit(k, ts[lane], &rays[lane]));
-                                }
-                            }
-                            tmax = L::from_array(bound);
-                        }
-                    }
+                    self.leaf_hits(cur.0, active_bits, rays, &r, &mut tmax, best, &mut accept);
                 }
             }
             match stack.pop() {
@@ -412,6 +366,48 @@ impl TriBvh {
                 None => return,
             }
         }
+    }
+
+    /// Leaf `leaf`'s triangles against the rays in `lanes` (a bit each): a closer hit that
+    /// `accept` takes goes into `best` and its distance into `tmax`. Whether any did.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn leaf_hits<L: Lanes<N>, const N: usize>(
+        &self,
+        leaf: u32,
+        lanes: u32,
+        rays: &[Ray; N],
+        r: &Rays<L>,
+        tmax: &mut L,
+        best: &mut [Option<TriHit>; N],
+        accept: &mut impl FnMut(u32, f32) -> bool,
+    ) -> bool {
+        let mut shortened = false;
+        for tri in self.leaf(leaf) {
+            for k in 0..4 {
+                if tri.id[k] == EMPTY {
+                    break;
+                }
+                let c = hit_triangle(tri, k, r, *tmax);
+                let mut mask = c.mask & lanes;
+                if mask == 0 {
+                    continue;
+                }
+                let (ts, dets) = (c.t.to_array(), c.det.to_array());
+                let mut bound = tmax.to_array();
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if ts[lane] < bound[lane] && accept(tri.id[k], dets[lane]) {
+                        bound[lane] = ts[lane];
+                        best[lane] = Some(tri.hit(k, ts[lane], &rays[lane]));
+                        shortened = true;
+                    }
+                }
+                *tmax = L::from_array(bound);
+            }
+        }
+        shortened
     }
 }
 
