@@ -140,6 +140,8 @@ struct Placed<'f> {
     instance: &'f Instance,
     bvh: Arc<MeshBvh>,
     to_object: Affine3A,
+    /// Whether its mesh's packets test a node once for all their rays (see `FINE`).
+    frustum: bool,
     /// Takes an object-space e1 x e2 to the eye-space one: (M e1) x (M e2) = cof(M) (e1 x e2)
     /// for the modelview's linear part M (its cofactor matrix, so mirrors keep the winding).
     normal_to_eye: Mat3,
@@ -185,6 +187,19 @@ pub struct Scene<'f> {
     translucent: bool,
 }
 
+/// A mesh of more triangles than this per pixel of the frame walks its packets ray by ray,
+/// without the frustum test (`TriBvh::closest_packet`): its triangles are mostly smaller than
+/// the pixels between a packet's rays, and the packet's bounds meet many leaves its rays pass
+/// by. 10M triangles at 1280x720 (11 a pixel): camera rays 2% and the GL-look frame 5%
+/// slower with the frustum; 1M (1.1 a pixel): camera rays 0-12% faster.
+const FINE: u64 = 4;
+
+/// Whether a mesh of `triangles` is coarse enough for the frustum test in `frame`.
+fn coarse(triangles: usize, frame: &Frame) -> bool {
+    let (w, h) = frame.size();
+    triangles as u64 <= FINE * (w as u64 * h as u64).max(1)
+}
+
 /// Up to this many instances are tried one box after the other: cheaper than a top-level
 /// traversal (a big mesh drawn once is the common case).
 const FEW_INSTANCES: usize = 8;
@@ -202,6 +217,7 @@ impl<'f> Scene<'f> {
                 let (a, b, c) = (m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate());
                 Placed {
                     instance,
+                    frustum: coarse(instance.mesh.triangles.len(), frame),
                     bvh,
                     to_object: Affine3A::from_mat4(instance.modelview.inverse().as_mat4()),
                     normal_to_eye: Mat3::from_cols(b.cross(c), c.cross(a), a.cross(b)),
@@ -451,7 +467,7 @@ impl<'f> Scene<'f> {
             return;
         }
         let mut found = [None; N];
-        self.bvh.closest_packet(rays, &mut found, |_, _| true);
+        self.bvh.closest_packet(rays, &mut found, coarse(self.frame.triangles.len(), self.frame), |_, _| true);
         for (b, h) in best.iter_mut().zip(&found) {
             *b = h.map(|h| self.flat(h));
         }
@@ -464,7 +480,7 @@ impl<'f> Scene<'f> {
             }
             let p = &self.placed[k];
             let object = std::array::from_fn(|j| p.ray(&Ray { tmax: reach(best, j), ..rays[j] }));
-            p.bvh.bvh.closest_packet(&object, &mut found, |_, det| p.drawn(det));
+            p.bvh.bvh.closest_packet(&object, &mut found, p.frustum, |_, det| p.drawn(det));
             for (b, h) in best.iter_mut().zip(&found) {
                 if let Some(h) = h {
                     *b = Some(p.hit(k, *h));
@@ -531,6 +547,16 @@ mod tests {
 
     fn ray(o: [f32; 3], d: [f32; 3]) -> Ray {
         Ray::new(Vec3A::from_array(o), Vec3::from_array(d).normalize().into(), 0.0, f32::INFINITY)
+    }
+
+    #[test]
+    fn meshes_of_more_than_fine_triangles_a_pixel_walk_packets_ray_by_ray() {
+        let frame = Frame { width: 1280, height: 720, ..Frame::default() };
+        assert!(coarse(1_000_000, &frame), "1M triangles at 1280x720");
+        assert!(!coarse(10_000_000, &frame), "10M triangles at 1280x720");
+        assert!(coarse(4 * 1280 * 720, &frame) && !coarse(4 * 1280 * 720 + 1, &frame));
+        // A frame without a size yet: only tiny meshes count as coarse.
+        assert!(!coarse(5, &Frame::default()));
     }
 
     #[test]
