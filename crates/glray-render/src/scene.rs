@@ -174,6 +174,9 @@ impl Placed<'_> {
 pub struct Scene<'f> {
     frame: &'f Frame,
     bvh: TriBvh,
+    /// Whether the frame's own triangles' packets test a node once for all their rays (as
+    /// `Placed::frustum` for a mesh).
+    frustum: bool,
     placed: Vec<Placed<'f>>,
     /// The instances' eye-space boxes, and a BVH over them when there are many.
     boxes: Vec<Aabb>,
@@ -245,7 +248,19 @@ impl<'f> Scene<'f> {
         let solid_bvh = (!solid_boxes.is_empty())
             .then(|| build_cwbvh(&solid_boxes, BvhBuildParams::fast_build(), &mut Duration::default()));
         let translucent = frame.surfaces.iter().any(|s| s.blend.is_some() || s.alpha_test.is_some());
-        Scene { frame, bvh, placed, boxes: bounds, top, bounds: all, solids: &frame.solids, solid_bvh, translucent }
+        let frustum = coarse(frame.triangles.len(), frame);
+        Scene {
+            frame,
+            bvh,
+            frustum,
+            placed,
+            boxes: bounds,
+            top,
+            bounds: all,
+            solids: &frame.solids,
+            solid_bvh,
+            translucent,
+        }
     }
 
     /// Offers `visit` every instance whose box the ray meets (the top-level BVH's way when
@@ -467,7 +482,7 @@ impl<'f> Scene<'f> {
             return;
         }
         let mut found = [None; N];
-        self.bvh.closest_packet(rays, &mut found, coarse(self.frame.triangles.len(), self.frame), |_, _| true);
+        self.bvh.closest_packet(rays, &mut found, self.frustum, |_, _| true);
         for (b, h) in best.iter_mut().zip(&found) {
             *b = h.map(|h| self.flat(h));
         }
