@@ -313,7 +313,7 @@ fn hit_triangles(tri: &Tri4, r: &Prepared, tmax: f32) -> Crossing<Vec4> {
 }
 
 /// Puts `entry` (distance first) among the first `n` of `hits`, which are sorted farthest
-/// first, keeping them so: children are then pushed far to near and the nearest is visited now.
+/// first, keeping them so.
 #[inline(always)]
 fn insert_farthest_first<T: Copy, const N: usize>(hits: &mut [(f32, T); N], n: usize, entry: (f32, T)) {
     let mut j = n;
@@ -347,6 +347,38 @@ impl TriBvh {
     #[inline]
     pub fn is_empty(&self) -> bool {
         self.root == EMPTY
+    }
+
+    /// How every walk that wants the nearest hit goes on from a node: of the children met
+    /// (`met`, a bit each, at least one), the nearest's stack entry, to visit now, the others
+    /// pushed on `stack` farthest first (so that they come back nearest first), each one's
+    /// loads started as it is pushed. `entry(k)`: child k's distance, by which they are
+    /// ordered, and its stack entry; `child`: an entry's subtree. The walks differ only in
+    /// their entries: a ray's (subtree, entry distance), a packet's (subtree, each ray's entry
+    /// distance), a frustum's (subtree, earliest entry, rays).
+    #[inline(always)]
+    fn nearest_pushing_rest<E: Copy, S: Pending<E>>(
+        &self,
+        mut met: u32,
+        stack: &mut S,
+        entry: impl Fn(usize) -> (f32, E),
+        child: impl Fn(&E) -> u32,
+    ) -> E {
+        debug_assert!(met != 0);
+        let first = entry(met.trailing_zeros() as usize);
+        let mut hits = [first; WIDTH];
+        let mut n = 0;
+        while met != 0 {
+            let k = met.trailing_zeros() as usize;
+            met &= met - 1;
+            insert_farthest_first(&mut hits, n, if n == 0 { first } else { entry(k) });
+            n += 1;
+        }
+        for (_, e) in &hits[..n - 1] {
+            self.prefetch_child(child(e));
+            stack.push(*e);
+        }
+        hits[n - 1].1
     }
 
     /// Walks the tree children nearest first (what a closest hit wants: a near hit prunes what
@@ -387,21 +419,8 @@ impl TriBvh {
                         continue;
                     }
                     // Two or more: visit the nearest now, the others nearest first after it.
-                    let mut hits = [(0.0f32, 0u32); WIDTH];
-                    let mut n = 0;
-                    let mut m = mask;
-                    while m != 0 {
-                        let k = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        insert_farthest_first(&mut hits, n, (tnear[k], node.child[k]));
-                        n += 1;
-                    }
-                    // `hits` is farthest first: push all but the nearest.
-                    for &(t, c) in &hits[..n - 1] {
-                        self.prefetch_child(c);
-                        stack.push((c, t));
-                    }
-                    cur = hits[n - 1].1;
+                    let entry = |k: usize| (tnear[k], (node.child[k], tnear[k]));
+                    cur = self.nearest_pushing_rest(mask, &mut stack, entry, |e| e.0).0;
                     continue;
                 }
             } else {

@@ -20,7 +20,7 @@ use super::lanes::Lanes;
 use super::lanes::F8;
 use super::node::Planes;
 use super::stack::{Fixed, Pending, Spilling};
-use super::{insert_farthest_first, moller_trumbore, Crossing, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
+use super::{moller_trumbore, Crossing, Tri4, TriBvh, TriHit, EMPTY, LEAF, WIDTH};
 
 /// `N` rays, one per lane.
 struct Rays<L> {
@@ -244,21 +244,9 @@ impl TriBvh {
                             }
                         }
                     }
-                    let mut hits = [(0.0f32, (0u32, 0u32)); WIDTH];
-                    let mut n = 0;
-                    while met != 0 {
-                        let k = met.trailing_zeros() as usize;
-                        met &= met - 1;
-                        insert_farthest_first(&mut hits, n, (entered[k], (node.child[k], lanes[k])));
-                        n += 1;
-                    }
-                    if n > 0 {
-                        for &(t, (c, lanes)) in &hits[..n - 1] {
-                            self.prefetch_child(c);
-                            stack.push((c, t, lanes));
-                        }
-                        let (t, (c, lanes)) = hits[n - 1];
-                        cur = (c, t, lanes);
+                    if met != 0 {
+                        let entry = |k: usize| (entered[k], (node.child[k], entered[k], lanes[k]));
+                        cur = self.nearest_pushing_rest(met, &mut stack, entry, |e| e.0);
                         continue;
                     }
                 } else {
@@ -346,20 +334,9 @@ impl TriBvh {
                         *entry = L::select(mask, tnear, infinity);
                         met |= ((L::bitmask(mask) != 0) as u32) << k;
                     }
-                    let mut hits = [(0.0f32, (0u32, infinity)); WIDTH];
-                    let mut n = 0;
-                    while met != 0 {
-                        let k = met.trailing_zeros() as usize;
-                        met &= met - 1;
-                        insert_farthest_first(&mut hits, n, (entered[k].min_element(), (node.child[k], entered[k])));
-                        n += 1;
-                    }
-                    if n > 0 {
-                        for &(_, entry) in &hits[..n - 1] {
-                            self.prefetch_child(entry.0);
-                            stack.push(entry);
-                        }
-                        cur = hits[n - 1].1;
+                    if met != 0 {
+                        let entry = |k: usize| (entered[k].min_element(), (node.child[k], entered[k]));
+                        cur = self.nearest_pushing_rest(met, &mut stack, entry, |e| e.0);
                         continue;
                     }
                 } else {
