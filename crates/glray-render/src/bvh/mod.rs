@@ -365,13 +365,14 @@ impl TriBvh {
         child: impl Fn(&E) -> u32,
     ) -> E {
         debug_assert!(met != 0);
-        let first = entry(met.trailing_zeros() as usize);
-        let mut hits = [first; WIDTH];
-        let mut n = 0;
+        // The first child met fills the array (and is its first entry), the rest are sorted in.
+        let mut hits = [entry(met.trailing_zeros() as usize); WIDTH];
+        met &= met - 1;
+        let mut n = 1;
         while met != 0 {
             let k = met.trailing_zeros() as usize;
             met &= met - 1;
-            insert_farthest_first(&mut hits, n, if n == 0 { first } else { entry(k) });
+            insert_farthest_first(&mut hits, n, entry(k));
             n += 1;
         }
         for (_, e) in &hits[..n - 1] {
