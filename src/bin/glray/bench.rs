@@ -15,6 +15,7 @@ use glray_capture::lighting::{Light, LightModel, Material};
 use glray_capture::mesh::Mesh;
 use glray_core::image::Image;
 use glray_render::effects::{occlusion, Origin};
+use glray_render::render::{for_each_block, TILE};
 use glray_render::sampling::Sampler;
 use glray_render::scene::{Meshes, Ray, Scene};
 use glray_render::{Effects, Options, Renderer};
@@ -233,15 +234,24 @@ fn kernels(frame: &Frame, ao: u32, frames: u32) -> Kernels {
     let mut ao_ms = Vec::new();
     for pass in 0..=frames {
         let start = Instant::now();
-        shade.par_chunks_mut(w).zip(records.par_chunks(w)).enumerate().for_each(|(y, (row, hits))| {
-            for (x, (out, hit)) in row.iter_mut().zip(hits).enumerate() {
-                if let Some(hit) = hit {
-                    let mut sampler = Sampler::new(&[x as u32, y as u32, 0]);
-                    let from = Origin { p: hit.p, n: hit.n, draw: u32::MAX };
-                    *out = occlusion(&scene, &from, ao, distance, eps, &mut sampler);
-                }
-            }
-        });
+        // In the renderer's order: bands of rows, tile by tile, each tile's 4x2 blocks.
+        shade.par_chunks_mut(TILE * w).zip(records.par_chunks(TILE * w)).enumerate().for_each(
+            |(band, (rows, hits))| {
+                let y0 = TILE * band;
+                for_each_block(0..w, y0..=y0 + hits.len() / w - 1, |x, ya, yb| {
+                    for py in ya..=yb {
+                        for px in x..(x + 4).min(w) {
+                            let at = (py - y0) * w + px;
+                            if let Some(hit) = &hits[at] {
+                                let mut sampler = Sampler::new(&[px as u32, py as u32, 0]);
+                                let from = Origin { p: hit.p, n: hit.n, draw: u32::MAX };
+                                rows[at] = occlusion(&scene, &from, ao, distance, eps, &mut sampler);
+                            }
+                        }
+                    }
+                });
+            },
+        );
         if pass > 0 {
             ao_ms.push(start.elapsed().as_secs_f64() * 1e3);
         }
