@@ -19,6 +19,7 @@ pub mod bvh;
 pub mod effects;
 pub mod fragment;
 mod gouraud;
+pub mod pieces;
 mod progress;
 pub mod render;
 pub mod resolve;

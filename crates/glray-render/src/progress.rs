@@ -1,4 +1,4 @@
-//! Progress of a long render on a terminal: after the first second, the share of rows done,
+//! Progress of a long render on a terminal: after the first second, the share of pixels done,
 //! rewritten in place on standard error, at most a few times a second.
 
 use std::io::Write;
@@ -7,18 +7,20 @@ use std::time::{Duration, Instant};
 
 pub(crate) struct Progress {
     on: bool,
-    rows: usize,
+    /// The pixels to render.
+    pixels: usize,
     start: Instant,
     /// When it was last shown (None: not yet).
     shown: Mutex<Option<Instant>>,
 }
 
 impl Progress {
-    pub fn new(on: bool, rows: usize) -> Progress {
-        Progress { on, rows, start: Instant::now(), shown: Mutex::new(None) }
+    pub fn new(on: bool, pixels: usize) -> Progress {
+        Progress { on, pixels, start: Instant::now(), shown: Mutex::new(None) }
     }
 
-    pub fn row_done(&self, done: usize) {
+    /// `done` pixels are rendered.
+    pub fn done(&self, done: usize) {
         if !self.on || self.start.elapsed() < Duration::from_secs(1) {
             return;
         }
@@ -27,7 +29,7 @@ impl Progress {
             return;
         }
         *shown = Some(Instant::now());
-        let pct = 100.0 * done as f64 / self.rows.max(1) as f64;
+        let pct = 100.0 * done as f64 / self.pixels.max(1) as f64;
         let _ = write!(std::io::stderr(), "\rglray: tracing {pct:5.1}% ({:.1} s)", self.start.elapsed().as_secs_f64());
     }
 

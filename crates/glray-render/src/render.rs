@@ -13,6 +13,7 @@ use rayon::prelude::*;
 
 use crate::effects::{Effects, MAX_PASSES};
 use crate::gouraud::Gouraud;
+use crate::pieces::{self, for_each_block, Piece};
 use crate::progress::Progress;
 use crate::resolve::closest_hit_suffices;
 use crate::scene::{Hit, Meshes, Scene};
@@ -256,40 +257,6 @@ impl<'a> Ahead<'a> {
     }
 }
 
-/// The side of the square tiles pixels are traced in, rows of tiles (bands) at a time on a
-/// thread. Neighbouring pixels' secondary rays start from neighbouring points and walk much
-/// the same nodes: in tiles, a pixel's neighbours above and below were traced just before it,
-/// not a row of the image ago, and their nodes are still in the cache: a 10M ambient-occlusion
-/// pass 11-18% faster than in pairs of rows, 1M 5% (docs/performance.md).
-pub const TILE: usize = 8;
-
-/// Calls `block` with each 4x2 block of the pixels `columns` x `rows`, tile by tile (`TILE`
-/// columns wide) from the left, each tile's blocks a pair of rows at a time from the top:
-/// (first column, upper row, lower row); a last row without a pair is its own lower row.
-/// Plain loops: as a chain of `flat_map`s over `step_by`s, the walk cost ~230 instructions a
-/// block (callgrind), 1% of a GL-look frame.
-pub fn for_each_block(
-    columns: std::ops::Range<usize>,
-    rows: std::ops::RangeInclusive<usize>,
-    mut block: impl FnMut(usize, usize, usize),
-) {
-    let (top, last) = (*rows.start(), *rows.end());
-    let mut tile = columns.start;
-    while tile < columns.end {
-        let end = columns.end.min(tile + TILE);
-        let mut y = top;
-        while y <= last {
-            let mut x = tile;
-            while x < end {
-                block(x, y, (y + 1).min(last));
-                x += 4;
-            }
-            y += 2;
-        }
-        tile += TILE;
-    }
-}
-
 /// Up to this many triangles in instances, a frame of camera rays alone is traced as flat
 /// triangles (see `Renderer::flatten_below`).
 pub const FLATTEN_INSTANCES: usize = 8192;
@@ -370,29 +337,26 @@ impl Job<'_> {
         let v = camera.viewport;
         let x0 = v.x.max(0) as usize;
         let x1 = ((v.x as i64 + v.width as i64).max(0) as usize).min(w);
-        let rows_done = AtomicUsize::new(0);
-        let progress = Progress::new(self.progress, h);
+        let done = AtomicUsize::new(0);
+        let progress = Progress::new(self.progress, w * h);
         let one_sample = self.options.effects.samples <= 1;
         let inside = |y: usize| (y as i64) >= v.y as i64 && (y as i64) < v.y as i64 + v.height as i64;
-        // Rows go in bands, each band's pixels in tiles of `TILE` columns and those in blocks
-        // of 4x2: the camera rays of a block are traced together (eight to a packet where the
-        // CPU has AVX, else two packets of four). Bands are `TILE` rows high when secondary rays
-        // leave the hits, whose neighbours then share nodes; camera rays alone gain nothing
-        // from tiles and go a pair of rows at a time (in bands of eight, the blocks held
-        // between the tracing and the shading made a 10M GL-look frame 2-6% slower).
-        let band_rows = if secondary { TILE } else { 2 };
-        let process = |band: usize, rows: &mut [u8], drows: &mut [f32], mut crows: Option<&mut [Vec4]>| {
-            let y0 = band_rows * band;
-            let last = y0 + drows.len() / w - 1;
-            if (y0..=last).any(inside) && x0 < x1 {
+        // Pieces of the image (`pieces`), each piece's pixels in 4x2 blocks: the camera rays of
+        // a block are traced together (eight to a packet where the CPU has AVX, else two packets
+        // of four). With secondary rays, pieces are tiled.
+        let process = |mut piece: Piece| {
+            let (rows, columns) = (piece.rows(), piece.columns());
+            let (y0, last) = (*rows.start(), *rows.end());
+            let (left, right) = (columns.start.max(x0), columns.end.min(x1));
+            if rows.clone().any(inside) && left < right {
                 let mut scratch = Scratch::default();
-                // The band's camera rays first, then the shading, with the cache lines a hit's
+                // The piece's camera rays first, then the shading, with the cache lines a hit's
                 // shading reads (big meshes miss on every hit) loaded ahead of it.
-                let mut blocks: Vec<Block> = Vec::with_capacity((x1 - x0).div_ceil(4) * (last - y0 + 2) / 2);
-                for_each_block(x0..x1, y0..=last, |x, ya, yb| {
+                let mut blocks: Vec<Block> = Vec::with_capacity((right - left).div_ceil(4) * (last - y0 + 2) / 2);
+                for_each_block(left..right, rows.clone(), |x, ya, yb| {
                     if inside(ya) || inside(yb) {
                         blocks.push(Block {
-                            pixels: std::array::from_fn(|k| ((x + k % 4).min(x1 - 1), if k < 4 { ya } else { yb })),
+                            pixels: std::array::from_fn(|k| ((x + k % 4).min(right - 1), if k < 4 { ya } else { yb })),
                             traced: false,
                             hits: [None; 8],
                         });
@@ -411,7 +375,7 @@ impl Job<'_> {
                         if let Some(Some(_)) = center {
                             ahead.step();
                         }
-                        // A block cut by the image's last columns or row repeats pixels.
+                        // A block cut by the piece's last columns or row repeats pixels.
                         let repeated = (k % 4 > 0 && px == pixels[k - 1].0) || (k >= 4 && py == pixels[0].1);
                         if repeated || !inside(py) {
                             continue;
@@ -422,32 +386,31 @@ impl Job<'_> {
                             count(&scratch.rays, 1);
                             continue;
                         }
-                        let at = (py - y0) * w + px;
-                        let under = from_u8(&rows[4 * at..4 * at + 4]);
-                        if let Some((color, d)) = tracer.pixel(px, py, under, drows[at] as f64, center, &mut scratch) {
-                            rows[4 * at..4 * at + 4].copy_from_slice(&to_u8(color));
-                            if let Some(c) = crows.as_deref_mut() {
-                                c[at] = color.clamp(Vec4::ZERO, Vec4::ONE);
+                        let (row, at) = (py - y0, px - columns.start);
+                        let rgba = &mut piece.rgba[row][4 * at..4 * at + 4];
+                        let depth = &mut piece.depth[row][at];
+                        if let Some((color, d)) =
+                            tracer.pixel(px, py, from_u8(rgba), *depth as f64, center, &mut scratch)
+                        {
+                            rgba.copy_from_slice(&to_u8(color));
+                            if let Some(c) = piece.colors.as_mut() {
+                                c[row][at] = color.clamp(Vec4::ZERO, Vec4::ONE);
                             }
                             if let Some(d) = d {
-                                drows[at] = d as f32;
+                                *depth = d as f32;
                             }
                         }
                     }
                 }
                 rays.fetch_add(scratch.rays.get(), Ordering::Relaxed);
             }
-            for _ in y0..=last {
-                progress.row_done(rows_done.fetch_add(1, Ordering::Relaxed) + 1);
-            }
+            let pixels = rows.count() * columns.len();
+            progress.done(done.fetch_add(pixels, Ordering::Relaxed) + pixels);
         };
-        let bands = rgba.par_chunks_mut(4 * band_rows * w).zip(depth.par_chunks_mut(band_rows * w)).enumerate();
-        match colors.as_mut() {
-            Some(c) => bands
-                .zip(c.par_chunks_mut(band_rows * w))
-                .for_each(|((band, (rows, drows)), crows)| process(band, rows, drows, Some(crows))),
-            None => bands.for_each(|(band, (rows, drows))| process(band, rows, drows, None)),
-        }
+        // Called, not inlined into rayon's loop: inlined, the pixel loop compiled ~1% slower,
+        // and a piece's work is one frame of a profile.
+        let process: &(dyn Fn(Piece) + Sync) = &process;
+        pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), w, secondary).into_par_iter().for_each(process);
         progress.finish();
         stats.trace = start.elapsed();
         stats.rays = rays.load(Ordering::Relaxed);
@@ -541,29 +504,6 @@ mod tests {
             for x in 1..7 {
                 assert_eq!(pixel(&r, x, y), [255, 0, 0, 255], "pixel ({x}, {y})");
             }
-        }
-    }
-
-    #[test]
-    fn blocks_cover_every_pixel_once_tile_by_tile() {
-        for (columns, rows) in [(0..8, 0..=7), (1..19, 0..=12), (3..4, 5..=5), (0..13, 8..=14), (2..30, 0..=1)] {
-            let mut seen = std::collections::HashMap::new();
-            let mut tiles = Vec::new();
-            for_each_block(columns.clone(), rows.clone(), |x, ya, yb| {
-                assert!(yb == ya + 1 || (yb == ya && ya == *rows.end()), "rows {ya}, {yb} of {rows:?}");
-                let tile = (x - columns.start) / TILE;
-                assert!(tiles.last().is_none_or(|&t| t <= tile), "tile {tile} after {tiles:?}");
-                tiles.push(tile);
-                for y in ya..=yb {
-                    for px in x..(x + 4).min(columns.end) {
-                        *seen.entry((px, y)).or_insert(0) += 1;
-                    }
-                }
-            });
-            let all = columns.len() * rows.clone().count();
-            assert_eq!(seen.len(), all, "{columns:?} x {rows:?}");
-            assert!(seen.keys().all(|(x, y)| columns.contains(x) && rows.contains(y)));
-            assert!(seen.values().all(|&n| n == 1), "{columns:?} x {rows:?}: a pixel in two blocks");
         }
     }
 

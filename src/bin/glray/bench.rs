@@ -15,7 +15,7 @@ use glray_capture::lighting::{Light, LightModel, Material};
 use glray_capture::mesh::Mesh;
 use glray_core::image::Image;
 use glray_render::effects::{occlusion, Origin};
-use glray_render::render::{for_each_block, TILE};
+use glray_render::pieces::{for_each_block, TILE};
 use glray_render::sampling::Sampler;
 use glray_render::scene::{Meshes, Ray, Scene};
 use glray_render::{Effects, Options, Renderer};
