@@ -490,41 +490,38 @@ mod tests {
         assert_eq!(pixel(&empty, 0, 0), [0, 0, 255, 255], "the clear colour");
     }
 
-    #[test]
-    fn every_pixel_of_a_window_cut_across_the_camera_ray_blocks_is_traced() {
-        // Camera rays go in 4x2 blocks: a 7x5 window with a viewport from column 1 cuts
-        // blocks at its left edge, its right edge and its last row.
+    /// A red quad over a `width` x `height` window whose viewport starts at column 1, rendered
+    /// with `options`: every pixel of the viewport is red, column 0 keeps the clear colour.
+    fn fills_a_viewport_from_column_one(width: u32, height: u32, options: &Options) {
         let red = quad(-5.0, Vec4::new(1.0, 0.0, 0.0, 1.0), 0, 0);
         let mut f = frame(red.to_vec(), vec![surface()]);
-        let viewport = Viewport { x: 1, y: 0, width: 6, height: 5 };
-        (f.width, f.height, f.viewport) = (7, 5, Some(viewport));
+        let viewport = Viewport { x: 1, y: 0, width: width as i32 - 1, height: height as i32 };
+        (f.width, f.height, f.viewport) = (width, height, Some(viewport));
         f.cameras[0].viewport = viewport;
-        let r = render(&f, 7, 5, None, &Options::default());
-        for y in 0..5 {
-            for x in 1..7 {
+        let r = render(&f, width, height, None, options);
+        for y in 0..height as usize {
+            assert_eq!(pixel(&r, 0, y), [0, 0, 255, 255], "the clear colour outside the viewport, row {y}");
+            for x in 1..width as usize {
                 assert_eq!(pixel(&r, x, y), [255, 0, 0, 255], "pixel ({x}, {y})");
             }
         }
     }
 
     #[test]
+    fn every_pixel_of_a_window_cut_across_the_camera_ray_blocks_is_traced() {
+        // Camera rays go in 4x2 blocks: a 7x5 window with a viewport from column 1 cuts
+        // blocks at its left edge, its right edge and its last row.
+        fills_a_viewport_from_column_one(7, 5, &Options::default());
+    }
+
+    #[test]
     fn with_secondary_rays_every_pixel_of_a_window_cut_across_the_tiles_is_traced() {
-        // With ambient occlusion, pixels go in bands of eight rows and tiles of eight columns:
-        // a 19x13 window with a viewport from column 1 cuts tiles at both edges and leaves a
-        // last band of five rows, the last of them without a pair. Nothing occludes the quad.
-        let red = quad(-5.0, Vec4::new(1.0, 0.0, 0.0, 1.0), 0, 0);
-        let mut f = frame(red.to_vec(), vec![surface()]);
-        let viewport = Viewport { x: 1, y: 0, width: 18, height: 13 };
-        (f.width, f.height, f.viewport) = (19, 13, Some(viewport));
-        f.cameras[0].viewport = viewport;
+        // With ambient occlusion, pixels go in pieces of eight rows by 64 columns, tiles of
+        // eight: a 70x13 window with a viewport from column 1 cuts tiles at both edges and a
+        // block at the first piece's edge (column 64), and leaves a last band of five rows, the
+        // last of them without a pair. Nothing occludes the quad.
         let options = Options { effects: Effects { ao_samples: 4, ..Effects::GL }, ..Options::default() };
-        let r = render(&f, 19, 13, None, &options);
-        for y in 0..13 {
-            assert_eq!(pixel(&r, 0, y), [0, 0, 255, 255], "the clear colour outside the viewport, row {y}");
-            for x in 1..19 {
-                assert_eq!(pixel(&r, x, y), [255, 0, 0, 255], "pixel ({x}, {y})");
-            }
-        }
+        fills_a_viewport_from_column_one(70, 13, &options);
     }
 
     #[test]
