@@ -52,6 +52,10 @@ pub(crate) fn split<'a>(
 ) -> Vec<Piece<'a>> {
     let (band, segment) = if tiled { (TILE, SEGMENT) } else { (2, width) };
     let mut pieces = Vec::new();
+    if width == 0 {
+        // A window with no columns (minimised) has no pixels, and no rows to cut.
+        return pieces;
+    }
     let mut colors = colors.map(|c| c.chunks_mut(width));
     for (y, (rgba_row, depth_row)) in rgba.chunks_mut(4 * width).zip(depth.chunks_mut(width)).enumerate() {
         let colors_row = colors.as_mut().and_then(|c| c.next());
@@ -167,6 +171,8 @@ mod tests {
             }
             assert!(seen.iter().all(|&n| n == 1), "{w}x{h}: every pixel in exactly one piece");
             if (w, h) == (1280, 720) {
+                let none = split(&mut [], &mut [], None, 0, tiled);
+                assert!(none.is_empty(), "a window without columns has no pieces");
                 assert_eq!(pieces.len(), if tiled { 1800 } else { 360 }, "enough pieces for many threads");
             }
         }
