@@ -235,6 +235,52 @@ mod tests {
         assert!((25..=26).contains(&dark), "only ambient under it: {dark}");
     }
 
+    /// A sphere of radius 1 around `center`, `segments` around and `rings` from pole to pole,
+    /// each vertex with its own normal (smooth shading), lit by GL_LIGHT0 from `light`.
+    fn smooth_sphere(center: [f64; 3], segments: u32, rings: u32, light: [f32; 3]) -> Frame {
+        let mut c = context();
+        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
+        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
+        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
+        let at: Vec<u8> = [light[0], light[1], light[2], 0.0].iter().flat_map(|x| x.to_ne_bytes()).collect();
+        call(&mut c, "glLightfv", &[Int(0x4000), Int(0x1203), Value::Blob(&at)]);
+        call(&mut c, "glColor3f", &[1.0, 1.0, 1.0].map(F64));
+        let point = |i: u32, j: u32| {
+            let (around, down) =
+                (std::f64::consts::TAU * i as f64 / segments as f64, std::f64::consts::PI * j as f64 / rings as f64);
+            [down.sin() * around.cos(), down.cos(), down.sin() * around.sin()]
+        };
+        call(&mut c, "glBegin", &[Int(4)]); // GL_TRIANGLES
+        for j in 0..rings {
+            for i in 0..segments {
+                let quad = [point(i, j), point(i + 1, j), point(i + 1, j + 1), point(i, j + 1)];
+                for k in [0, 1, 2, 0, 2, 3] {
+                    let n = quad[k];
+                    call(&mut c, "glNormal3f", &n.map(F64));
+                    call(&mut c, "glVertex3f", &[0, 1, 2].map(|a| F64(center[a] + n[a])));
+                }
+            }
+        }
+        call(&mut c, "glEnd", &[]);
+        c.take_frame()
+    }
+
+    #[test]
+    fn a_smooth_shaded_surface_does_not_shadow_itself_where_its_normals_face_the_light() {
+        // A coarse sphere alone, lit from the side: nothing else casts a shadow, and where its
+        // shading normals face the light it is lit, on facets that face away too (with shadow
+        // rays leaving the flat facets, such points went dark in jagged, faceted bands along
+        // the line between light and shade).
+        let frame = smooth_sphere([0.0, 0.0, -4.0], 12, 8, [1.0, 0.4, 0.6]);
+        let per_pixel = Options { per_pixel_lighting: true, ..with(Effects::GL) };
+        let plain = render(&frame, SIZE, SIZE, None, &per_pixel);
+        let shadowed = render(&frame, SIZE, SIZE, None, &with(Effects { shadows: true, ..Effects::GL }));
+        let differ = plain.rgba.chunks(4).zip(shadowed.rgba.chunks(4)).filter(|(a, b)| a != b).count();
+        let covered = plain.rgba.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
+        assert!(covered > 500, "the sphere covers {covered} pixels");
+        assert_eq!(differ, 0, "{differ} of {covered} pixels darkened by the sphere's own facets");
+    }
+
     #[test]
     fn translucent_surfaces_let_their_share_of_light_through() {
         let mut c = lit_floor();
@@ -312,6 +358,27 @@ mod tests {
         let half = Effects { reflectivity: 0.5, ..mirror };
         let p = pixel_at(&frame, &render(&frame, SIZE, SIZE, None, &with(half)), on);
         assert_eq!(p[..3], [255, 128, 128], "half mirror, half white: {p:?}");
+    }
+
+    #[test]
+    fn a_smooth_shaded_mirror_reflects_about_its_shading_normal() {
+        // A lit quad facing the camera whose normals lean 30 degrees up (as a curved mesh's do
+        // away from its facets' centres), and an unlit green board above it. About the facet's
+        // own normal, the ray to the quad's centre would come straight back and see the black
+        // background; about the shading normal it goes up to the board.
+        let mut c = context();
+        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
+        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
+        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
+        let facing = [[-1.0, -1.0, -5.0], [1.0, -1.0, -5.0], [1.0, 1.0, -5.0], [-1.0, 1.0, -5.0]];
+        quad(&mut c, facing, [1.0, 1.0, 1.0], [0.0, 0.5, 0.75f64.sqrt()]);
+        call(&mut c, "glDisable", &[Int(0x0B50)]);
+        let board = [[-3.0, 1.5, -2.0], [3.0, 1.5, -2.0], [3.0, 1.5, -6.0], [-3.0, 1.5, -6.0]];
+        quad(&mut c, board, [0.0, 1.0, 0.0], [0.0, -1.0, 0.0]);
+        let frame = c.take_frame();
+        let mirror = Effects { reflections: 1, reflectivity: 1.0, ..Effects::GL };
+        let r = render(&frame, SIZE, SIZE, None, &with(mirror));
+        assert_eq!(pixel_at(&frame, &r, [0.0, 0.0, -5.0])[..3], [0, 255, 0], "the green board, reflected");
     }
 
     #[test]

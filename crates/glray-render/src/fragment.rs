@@ -30,7 +30,7 @@ pub struct Fragment {
 }
 
 /// Barycentric weights of `p` in the triangle (in the plane of the triangle).
-fn barycentric(t: &Triangle, p: DVec3) -> DVec3 {
+pub(crate) fn barycentric(t: &Triangle, p: DVec3) -> DVec3 {
     let [a, b, c] = t.positions.map(|v| v.as_dvec3());
     let (e1, e2, d) = (b - a, c - a, p - a);
     let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));

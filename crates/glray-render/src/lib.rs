@@ -26,6 +26,7 @@ pub mod resolve;
 pub mod sampling;
 pub mod scene;
 mod signature;
+mod smooth;
 mod tracer;
 
 pub use effects::Effects;

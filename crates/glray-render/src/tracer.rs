@@ -17,6 +17,7 @@ use crate::render::Options;
 use crate::resolve::{in_drawing_order, opaque};
 use crate::sampling::{stratified, Sampler};
 use crate::scene::{Hit, Scene};
+use crate::smooth::{mirror, Smooth};
 
 /// What a frame's pixels share.
 pub(crate) struct Tracer<'a> {
@@ -240,9 +241,15 @@ impl Tracer<'_> {
             n = -n;
         }
         let from = Origin { p: p.as_vec3(), n, draw: t.sequence };
+        // Shadow and mirror rays follow the smooth surface a lit mesh's normals describe, not
+        // its flat facets (`smooth`): they leave from the point lifted onto it.
+        let reflects = bounce < e.reflections && e.reflectivity > 0.0;
+        let smooth = if e.shadows || reflects { Smooth::at(t, p, n) } else { None };
+        let lifted = smooth.as_ref().map(|s| Origin { p: s.lifted().as_vec3(), ..from });
+        let leave = lifted.as_ref().unwrap_or(&from);
         let reaches = |light: &Light| {
             count(rays, 1);
-            lit_by(self.scene, &from, light, self.eps)
+            lit_by(self.scene, leave, light, self.eps)
         };
         let visible: Option<&dyn Fn(&Light) -> f32> = if e.shadows { Some(&reaches) } else { None };
         let mut f = shade(self.frame, self.camera, t, p, self.options.per_pixel_lighting, visible);
@@ -252,10 +259,10 @@ impl Tracer<'_> {
             let keep = 1.0 - e.ao_intensity * hidden;
             f.color = (f.color.xyz() * keep).extend(f.color.w);
         }
-        if bounce < e.reflections && e.reflectivity > 0.0 {
+        if reflects {
             let d = dir.as_vec3().normalize_or_zero();
-            let reflected = d - 2.0 * d.dot(n) * n;
-            let ray = leaving(p.as_vec3(), n, reflected, self.eps, f32::INFINITY);
+            let reflected = mirror(d, n, smooth.as_ref().and_then(Smooth::normal));
+            let ray = leaving(leave.p, n, reflected, self.eps, f32::INFINITY);
             count(rays, 1);
             let seen = match self.scene.closest(ray).and_then(|h| Some((h, self.frame.triangle(h.id)?))) {
                 Some((hit, t2)) => {
