@@ -13,6 +13,7 @@ use glray_core::prefetch;
 use crate::camera::Viewport;
 use crate::instance::Instance;
 use crate::lighting::{prepare, Light, LightModel, Material, Prepared};
+use crate::sunlit::Sunlit;
 use crate::texture::Texture;
 
 /// One triangle, ready to trace.
@@ -78,6 +79,9 @@ pub struct Lighting {
     prepared: Vec<Prepared>,
     /// Whether the lighting reads a vertex's position (`reads_position`), derived in `new`.
     positional: bool,
+    /// The equation in single precision when every light is at infinity (`sunlit`), derived
+    /// in `new`.
+    sunlit: Option<Sunlit>,
 }
 
 impl Lighting {
@@ -91,7 +95,14 @@ impl Lighting {
     ) -> Lighting {
         let prepared = prepare(&lights, &model);
         let positional = model.local_viewer || lights.iter().any(|l| l.enabled && l.position.w != 0.0);
-        Lighting { lights, model, materials, color_material, prepared, positional }
+        let sunlit = Sunlit::new(&lights, &model, &materials, color_material);
+        Lighting { lights, model, materials, color_material, prepared, positional, sunlit }
+    }
+
+    /// The lighting made ready for many vertices in single precision, when every enabled light
+    /// is at infinity and not a spotlight and the viewer is at infinity (`sunlit::Sunlit`).
+    pub fn sunlit(&self) -> Option<&Sunlit> {
+        self.sunlit.as_ref()
     }
 
     /// Whether a vertex's lit colour depends on where it is: a light at a point (not at

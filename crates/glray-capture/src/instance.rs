@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use glam::{DMat3, DMat4, DVec3, DVec4, Vec2, Vec3, Vec4};
+use glam::{DMat3, DMat4, DVec3, DVec4, Vec2, Vec3, Vec3A, Vec4};
 
 use crate::context::vec4;
 use crate::draw::{culled, window_facing};
@@ -177,6 +177,22 @@ impl Instance {
         let m = &self.mesh;
         let lighting = self.lighting(lightings);
         let face = usize::from(!front);
+        if let Some(sunlit) = lighting.and_then(Lighting::sunlit) {
+            // Lights at infinity seen from infinity (most programs): single precision.
+            let nm = self.normal_matrix.as_mat3();
+            let (normal, color) = (self.normal.as_vec3a(), self.color.as_vec4());
+            let vertex = |i: u32| {
+                let n = m.normals.at(i).map_or(normal, Vec3A::from);
+                let n = crate::sunlit::eye_normal(&nm, n, self.normalize, self.rescale_normal);
+                sunlit.light(n, m.colors.at(i).unwrap_or(color), face)
+            };
+            if self.flat {
+                let (primary, secondary) = vertex(m.provoking[index]);
+                return ([primary; 3], [secondary; 3]);
+            }
+            let vs = m.corner_indices(index).map(vertex);
+            return (vs.map(|v| v.0), vs.map(|v| v.1));
+        }
         let positional = lighting.is_some_and(Lighting::reads_position);
         let vertex = |i: u32| {
             let eye = if positional { self.eye(i) } else { DVec3::ZERO };

@@ -44,5 +44,6 @@ pub mod mesh;
 pub mod ops;
 pub mod primitive;
 mod state;
+pub mod sunlit;
 pub mod texture;
 mod vertex;
