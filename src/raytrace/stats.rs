@@ -49,7 +49,7 @@ impl Sink {
             Sink::Stderr => writeln!(
                 std::io::stderr(),
                 "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
-                 present {:.2} ms; {} triangles, {} samples per pixel",
+                 present {:.2} ms; {} triangles, {} samples per pixel{}",
                 s.frame,
                 s.width,
                 s.height,
@@ -60,12 +60,13 @@ impl Sink {
                 mrays,
                 ms(s.present),
                 r.triangles,
-                r.samples
+                r.samples,
+                if r.reused { " (unchanged: the last picture shown again)" } else { "" }
             ),
             Sink::File(f) => writeln!(
                 f,
                 "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
-                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{}}}",
+                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{}}}",
                 s.frame,
                 s.thread,
                 s.width,
@@ -77,7 +78,8 @@ impl Sink {
                 r.rays,
                 mrays,
                 r.triangles,
-                r.samples
+                r.samples,
+                r.reused
             ),
         };
         if let Err(e) = result {

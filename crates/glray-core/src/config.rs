@@ -129,7 +129,9 @@ pub const SETTINGS: &[Setting] = &[
         kind: Kind::Bool,
         default: "true",
         doc: "While the scene and camera stay the same from frame to frame, each frame adds its samples to \
-              the ones before (up to 64 frames), so a still picture converges to full quality.",
+              the ones before (up to 64 frames), so a still picture converges to full quality; a converged \
+              picture (the GL look: after one frame) is shown again without tracing. false: every frame is \
+              traced anew.",
     },
     Setting {
         key: "stats",

@@ -421,6 +421,7 @@ mod tests {
             renderer.render(&frame, SIZE, SIZE, None);
         }
         assert_eq!(renderer.stats().samples, MAX_PASSES, "it stops when converged");
+        assert!(renderer.stats().reused, "and shows the converged picture again");
         // A different camera starts again.
         let mut moved = frame.clone();
         moved.projection =
@@ -428,6 +429,59 @@ mod tests {
         renderer.render(&moved, SIZE, SIZE, None);
         assert_eq!(renderer.stats().samples, 1);
         let _ = Viewport { x: 0, y: 0, width: 1, height: 1 };
+    }
+
+    #[test]
+    fn an_unchanged_gl_look_frame_is_shown_again_and_a_changed_one_traced() {
+        use glam::Vec4;
+        use glray_capture::frame::Texturing;
+        use glray_capture::texture::{Level, Texture};
+        use std::sync::Arc;
+        let frame = crease();
+        let mut renderer = Renderer::new(with(Effects::GL));
+        let first = renderer.render(&frame, SIZE, SIZE, None);
+        assert!(!renderer.stats().reused && renderer.stats().rays > 0);
+        assert_eq!(renderer.render(&frame, SIZE, SIZE, None), first);
+        assert!(renderer.stats().reused, "nothing changed: the picture is shown again");
+        assert_eq!((renderer.stats().rays, renderer.stats().samples), (0, 1));
+        // A moved camera, a new size, a frame drawn over the last one: traced.
+        let mut moved = frame.clone();
+        moved.projection =
+            Some(moved.projection.unwrap() * DMat4::from_translation(DVec4::new(0.0, 0.5, 0.0, 0.0).truncate()));
+        let other = renderer.render(&moved, SIZE, SIZE, None);
+        assert!(!renderer.stats().reused && renderer.stats().rays > 0);
+        assert_ne!(other, first);
+        renderer.render(&moved, SIZE, SIZE - 1, None);
+        assert!(!renderer.stats().reused);
+        let mut over = moved.clone();
+        over.cleared = false;
+        renderer.render(&over, SIZE, SIZE, None);
+        renderer.render(&over, SIZE, SIZE, None);
+        assert!(!renderer.stats().reused, "a frame drawn over the last depends on it");
+        // A texture changed in place (capture makes it a new object): traced again.
+        let texture = |c: f32| {
+            let texels = vec![Vec4::new(c, c, c, 1.0)];
+            Arc::new(Texture { levels: vec![Level { width: 1, height: 1, texels }], ..Texture::default() })
+        };
+        let mut textured = frame.clone();
+        let texturing = |t| Some(Texturing { texture: t, env_mode: 0x2100, env_color: Vec4::ZERO });
+        textured.surfaces[0].texturing = texturing(texture(1.0));
+        renderer.render(&textured, SIZE, SIZE, None);
+        assert!(!renderer.stats().reused);
+        // The signature knows a texture by its address: the renderer keeps the texture alive,
+        // so that no new one can take that address while the picture may be shown again.
+        let kept = textured.surfaces[0].texturing.as_ref().map(|t| Arc::strong_count(&t.texture));
+        assert_eq!(kept, Some(2));
+        // The old texture freed first, as capture frees a replaced one.
+        textured.surfaces[0].texturing = None;
+        textured.surfaces[0].texturing = texturing(texture(0.5));
+        renderer.render(&textured, SIZE, SIZE, None);
+        assert!(!renderer.stats().reused, "a new texture");
+        // Without progressive refinement, every frame is traced.
+        let mut every = Renderer::new(with(Effects { progressive: false, ..Effects::GL }));
+        every.render(&frame, SIZE, SIZE, None);
+        every.render(&frame, SIZE, SIZE, None);
+        assert!(!every.stats().reused && every.stats().rays > 0);
     }
 
     #[test]

@@ -4,11 +4,13 @@
 //! where it is taken, so the image is the same for any number of threads.
 
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::Vec4;
 use glray_capture::camera::Camera;
 use glray_capture::frame::{Frame, TriangleId};
+use glray_capture::texture::Texture;
 use rayon::prelude::*;
 
 use crate::effects::{Effects, MAX_PASSES};
@@ -93,14 +95,27 @@ pub struct Stats {
     pub triangles: u64,
     /// Samples per pixel accumulated so far (progressive refinement).
     pub samples: u32,
+    /// The picture is the last one's, shown again: nothing changed since, and it had all its
+    /// samples (DESIGN rule 5: render only if something changed).
+    pub reused: bool,
 }
 
-/// Samples added up over frames that show the same scene.
+/// Samples added up over frames that show the same scene (for the GL look, one pass: the
+/// picture, shown again while the scene stays the same).
 struct Accumulation {
     key: u64,
     passes: u32,
+    /// The passes' colours added up (empty for the GL look, which takes one pass).
     sum: Vec<Vec4>,
     last: Rendered,
+    /// The frame's textures, kept alive: the signature knows a texture by its address, which a
+    /// new texture could otherwise take once the old one is freed.
+    _textures: Vec<Arc<Texture>>,
+}
+
+/// The textures `frame` draws with.
+fn textures(frame: &Frame) -> Vec<Arc<Texture>> {
+    frame.surfaces.iter().filter_map(|s| s.texturing.as_ref().map(|t| t.texture.clone())).collect()
 }
 
 /// Renders frames, keeping what outlives a frame: the BVHs of display-list meshes, and the
@@ -141,15 +156,18 @@ impl Renderer {
         self.meshes.prune();
         let effects = self.options.effects;
         // Only a cleared frame is all its own: one drawn over the last depends on it.
-        let key = (effects.progressive && effects.beyond_gl() && frame.cleared)
-            .then(|| signature(frame, width, height, &self.options));
+        let key = (effects.progressive && frame.cleared).then(|| signature(frame, width, height, &self.options));
         let pass = match (&self.accumulation, key) {
             (Some(a), Some(k)) if a.key == k => a.passes,
             _ => 0,
         };
-        if pass >= MAX_PASSES {
+        // The GL look has its whole picture after one pass; effects converge over `MAX_PASSES`.
+        let converged = if effects.beyond_gl() { MAX_PASSES } else { 1 };
+        if pass >= converged {
             let a = self.accumulation.as_ref().expect("accumulated");
-            self.stats = Stats { samples: a.passes * effects.samples.max(1), ..Stats::default() };
+            let triangles = frame.triangle_count() as u64;
+            self.stats =
+                Stats { samples: a.passes * effects.samples.max(1), reused: true, triangles, ..Stats::default() };
             return a.last.clone();
         }
         let mut job = Job {
@@ -162,7 +180,7 @@ impl Renderer {
             progress: self.progress,
             flatten_below: self.flatten_below,
         };
-        let (mut rendered, linear, stats) = job.run(&mut self.meshes, key.is_some());
+        let (mut rendered, linear, stats) = job.run(&mut self.meshes, key.is_some() && effects.beyond_gl());
         self.stats = stats;
         match (key, linear) {
             (Some(key), Some(linear)) => {
@@ -180,7 +198,25 @@ impl Renderer {
                     px.copy_from_slice(&to_u8(*s / passes as f32));
                 }
                 self.stats.samples = passes * effects.samples.max(1);
-                self.accumulation = Some(Accumulation { key, passes, sum, last: rendered.clone() });
+                let _textures = textures(frame);
+                self.accumulation = Some(Accumulation { key, passes, sum, last: rendered.clone(), _textures });
+            }
+            (Some(key), None) => {
+                // The GL look: shown again as long as nothing changes. The copy goes into the
+                // last one's buffers (no fresh pages: this is every frame of a moving camera).
+                self.stats.samples = effects.samples.max(1);
+                let last = match self.accumulation.take() {
+                    Some(Accumulation { mut last, .. }) => {
+                        // Field by field: a derived `clone_from` would allocate anew.
+                        (last.width, last.height) = (rendered.width, rendered.height);
+                        last.rgba.clone_from(&rendered.rgba);
+                        last.depth.clone_from(&rendered.depth);
+                        last
+                    }
+                    None => rendered.clone(),
+                };
+                let _textures = textures(frame);
+                self.accumulation = Some(Accumulation { key, passes: 1, sum: Vec::new(), last, _textures });
             }
             _ => {
                 self.accumulation = None;
