@@ -29,8 +29,9 @@ fn doubles<H: Hasher>(h: &mut H, values: impl IntoIterator<Item = f64>) {
 }
 
 /// A triangle's words: positions 9, colours 12, secondary colours 9, texture coordinates 6,
-/// normals 9 (floats, as bits), then surface, sequence, camera, lighting and facing.
-const TRIANGLE_WORDS: usize = 9 + 12 + 9 + 6 + 9 + 5;
+/// normals 9, colours before lighting 12, clip w 3 (floats, as bits), then surface, sequence,
+/// camera, lighting and facing: every field of a `Triangle`.
+const TRIANGLE_WORDS: usize = 9 + 12 + 9 + 6 + 9 + 12 + 3 + 5;
 
 /// Triangles hashed together on one thread.
 const CHUNK: usize = 1 << 14;
@@ -42,12 +43,14 @@ fn triangles_hash(triangles: &[Triangle]) -> u64 {
     for t in triangles {
         let mut words = [0u32; TRIANGLE_WORDS];
         let ints = [t.surface, t.sequence, t.camera, t.lighting, u32::from(t.back)];
-        let parts: [&[u32]; 6] = [
+        let parts: [&[u32]; 8] = [
             bytemuck::cast_slice(&t.positions),
             bytemuck::cast_slice(&t.colors),
             bytemuck::cast_slice(&t.secondary),
             bytemuck::cast_slice(&t.texcoords),
             bytemuck::cast_slice(&t.normals),
+            bytemuck::cast_slice(&t.base_colors),
+            bytemuck::cast_slice(&t.clip_w),
             &ints,
         ];
         let mut at = 0;
@@ -62,7 +65,8 @@ fn triangles_hash(triangles: &[Triangle]) -> u64 {
 
 pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Options) -> u64 {
     let mut h = Xxh3::new();
-    (width, height, frame.cleared, options.per_pixel_lighting).hash(&mut h);
+    (width, height, frame.cleared, frame.depth_cleared, options.per_pixel_lighting).hash(&mut h);
+    doubles(&mut h, [frame.depth_range.0, frame.depth_range.1]);
     format!("{:?}", options.effects).hash(&mut h);
     floats(&mut h, frame.clear_color.to_array());
     doubles(&mut h, frame.projection.map(|p| p.to_cols_array()).unwrap_or_default());
@@ -70,6 +74,7 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
         doubles(&mut h, c.projection.to_cols_array());
         (c.viewport.x, c.viewport.y, c.viewport.width, c.viewport.height).hash(&mut h);
     }
+    (frame.cameras.len(), frame.lightings.len(), frame.surfaces.len()).hash(&mut h);
     frame.triangles.len().hash(&mut h);
     // Chunks hashed on the pool, their hashes taken in order: the same number for any thread
     // count.
@@ -77,6 +82,12 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
     for c in chunks {
         c.hash(&mut h);
     }
+    frame.solids.len().hash(&mut h);
+    for l in &frame.solids {
+        floats(&mut h, l.a.to_array().into_iter().chain(l.b.to_array()).chain([l.radius]));
+        (l.sequence, l.camera).hash(&mut h);
+    }
+    frame.instances.len().hash(&mut h);
     for i in &frame.instances {
         (i.mesh.id, i.surface, i.camera, i.sequence, i.lighting, i.flat, i.front_ccw, i.cull).hash(&mut h);
         (i.normalize, i.rescale_normal).hash(&mut h);
@@ -89,7 +100,11 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
     }
     for s in &frame.surfaces {
         // Textures by identity: a changed texture is a new object in capture.
-        s.texturing.as_ref().map(|t| Arc::as_ptr(&t.texture) as usize).hash(&mut h);
+        if let Some(t) = &s.texturing {
+            (Arc::as_ptr(&t.texture) as usize, t.env_mode).hash(&mut h);
+            floats(&mut h, t.env_color.to_array());
+        }
+        s.texturing.is_some().hash(&mut h);
         format!(
             "{:?} {:?} {:?} {:?} {:?}",
             s.fog,
@@ -125,8 +140,8 @@ mod tests {
         }
     }
 
-    /// A change made to one triangle.
-    type Change = fn(&mut Triangle);
+    /// A change made to a triangle or a frame.
+    type Change<T> = fn(&mut T);
 
     #[test]
     fn any_number_of_any_triangle_changes_the_signature_and_threads_do_not() {
@@ -141,8 +156,10 @@ mod tests {
         };
         assert_eq!((on(1), on(3)), (base, base));
         let k = CHUNK + CHUNK / 2;
-        let changes: [(&str, Change); 8] = [
+        let changes: [(&str, Change<Triangle>); 10] = [
             ("position", |t| t.positions[2].y += 1e-6),
+            ("colour before lighting", |t| t.base_colors[0].x = 0.5),
+            ("clip w", |t| t.clip_w[1] = 2.0),
             ("colour", |t| t.colors[1].w = 0.5),
             ("secondary colour", |t| t.secondary[0].x = 0.1),
             ("texture coordinate", |t| t.texcoords[2].y = 0.25),
@@ -160,5 +177,33 @@ mod tests {
         fewer.triangles.pop();
         assert_ne!(sign(&fewer), base, "one triangle fewer");
         assert_ne!(signature(&frame, 64, 65, &options), base, "the size");
+    }
+
+    #[test]
+    fn lines_depth_state_and_texture_environment_change_the_signature() {
+        use glray_capture::frame::{Solid, Surface, Texturing};
+        use glray_capture::texture::Texture;
+        let texture = Arc::new(Texture::default());
+        let mut surface = Surface::depth_tested();
+        surface.texturing = Some(Texturing { texture, env_mode: 0x2100, env_color: Vec4::ZERO });
+        let line = Solid { a: Vec3::ZERO, b: Vec3::X, radius: 0.1, sequence: 0, camera: 0 };
+        let frame =
+            Frame { triangles: vec![triangle(0)], solids: vec![line], surfaces: vec![surface], ..Frame::default() };
+        let options = Options::default();
+        let base = signature(&frame, 64, 64, &options);
+        let changes: [(&str, Change<Frame>); 7] = [
+            ("a line moved", |f| f.solids[0].b.y = 1.0),
+            ("a line thicker", |f| f.solids[0].radius = 0.2),
+            ("a line more", |f| f.solids.push(f.solids[0])),
+            ("the depth range", |f| f.depth_range.1 = 0.5),
+            ("depth not cleared", |f| f.depth_cleared = !f.depth_cleared),
+            ("the texture environment", |f| f.surfaces[0].texturing.as_mut().unwrap().env_mode = 0x1E01),
+            ("the texture environment's colour", |f| f.surfaces[0].texturing.as_mut().unwrap().env_color.x = 1.0),
+        ];
+        for (what, change) in changes {
+            let mut changed = frame.clone();
+            change(&mut changed);
+            assert_ne!(signature(&changed, 64, 64, &options), base, "{what}");
+        }
     }
 }
