@@ -159,7 +159,7 @@ impl Tracer<'_> {
         if !self.simple || self.pass != 0 {
             return false;
         }
-        let rays = pixels.map(|(x, y)| Self::traced(&self.camera.ray(x as f64 + 0.5, y as f64 + 0.5)));
+        let rays = self.camera.rays(&pixels.map(|(x, y)| (x as f64 + 0.5, y as f64 + 0.5))).map(|r| Self::traced(&r));
         self.scene.closest_packet(&rays, hits);
         true
     }

@@ -197,8 +197,7 @@ fn kernels(frame: &Frame, ao: u32, frames: u32) -> Kernels {
             HitRecord { p: Vec3::from(ray.origin) + d * hit.t, n }
         })
     };
-    let ray = |x: usize, y: usize| {
-        let r = camera.ray(x as f64 + 0.5, y as f64 + 0.5);
+    let ray = |r: glray_capture::camera::Ray| {
         glray_render::bvh::ray(r.origin.as_vec3a(), r.direction.as_vec3a(), 0.0, r.t_max as f32)
     };
     // In 4x2 blocks of camera rays, as the renderer traces them.
@@ -208,10 +207,11 @@ fn kernels(frame: &Frame, ao: u32, frames: u32) -> Kernels {
             let two = rows.len() > w;
             for x0 in (0..w).step_by(4) {
                 let at = |k: usize| ((x0 + k % 4).min(w - 1), if two { y0 + k / 4 } else { y0 });
-                let rays: [Ray; 8] = std::array::from_fn(|k| {
+                let centres: [(f64, f64); 8] = std::array::from_fn(|k| {
                     let (x, y) = at(k);
-                    ray(x, y)
+                    (x as f64 + 0.5, y as f64 + 0.5)
                 });
+                let rays: [Ray; 8] = camera.rays(&centres).map(ray);
                 let mut hits = [None; 8];
                 scene.closest_packet(&rays, &mut hits);
                 for k in 0..8 {
