@@ -193,17 +193,26 @@ mod tests {
             projection(|m| m.ortho(-2.0, 3.0, -1.0, 1.5, -4.0, 9.0).unwrap()),
             // A skewed frustum, and a projection whose w varies over the window.
             projection(|m| m.frustum(-0.3, 0.7, -0.2, 0.4, 0.5, 80.0).unwrap()),
-            DMat4::from_cols_array(&[1.0, 0.0, 0.0, 0.1, 0.0, 1.0, 0.0, 0.05, 0.0, 0.0, -1.2, -1.0, 0.0, 0.0, -2.0, 0.0]),
+            DMat4::from_cols_array(&[
+                1.0, 0.0, 0.0, 0.1, 0.0, 1.0, 0.0, 0.05, 0.0, 0.0, -1.2, -1.0, 0.0, 0.0, -2.0, 0.0,
+            ]),
         ];
         for p in cameras {
             let c = Camera::new(p, Viewport { x: 3, y: -2, width: 200, height: 100 }, (0.0, 1.0)).unwrap();
             for y in (-5i32..110).step_by(7) {
                 for x in (-5i32..210).step_by(8) {
-                    let at: [(f64, f64); 8] = std::array::from_fn(|k| ((x + k as i32 % 4) as f64 + 0.5, (y + k as i32 / 4) as f64 + 0.3));
+                    let at: [(f64, f64); 8] =
+                        std::array::from_fn(|k| ((x + k as i32 % 4) as f64 + 0.5, (y + k as i32 / 4) as f64 + 0.3));
                     let side = c.rays(&at);
                     for (k, &(px, py)) in at.iter().enumerate() {
                         let one = c.ray(px, py);
-                        let bits = |r: &Ray| (r.origin.to_array().map(f64::to_bits), r.direction.to_array().map(f64::to_bits), r.t_max.to_bits());
+                        let bits = |r: &Ray| {
+                            (
+                                r.origin.to_array().map(f64::to_bits),
+                                r.direction.to_array().map(f64::to_bits),
+                                r.t_max.to_bits(),
+                            )
+                        };
                         assert_eq!(bits(&side[k]), bits(&one), "{p:?} at ({px}, {py})");
                     }
                 }
