@@ -65,6 +65,26 @@ fn frames_can_be_chosen() {
     assert!(stderr(&bad).contains("--frames"), "{}", stderr(&bad));
 }
 
+#[test]
+fn ray_traced_replays_trace_only_the_frames_a_chosen_one_needs() {
+    let dir = scratch("traced-frames");
+    let trace = suite().join("osmesa-all.trace");
+    let run = |preset: &str, out: &str, frames: &[&str]| {
+        let mut c = glray(&["replay", "--renderer", "glray", "--out"]);
+        c.arg(dir.join(out)).arg(&trace).args(frames).env("GLRAY_PRESET", preset);
+        stdout(&run_ok(&mut c, "glray replay --renderer glray"))
+    };
+    // The GL look: frames 0 and 1 clear and are not written, so they are not traced, and
+    // frame 2 is the same picture as when every frame is.
+    assert!(run("gl", "chosen", &["--frames", "2"]).contains("(1 frames traced)"));
+    assert!(run("gl", "all", &[]).contains("(3 frames traced)"));
+    assert_same_file(&dir.join("all/frame-0002.png"), &dir.join("chosen/frame-0002.png"), "the GL look");
+    // Ambient occlusion refines over unchanged frames: frame 2 holds frames 0 and 1's samples.
+    assert!(run("ao", "ao-chosen", &["--frames", "2"]).contains("(3 frames traced)"));
+    run("ao", "ao-all", &[]);
+    assert_same_file(&dir.join("ao-all/frame-0002.png"), &dir.join("ao-chosen/frame-0002.png"), "ao");
+}
+
 /// Records `program args` under glray (with `way`'s preloads), replays into OSMesa, and returns
 /// the replay's directory.
 fn record_and_replay(name: &str, cmd: &mut Command, dir: &Path, replay_args: &[&str]) -> PathBuf {

@@ -244,12 +244,13 @@ fn replay_glray(
     let options = glray_render::Options::from_config(config).unwrap_or_default();
     let s = raytrace::run(data, out, frames, readpixels, &options).map_err(|e| format!("{}: {e}", trace.display()))?;
     println!(
-        "ray traced {} calls: {} frames ({} triangles) written to {}{}",
+        "ray traced {} calls: {} frames ({} triangles) written to {}{} ({} frames traced)",
         s.calls,
         s.frames_written,
         s.triangles,
         out.display(),
-        if readpixels { format!(", {} glReadPixels images", s.readpixels_written) } else { String::new() }
+        if readpixels { format!(", {} glReadPixels images", s.readpixels_written) } else { String::new() },
+        s.frames_traced
     );
     Ok(())
 }

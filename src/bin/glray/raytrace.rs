@@ -17,6 +17,8 @@ use crate::replay::FrameSet;
 pub struct Summary {
     pub calls: u64,
     pub frames_written: u64,
+    /// Frames ray traced: the ones written, and those a later written one drew over.
+    pub frames_traced: u64,
     pub readpixels_written: u64,
     pub triangles: u64,
 }
@@ -53,7 +55,10 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options
     let mut capture = Capture::default();
     let mut summary = Summary::default();
     let mut read_pixels: Vec<bool> = Vec::new();
-    let mut last: HashMap<u32, Rendered> = HashMap::new();
+    // With progressive refinement of effects, a frame's picture holds the samples of the
+    // unchanged frames before it, as the live program's would: every frame is traced then.
+    let every = options.effects.progressive && options.effects.beyond_gl();
+    let mut last = Pictures { every, ..Pictures::default() };
     let mut renderer = Renderer::new(*options);
     // Offline renders with many samples take long: show how far they are on a terminal.
     renderer.progress = std::io::IsTerminal::is_terminal(&std::io::stderr());
@@ -73,7 +78,7 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options
                 && a[5] == 0x1401
             {
                 let frame = capture.context(*thread).frame().clone();
-                let image = picture(&frame, last.get(thread), &mut renderer)
+                let image = picture(&frame, last.under(*thread, &frame, &mut renderer), &mut renderer)
                     .and_then(|(_, i)| crop(&i, a[0], a[1], a[2], a[3]));
                 if let Some(image) = image {
                     let path: PathBuf = out.join(format!("readpixels-{:04}.png", summary.readpixels_written));
@@ -85,16 +90,97 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options
         let number = if let Event::Frame { number } = event { Some(number) } else { None };
         if let Some((thread, frame)) = capture.event(&event, |n| reader.name(n)) {
             let number = number.unwrap_or_default();
-            // Every frame is rendered (a later one may draw over it); the chosen ones written.
-            if let Some((rendered, image)) = picture(&frame, last.get(&thread), &mut renderer) {
-                if frames.contains(number) {
-                    summary.triangles += frame.triangle_count() as u64;
-                    image.write_png(&out.join(format!("frame-{number:04}.png")))?;
-                    summary.frames_written += 1;
-                }
-                last.insert(thread, rendered);
+            if !frames.contains(number) {
+                // Traced only if a later frame draws over it, or a glReadPixels reads it.
+                last.pending(thread, frame, &mut renderer);
+                continue;
+            }
+            if let Some((rendered, image)) = picture(&frame, last.under(thread, &frame, &mut renderer), &mut renderer) {
+                summary.triangles += frame.triangle_count() as u64;
+                image.write_png(&out.join(format!("frame-{number:04}.png")))?;
+                summary.frames_written += 1;
+                last.traced += 1;
+                last.rendered(thread, rendered);
             }
         }
     }
+    summary.frames_traced = last.traced;
     Ok(summary)
+}
+
+/// The most frames drawn over one another, not traced yet, kept per thread: past it, the oldest
+/// is traced (a program that never clears would otherwise keep all its frames).
+const MOST_PENDING: usize = 4;
+
+/// Each thread's last picture, and the frames after it not traced yet: a frame that is not
+/// written is traced only when a later one draws over it (no clear) and is needed itself.
+#[derive(Default)]
+struct Pictures {
+    rendered: HashMap<u32, Rendered>,
+    /// Per thread, oldest first: each draws over the one before (all but the first).
+    pending: HashMap<u32, Vec<Frame>>,
+    /// Frames traced so far.
+    traced: u64,
+    /// Trace every frame, written or not (progressive refinement adds their samples up).
+    every: bool,
+}
+
+impl Pictures {
+    /// What `frame`, `thread`'s next, is drawn over: nothing if it clears its colour buffer
+    /// (what came before is dropped untraced), else the thread's last picture.
+    fn under(&mut self, thread: u32, frame: &Frame, renderer: &mut Renderer) -> Option<&Rendered> {
+        if frame.cleared {
+            self.pending.remove(&thread);
+            self.rendered.remove(&thread);
+            return None;
+        }
+        self.get(thread, renderer)
+    }
+
+    /// `thread`'s last picture, tracing the frames left pending first.
+    fn get(&mut self, thread: u32, renderer: &mut Renderer) -> Option<&Rendered> {
+        for frame in self.pending.remove(&thread).unwrap_or_default() {
+            self.trace(thread, &frame, renderer);
+        }
+        self.rendered.get(&thread)
+    }
+
+    /// Traces `frame` over `thread`'s last picture, which it becomes.
+    fn trace(&mut self, thread: u32, frame: &Frame, renderer: &mut Renderer) {
+        match picture(frame, self.rendered.get(&thread), renderer) {
+            Some((rendered, _)) => {
+                self.traced += 1;
+                self.rendered.insert(thread, rendered);
+            }
+            None => {
+                self.rendered.remove(&thread);
+            }
+        }
+    }
+
+    /// `thread`'s picture traced and written.
+    fn rendered(&mut self, thread: u32, r: Rendered) {
+        self.pending.remove(&thread);
+        self.rendered.insert(thread, r);
+    }
+
+    /// `frame` is `thread`'s last, not traced (yet). One that clears its colour buffer does
+    /// not depend on what came before, which is dropped untraced.
+    fn pending(&mut self, thread: u32, frame: Frame, renderer: &mut Renderer) {
+        if self.every {
+            let _ = self.under(thread, &frame, renderer);
+            self.trace(thread, &frame, renderer);
+            return;
+        }
+        let chain = self.pending.entry(thread).or_default();
+        if frame.cleared {
+            chain.clear();
+            self.rendered.remove(&thread);
+        }
+        chain.push(frame);
+        if chain.len() > MOST_PENDING {
+            let oldest = chain.remove(0);
+            self.trace(thread, &oldest, renderer);
+        }
+    }
 }
