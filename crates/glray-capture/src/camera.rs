@@ -105,8 +105,8 @@ impl Camera {
             let ndc_x = (at[k].0 - v.x as f64) * self.ndc_scale.0 - 1.0;
             let ndc_y = (at[k].1 - v.y as f64) * self.ndc_scale.1 - 1.0;
             // As `ray` adds them: dx * ndc_x + dy * ndc_y, component by component.
-            for c in 0..4 {
-                xy[c][k] = self.dx[c] * ndc_x + self.dy[c] * ndc_y;
+            for (c, lanes) in xy.iter_mut().enumerate() {
+                lanes[k] = self.dx[c] * ndc_x + self.dy[c] * ndc_y;
             }
         }
         match self.recip_w {
