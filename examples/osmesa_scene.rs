@@ -24,8 +24,10 @@ fn main() {
         let buffers = scene::BufferFns::load(|n| osmesa::OSMesaGetProcAddress(n.as_ptr().cast()))
             .map(|b| &*Box::leak(Box::new(b)));
         let s = scene::Scene::with_parts(buffers, parts);
+        // SCENE_STILL: every frame the same (the first), as an idle program redraws.
+        let still = std::env::var_os("SCENE_STILL").is_some();
         for frame in 0..frames {
-            s.draw(W, H, frame);
+            s.draw(W, H, if still { 0 } else { frame });
             gl::glFinish();
         }
         let err = gl::glGetError();

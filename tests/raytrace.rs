@@ -204,6 +204,31 @@ fn effect_presets_change_the_picture_and_report_their_statistics() {
 }
 
 #[test]
+fn a_program_redrawing_the_same_scene_gets_the_last_picture_again() {
+    let dir = scratch("rt-still");
+    let program = example("osmesa_scene");
+    let run = |progressive: &str| {
+        let (png, stats) = (dir.join(format!("{progressive}.png")), dir.join(format!("{progressive}.jsonl")));
+        let mut cmd = command(Way::Preload, &[], &program, 60);
+        cmd.arg(&png).arg("3").env("SCENE_STILL", "1").env("GLRAY_PRESET", "gl");
+        cmd.env("GLRAY_PROGRESSIVE", progressive).env("GLRAY_STATS", &stats);
+        run_ok(&mut cmd, &format!("osmesa_scene still, progressive={progressive}"));
+        let lines: Vec<String> = std::fs::read_to_string(&stats).unwrap().lines().map(String::from).collect();
+        assert_eq!(lines.len(), 3, "one line per frame: {lines:?}");
+        (png, lines)
+    };
+    let (shown, lines) = run("true");
+    assert!(lines[0].contains("\"reused\":false") && !lines[0].contains("\"rays\":0,"), "{}", lines[0]);
+    for line in &lines[1..] {
+        assert!(line.contains("\"reused\":true") && line.contains("\"rays\":0,"), "{line}");
+    }
+    let (traced, lines) = run("false");
+    assert!(lines.iter().all(|l| l.contains("\"reused\":false")), "{lines:?}");
+    // The picture shown again is the one tracing every frame makes, in the program's buffer.
+    assert_same_file(&traced, &shown, "a frame shown again");
+}
+
+#[test]
 fn preset_off_leaves_frames_to_the_real_gl() {
     let dir = scratch("rt-off");
     let program = example("osmesa_scene");

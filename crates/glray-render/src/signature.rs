@@ -10,6 +10,7 @@
 use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
+use glam::Vec2;
 use glray_capture::frame::{Frame, Triangle};
 use rayon::prelude::*;
 use xxhash_rust::xxh3::Xxh3;
@@ -38,16 +39,20 @@ const CHUNK: usize = 1 << 14;
 
 /// The hash of `triangles`' numbers, each triangle's in one run of bytes (one call into the
 /// hasher, not fifty).
-fn triangles_hash(triangles: &[Triangle]) -> u64 {
+fn triangles_hash(triangles: &[Triangle], textured: &[bool]) -> u64 {
     let mut h = Xxh3::new();
     for t in triangles {
+        // Texture coordinates only where they are read: an untextured draw's are what a
+        // previous frame left current, and would make an unchanged scene look changed.
+        let texcoords =
+            if textured.get(t.surface as usize).copied().unwrap_or(false) { t.texcoords } else { [Vec2::ZERO; 3] };
         let mut words = [0u32; TRIANGLE_WORDS];
         let ints = [t.surface, t.sequence, t.camera, t.lighting, u32::from(t.back)];
         let parts: [&[u32]; 8] = [
             bytemuck::cast_slice(&t.positions),
             bytemuck::cast_slice(&t.colors),
             bytemuck::cast_slice(&t.secondary),
-            bytemuck::cast_slice(&t.texcoords),
+            bytemuck::cast_slice(&texcoords),
             bytemuck::cast_slice(&t.normals),
             bytemuck::cast_slice(&t.base_colors),
             bytemuck::cast_slice(&t.clip_w),
@@ -78,7 +83,8 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
     frame.triangles.len().hash(&mut h);
     // Chunks hashed on the pool, their hashes taken in order: the same number for any thread
     // count.
-    let chunks: Vec<u64> = frame.triangles.par_chunks(CHUNK).map(triangles_hash).collect();
+    let textured: Vec<bool> = frame.surfaces.iter().map(|s| s.texturing.is_some()).collect();
+    let chunks: Vec<u64> = frame.triangles.par_chunks(CHUNK).map(|c| triangles_hash(c, &textured)).collect();
     for c in chunks {
         c.hash(&mut h);
     }
@@ -92,8 +98,13 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
         (i.mesh.id, i.surface, i.camera, i.sequence, i.lighting, i.flat, i.front_ccw, i.cull).hash(&mut h);
         (i.normalize, i.rescale_normal).hash(&mut h);
         doubles(&mut h, i.modelview.to_cols_array());
-        doubles(&mut h, i.texture_matrix.to_cols_array());
-        doubles(&mut h, i.color.to_array().into_iter().chain(i.normal.to_array()).chain(i.texcoord.to_array()));
+        doubles(&mut h, i.color.to_array().into_iter().chain(i.normal.to_array()));
+        // Texture coordinates only where they are read: the current one a previous frame left
+        // would otherwise make an unchanged scene look changed.
+        if frame.surfaces.get(i.surface as usize).is_some_and(|s| s.texturing.is_some()) {
+            doubles(&mut h, i.texture_matrix.to_cols_array());
+            doubles(&mut h, i.texcoord.to_array());
+        }
     }
     for l in &frame.lightings {
         format!("{l:?}").hash(&mut h);
@@ -145,8 +156,17 @@ mod tests {
 
     #[test]
     fn any_number_of_any_triangle_changes_the_signature_and_threads_do_not() {
-        // Several chunks' worth, the change in a middle one.
-        let frame = Frame { triangles: (0..3 * CHUNK + 5).map(triangle).collect(), ..Frame::default() };
+        use glray_capture::frame::{Surface, Texturing};
+        use glray_capture::texture::Texture;
+        // Several chunks' worth, the change in a middle one; surface 0 textured, 1 not.
+        let mut textured = Surface::depth_tested();
+        let texture = Arc::new(Texture::default());
+        textured.texturing = Some(Texturing { texture, env_mode: 0x2100, env_color: Vec4::ZERO });
+        let frame = Frame {
+            triangles: (0..3 * CHUNK + 5).map(triangle).collect(),
+            surfaces: vec![textured, Surface::depth_tested()],
+            ..Frame::default()
+        };
         let options = Options::default();
         let sign = |f: &Frame| signature(f, 64, 64, &options);
         let base = sign(&frame);
@@ -173,6 +193,12 @@ mod tests {
             change(&mut changed.triangles[k]);
             assert_ne!(sign(&changed), base, "{what}");
         }
+        // An untextured triangle's texture coordinates are never read: they do not count.
+        let mut untextured = frame.clone();
+        untextured.triangles[k].surface = 1;
+        let base_untextured = sign(&untextured);
+        untextured.triangles[k].texcoords[0].x = 0.5;
+        assert_eq!(sign(&untextured), base_untextured, "untextured texture coordinates");
         let mut fewer = frame.clone();
         fewer.triangles.pop();
         assert_ne!(sign(&fewer), base, "one triangle fewer");
