@@ -12,7 +12,7 @@ use glray_core::prefetch;
 
 use crate::camera::Viewport;
 use crate::instance::Instance;
-use crate::lighting::{prepare, Light, LightModel, Material, Prepared};
+use crate::lighting::{color_faces, color_target, prepare, Light, LightModel, Material, Prepared};
 use crate::sunlit::Sunlit;
 use crate::texture::Texture;
 
@@ -141,22 +141,13 @@ impl Lighting {
 pub fn color_materials(materials: [Material; 2], color_material: Option<(u32, u32)>, color: DVec4) -> [Material; 2] {
     let mut mats = materials;
     if let Some((face, mode)) = color_material {
-        let faces: &[usize] = match face {
-            0x0404 => &[0],
-            0x0405 => &[1],
-            _ => &[0, 1],
-        };
-        for &f in faces {
-            let m = &mut mats[f];
-            match mode {
-                0x1200 => m.ambient = color,
-                0x1201 => m.diffuse = color,
-                0x1202 => m.specular = color,
-                0x1600 => m.emission = color,
-                _ => {
-                    m.ambient = color;
-                    m.diffuse = color;
-                }
+        let t = color_target(mode);
+        for (m, on) in mats.iter_mut().zip(color_faces(face)) {
+            if on {
+                m.ambient = if t.ambient { color } else { m.ambient };
+                m.diffuse = if t.diffuse { color } else { m.diffuse };
+                m.specular = if t.specular { color } else { m.specular };
+                m.emission = if t.emission { color } else { m.emission };
             }
         }
     }

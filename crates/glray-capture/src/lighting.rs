@@ -89,6 +89,36 @@ impl Default for LightModel {
     }
 }
 
+/// The colours of a material glColorMaterial's mode replaces with the current colour.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ColorTarget {
+    pub ambient: bool,
+    pub diffuse: bool,
+    pub specular: bool,
+    pub emission: bool,
+}
+
+/// What glColorMaterial's `mode` replaces (GL_AMBIENT_AND_DIFFUSE for any other value).
+pub fn color_target(mode: u32) -> ColorTarget {
+    let only = |ambient, diffuse, specular, emission| ColorTarget { ambient, diffuse, specular, emission };
+    match mode {
+        0x1200 => only(true, false, false, false), // GL_AMBIENT
+        0x1201 => only(false, true, false, false), // GL_DIFFUSE
+        0x1202 => only(false, false, true, false), // GL_SPECULAR
+        0x1600 => only(false, false, false, true), // GL_EMISSION
+        _ => only(true, true, false, false),       // GL_AMBIENT_AND_DIFFUSE
+    }
+}
+
+/// Which faces (front, back) glColorMaterial's `face` applies to.
+pub fn color_faces(face: u32) -> [bool; 2] {
+    match face {
+        0x0404 => [true, false], // GL_FRONT
+        0x0405 => [false, true], // GL_BACK
+        _ => [true, true],       // GL_FRONT_AND_BACK
+    }
+}
+
 /// What the lighting equation needs of a directional light that no vertex changes, worked out
 /// once per frame: its unit direction and, for a viewer at infinity, its half vector (two
 /// square roots and divisions per light and vertex otherwise; the tracer lights every hit's

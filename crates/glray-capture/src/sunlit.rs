@@ -17,7 +17,7 @@
 
 use glam::{DVec3, DVec4, Mat3, Vec3, Vec3A, Vec4};
 
-use crate::lighting::{Light, LightModel, Material};
+use crate::lighting::{color_faces, color_target, ColorTarget, Light, LightModel, Material};
 
 /// One light at infinity, as the equation reads it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -52,20 +52,14 @@ impl Face {
         }
     }
 
-    /// This face with `color` put in by glColorMaterial's `mode` (`frame::color_materials`).
+    /// This face with `color` put in where glColorMaterial's target says (`frame::color_materials`).
     #[inline]
-    fn with_color(mut self, mode: u32, color: Vec4) -> Face {
+    fn with_color(mut self, t: ColorTarget, color: Vec4) -> Face {
         let rgb = Vec3A::from(color.truncate());
-        match mode {
-            0x1200 => self.ambient = rgb,
-            0x1201 => self.diffuse = color,
-            0x1202 => self.specular = rgb,
-            0x1600 => self.emission = rgb,
-            _ => {
-                self.ambient = rgb;
-                self.diffuse = color;
-            }
-        }
+        self.ambient = if t.ambient { rgb } else { self.ambient };
+        self.diffuse = if t.diffuse { color } else { self.diffuse };
+        self.specular = if t.specular { rgb } else { self.specular };
+        self.emission = if t.emission { rgb } else { self.emission };
         self
     }
 }
@@ -80,7 +74,7 @@ pub struct Sunlit {
     /// Front and back materials.
     faces: [Face; 2],
     /// Which faces glColorMaterial's colour goes into, and as what (`Lighting::color_material`).
-    color_material: Option<([bool; 2], u32)>,
+    color_material: Option<([bool; 2], ColorTarget)>,
     two_side: bool,
     separate_specular: bool,
 }
@@ -112,14 +106,7 @@ impl Sunlit {
             })
             .collect();
         let ambient = lights.iter().fold(model.ambient.truncate(), |a, l| a + l.ambient.truncate());
-        let color_material = color_material.map(|(face, mode)| {
-            let faces = match face {
-                0x0404 => [true, false],
-                0x0405 => [false, true],
-                _ => [true, true],
-            };
-            (faces, mode)
-        });
+        let color_material = color_material.map(|(face, mode)| (color_faces(face), color_target(mode)));
         Some(Sunlit {
             suns,
             ambient: ambient.as_vec3a(),
@@ -138,9 +125,9 @@ impl Sunlit {
         // One-sided lighting lights the back face as the front.
         let (side, normal) = if face == 1 && self.two_side { (1, -normal) } else { (0, normal) };
         let mut m = self.faces[side];
-        if let Some((faces, mode)) = self.color_material {
+        if let Some((faces, target)) = self.color_material {
             if faces[side] {
-                m = m.with_color(mode, color);
+                m = m.with_color(target, color);
             }
         }
         let mut diffuse = Vec3A::ZERO;
