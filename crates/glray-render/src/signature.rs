@@ -101,7 +101,7 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
         doubles(&mut h, i.color.to_array().into_iter().chain(i.normal.to_array()));
         // Texture coordinates only where they are read: the current one a previous frame left
         // would otherwise make an unchanged scene look changed.
-        if frame.surfaces.get(i.surface as usize).is_some_and(|s| s.texturing.is_some()) {
+        if textured.get(i.surface as usize).copied().unwrap_or(false) {
             doubles(&mut h, i.texture_matrix.to_cols_array());
             doubles(&mut h, i.texcoord.to_array());
         }
@@ -131,24 +131,12 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::{Vec2, Vec3, Vec4};
+    use glam::{Vec3, Vec4};
 
     fn triangle(k: usize) -> Triangle {
         let x = k as f32;
-        Triangle {
-            positions: [Vec3::new(x, 0.0, -1.0), Vec3::new(x + 1.0, 0.0, -1.0), Vec3::new(x, 1.0, -1.0)],
-            colors: [Vec4::ONE; 3],
-            secondary: [Vec3::ZERO; 3],
-            texcoords: [Vec2::ZERO; 3],
-            surface: 0,
-            sequence: 0,
-            camera: 0,
-            clip_w: [1.0; 3],
-            normals: [Vec3::Z; 3],
-            base_colors: [Vec4::ONE; 3],
-            lighting: 0,
-            back: false,
-        }
+        let corners = [Vec3::new(x, 0.0, -1.0), Vec3::new(x + 1.0, 0.0, -1.0), Vec3::new(x, 1.0, -1.0)];
+        crate::fragment::tests::plain(corners, [1.0; 3])
     }
 
     /// A change made to a triangle or a frame.
