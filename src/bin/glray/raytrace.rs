@@ -100,7 +100,7 @@ pub fn run(data: &[u8], out: &Path, frames: &FrameSet, readpixels: bool, options
                 image.write_png(&out.join(format!("frame-{number:04}.png")))?;
                 summary.frames_written += 1;
                 last.traced += 1;
-                last.rendered(thread, rendered);
+                last.written(thread, rendered);
             }
         }
     }
@@ -159,7 +159,7 @@ impl Pictures {
     }
 
     /// `thread`'s picture traced and written.
-    fn rendered(&mut self, thread: u32, r: Rendered) {
+    fn written(&mut self, thread: u32, r: Rendered) {
         self.pending.remove(&thread);
         self.rendered.insert(thread, r);
     }
