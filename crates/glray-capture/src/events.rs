@@ -141,7 +141,10 @@ mod tests {
             c.event(&Event::Name { number }, |n| &bytes[n]);
         }
         for (cmd, thread, args, ret) in calls {
-            c.event(&Event::Call { cmd: *cmd, thread: *thread, args: args.clone(), ret: ret.clone() }, |n| &bytes[n]);
+            c.event(
+                &Event::Call { cmd: *cmd, thread: *thread, args: args.iter().cloned().collect(), ret: ret.clone() },
+                |n| &bytes[n],
+            );
         }
     }
 

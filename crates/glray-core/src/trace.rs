@@ -99,12 +99,17 @@ pub mod array_kind {
     pub const LAST: u8 = ATTRIB;
 }
 
+/// A call's arguments, inline up to four (glVertex3fv's one, glColor4f's four): capture reads
+/// every call a program makes, and a vector allocated and freed for each was a fifth of what
+/// reading one cost.
+pub type Args<'a> = smallvec::SmallVec<[Value<'a>; 4]>;
+
 #[derive(Debug, Clone, PartialEq)]
 pub enum Event<'a> {
     Call {
         cmd: usize,
         thread: u32,
-        args: Vec<Value<'a>>,
+        args: Args<'a>,
         ret: Option<Value<'a>>,
     },
     Frame {
@@ -523,7 +528,7 @@ impl<'a> Reader<'a> {
                 let cmd = cmd as usize;
                 let thread = self.u32_of("the thread number")?;
                 let nargs = self.byte("the argument count")?;
-                let mut args = Vec::with_capacity(nargs as usize);
+                let mut args = Args::with_capacity(nargs as usize);
                 for i in 0..nargs {
                     args.push(self.value(&format_args!("argument {i}"))?);
                 }
@@ -656,7 +661,7 @@ mod tests {
             }
         }
         assert_eq!(events.len(), 7);
-        assert_eq!(events[0], Event::Call { cmd: 0, thread: 0, args: vec![Value::UInt(4)], ret: None });
+        assert_eq!(events[0], Event::Call { cmd: 0, thread: 0, args: smallvec::smallvec![Value::UInt(4)], ret: None });
         assert_eq!(
             events[3],
             Event::Arrays {
@@ -678,7 +683,7 @@ mod tests {
             Event::Call {
                 cmd: 2,
                 thread: 1,
-                args: vec![Value::Opaque(0xdead_beef), Value::UInt(u64::MAX)],
+                args: smallvec::smallvec![Value::Opaque(0xdead_beef), Value::UInt(u64::MAX)],
                 ret: Some(Value::Int(-5))
             }
         );
