@@ -160,7 +160,10 @@ pub fn leave() {
 /// Runs `f` with the recorder, under the lock and a panic guard: an I/O error or a panic stops
 /// recording (with a message) but never the program.
 pub fn with(f: impl FnOnce(&mut Recorder)) {
-    if FORKED.swap(false, Ordering::Relaxed) {
+    // A load, not a swap: a locked instruction on every call cost as much as the recorder's
+    // lock. Only a child just forked (one thread) ever finds it set.
+    if FORKED.load(Ordering::Relaxed) {
+        FORKED.store(false, Ordering::Relaxed);
         after_fork();
         if !active() {
             return;
