@@ -416,21 +416,41 @@ impl<'a> Reader<'a> {
         self.error_at(self.event_start, message)
     }
 
+    // The readers below run for every field of every call capture follows (a display list's
+    // compile is tens of millions of calls): inlined, with their errors made out of line.
+
+    #[inline]
     fn take(&mut self, n: usize, what: &(impl fmt::Display + ?Sized)) -> Result<&'a [u8], TraceError> {
         let left = self.data.len() - self.pos;
         if n > left {
-            return Err(self.error_at(self.pos, format!("truncated: {what} needs {n} bytes, {left} left")));
+            return Err(self.truncated(what, n, left));
         }
         let s = &self.data[self.pos..self.pos + n];
         self.pos += n;
         Ok(s)
     }
 
+    #[cold]
+    fn truncated(&self, what: &(impl fmt::Display + ?Sized), n: usize, left: usize) -> TraceError {
+        self.error_at(self.pos, format!("truncated: {what} needs {n} bytes, {left} left"))
+    }
+
+    #[inline]
     fn byte(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<u8, TraceError> {
         Ok(self.take(1, what)?[0])
     }
 
+    #[inline]
     fn varint(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<u64, TraceError> {
+        // Most numbers in a trace (command numbers, threads, lengths) fit one byte.
+        if let Some(&b) = self.data.get(self.pos).filter(|b| **b < 0x80) {
+            self.pos += 1;
+            return Ok(b as u64);
+        }
+        self.long_varint(what)
+    }
+
+    fn long_varint(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<u64, TraceError> {
         let start = self.pos;
         let mut v = 0u64;
         for shift in (0..64).step_by(7) {
@@ -446,6 +466,7 @@ impl<'a> Reader<'a> {
         Err(self.error_at(start, format!("{what}: varint longer than 64 bits")))
     }
 
+    #[inline]
     fn zigzag(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<i64, TraceError> {
         let v = self.varint(what)?;
         Ok((v >> 1) as i64 ^ -((v & 1) as i64))
@@ -453,6 +474,7 @@ impl<'a> Reader<'a> {
 
     /// A count of items of at least `min_item_bytes` each: never more than the bytes left allow,
     /// so a corrupt count cannot cause a huge allocation.
+    #[inline]
     fn count(&mut self, min_item_bytes: usize, what: &(impl fmt::Display + ?Sized)) -> Result<usize, TraceError> {
         let start = self.pos;
         let n = self.varint(what)?;
@@ -463,11 +485,13 @@ impl<'a> Reader<'a> {
         Ok(n as usize)
     }
 
+    #[inline]
     fn sized(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<&'a [u8], TraceError> {
         let n = self.count(1, what)?;
         self.take(n, what)
     }
 
+    #[inline]
     fn u32_of(&mut self, what: &(impl fmt::Display + ?Sized)) -> Result<u32, TraceError> {
         let start = self.pos;
         let v = self.varint(what)?;
