@@ -54,20 +54,37 @@ pub fn type_size(ty: u32) -> Option<usize> {
 /// Element `i` of type `ty` in `b` (native byte order), as f64, without normalisation;
 /// None past the end.
 pub fn element(b: &[u8], ty: u32, i: usize) -> Option<f64> {
-    let size = type_size(ty)?;
-    let s = b.get(i * size..(i + 1) * size)?;
-    Some(match ty {
-        GL_BYTE => s[0] as i8 as f64,
-        GL_UNSIGNED_BYTE => s[0] as f64,
-        GL_SHORT => i16::from_ne_bytes([s[0], s[1]]) as f64,
-        GL_UNSIGNED_SHORT => u16::from_ne_bytes([s[0], s[1]]) as f64,
-        GL_HALF_FLOAT => half_to_f64(u16::from_ne_bytes([s[0], s[1]])),
-        GL_INT => i32::from_ne_bytes(s.try_into().ok()?) as f64,
-        GL_UNSIGNED_INT => u32::from_ne_bytes(s.try_into().ok()?) as f64,
-        GL_FLOAT => f32::from_ne_bytes(s.try_into().ok()?) as f64,
-        GL_DOUBLE => f64::from_ne_bytes(s.try_into().ok()?),
-        _ => return None,
-    })
+    let mut v = [0.0];
+    (elements(b.get(i * type_size(ty)?..)?, ty, &mut v) == 1).then_some(v[0])
+}
+
+/// The elements of type `ty` at the start of `b` (native byte order) into `out`, as f64
+/// without normalisation, as many as both hold; how many (0 for a type glray does not read).
+/// The type is decided once for them all, not element by element: attribute vectors
+/// (glVertex3fv, glNormal3fv: millions in a big display list) and vertex arrays are read so.
+#[inline]
+pub fn elements(b: &[u8], ty: u32, out: &mut [f64]) -> usize {
+    #[inline(always)]
+    fn each<const S: usize>(b: &[u8], out: &mut [f64], convert: impl Fn([u8; S]) -> f64) -> usize {
+        let mut n = 0;
+        for (o, s) in out.iter_mut().zip(b.chunks_exact(S)) {
+            *o = convert(s.try_into().expect("chunks of S bytes"));
+            n += 1;
+        }
+        n
+    }
+    match ty {
+        GL_BYTE => each(b, out, |s: [u8; 1]| s[0] as i8 as f64),
+        GL_UNSIGNED_BYTE => each(b, out, |s: [u8; 1]| s[0] as f64),
+        GL_SHORT => each(b, out, |s| i16::from_ne_bytes(s) as f64),
+        GL_UNSIGNED_SHORT => each(b, out, |s| u16::from_ne_bytes(s) as f64),
+        GL_HALF_FLOAT => each(b, out, |s| half_to_f64(u16::from_ne_bytes(s))),
+        GL_INT => each(b, out, |s| i32::from_ne_bytes(s) as f64),
+        GL_UNSIGNED_INT => each(b, out, |s| u32::from_ne_bytes(s) as f64),
+        GL_FLOAT => each(b, out, |s| f32::from_ne_bytes(s) as f64),
+        GL_DOUBLE => each(b, out, f64::from_ne_bytes),
+        _ => 0,
+    }
 }
 
 /// GL's conversion of a normalised integer component to [-1, 1] or [0, 1] (OpenGL 2.1,
@@ -86,7 +103,11 @@ pub fn normalize(v: f64, ty: u32) -> f64 {
 
 /// The first `n` elements of a pointer argument as f64 (fewer if less memory was recorded).
 pub fn array(b: &[u8], ty: u32, n: usize) -> Vec<f64> {
-    (0..n).map_while(|i| element(b, ty, i)).collect()
+    // No more room than the memory holds (a corrupt count asks for no huge allocation).
+    let mut v = vec![0.0; n.min(b.len())];
+    let got = elements(b, ty, &mut v);
+    v.truncate(got);
+    v
 }
 
 fn half_to_f64(h: u16) -> f64 {
@@ -121,5 +142,52 @@ mod tests {
         assert_eq!(normalize(127.0, GL_BYTE), 1.0);
         assert_eq!(half_to_f64(0x3c00), 1.0);
         assert_eq!(array(&1.5f32.to_ne_bytes(), GL_FLOAT, 4), vec![1.5]);
+    }
+
+    #[test]
+    fn elements_of_every_type_read_what_their_memory_holds() {
+        let bytes = |v: &[f64], ty: u32| -> Vec<u8> {
+            v.iter()
+                .flat_map(|&x| match ty {
+                    GL_BYTE => (x as i8).to_ne_bytes().to_vec(),
+                    GL_UNSIGNED_BYTE => (x as u8).to_ne_bytes().to_vec(),
+                    GL_SHORT => (x as i16).to_ne_bytes().to_vec(),
+                    GL_UNSIGNED_SHORT => (x as u16).to_ne_bytes().to_vec(),
+                    GL_HALF_FLOAT => 0x3c00u16.to_ne_bytes().to_vec(), // 1.0, the only value used
+                    GL_INT => (x as i32).to_ne_bytes().to_vec(),
+                    GL_UNSIGNED_INT => (x as u32).to_ne_bytes().to_vec(),
+                    GL_FLOAT => (x as f32).to_ne_bytes().to_vec(),
+                    _ => x.to_ne_bytes().to_vec(),
+                })
+                .collect()
+        };
+        let signed = [-3.0, 7.0, 100.0];
+        let unsigned = [3.0, 7.0, 200.0];
+        for (ty, v) in [
+            (GL_BYTE, &signed),
+            (GL_UNSIGNED_BYTE, &unsigned),
+            (GL_SHORT, &signed),
+            (GL_UNSIGNED_SHORT, &unsigned),
+            (GL_INT, &signed),
+            (GL_UNSIGNED_INT, &unsigned),
+            (GL_FLOAT, &[0.5, -2.25, 3.0]),
+            (GL_DOUBLE, &[0.1, -2.25, 1e300]),
+            (GL_HALF_FLOAT, &[1.0, 1.0, 1.0]),
+        ] {
+            let b = bytes(v, ty);
+            let mut out = [9.0; 4];
+            assert_eq!(elements(&b, ty, &mut out), 3, "type {ty:#x}");
+            assert_eq!(&out[..3], &v[..], "type {ty:#x}");
+            assert_eq!(out[3], 9.0, "type {ty:#x}: past the memory, untouched");
+            // Element by element, the same values; memory cut inside the last element: two.
+            for (i, x) in v.iter().enumerate() {
+                assert_eq!(element(&b, ty, i), Some(*x), "type {ty:#x}, element {i}");
+            }
+            assert_eq!(element(&b, ty, 3), None);
+            assert_eq!(elements(&b[..b.len() - 1], ty, &mut out), 2, "type {ty:#x}");
+            assert_eq!(array(&b, ty, 10), v.to_vec(), "type {ty:#x}");
+        }
+        assert_eq!(elements(&[0; 8], 0x1234, &mut [0.0; 2]), 0, "a type glray does not read");
+        assert_eq!(element(&[0; 8], 0x1234, 0), None);
     }
 }

@@ -56,12 +56,17 @@ impl<'a> Source<'a> {
     pub(crate) fn fetch(&self, i: u64, normalized: bool) -> Option<DVec4> {
         let at = usize::try_from(i.checked_sub(self.first)?).ok()?.checked_mul(self.stride)?;
         let b = self.bytes.get(at..)?;
-        let mut v = DVec4::new(0.0, 0.0, 0.0, 1.0);
-        for c in 0..self.size.min(4) {
-            let x = args::element(b, self.ty, c)?;
-            v[c] = if normalized { args::normalize(x, self.ty) } else { x };
+        let n = self.size.min(4);
+        let mut x = [0.0, 0.0, 0.0, 1.0];
+        if args::elements(b, self.ty, &mut x[..n]) < n {
+            return None;
         }
-        Some(v)
+        if normalized {
+            for c in &mut x[..n] {
+                *c = args::normalize(*c, self.ty);
+            }
+        }
+        Some(DVec4::from_array(x))
     }
 }
 

@@ -42,24 +42,17 @@ pub(crate) fn decode_attribute(f: AttrForm, a: &[Value]) -> GlResult<Given> {
     // At most four values, on the stack: this runs for every glVertex, glNormal and glColor a
     // display list compiles (tens of millions in a big list).
     let mut values = [0.0f64; 4];
-    let mut len = 0;
-    if f.vector && f.ty == args::GL_FLOAT {
-        // The common case (glVertex3fv, glNormal3fv), read straight from the recorded memory
-        // rather than element by element through the type's dispatch: a third of what each
-        // such call cost capture.
-        for (slot, v) in values.iter_mut().zip(args::bytes(a, first).chunks_exact(4).take(f.n)) {
-            *slot = f32::from_ne_bytes([v[0], v[1], v[2], v[3]]) as f64;
-            len += 1;
-        }
+    // A vector's components read with its type decided once (`args::elements`), not per
+    // component.
+    let len = if f.vector {
+        args::elements(args::bytes(a, first), f.ty, &mut values[..f.n.min(4)])
     } else {
-        for (k, slot) in values.iter_mut().enumerate().take(f.n) {
-            let value =
-                if f.vector { args::element(args::bytes(a, first), f.ty, k) } else { Some(args::float(a, first + k)) };
-            let Some(v) = value else { break };
-            *slot = v;
-            len = k + 1;
+        let n = f.n.min(4);
+        for (k, slot) in values[..n].iter_mut().enumerate() {
+            *slot = args::float(a, first + k);
         }
-    }
+        n
+    };
     let raw = &values[..len];
     let get = |k: usize, default: f64| raw.get(k).copied().unwrap_or(default);
     let norm = |k: usize, default: f64| raw.get(k).map_or(default, |x| args::normalize(*x, f.ty));
