@@ -103,8 +103,8 @@ pub fn normalize(v: f64, ty: u32) -> f64 {
 
 /// The first `n` elements of a pointer argument as f64 (fewer if less memory was recorded).
 pub fn array(b: &[u8], ty: u32, n: usize) -> Vec<f64> {
-    // No more room than the memory holds (a corrupt count asks for no huge allocation).
-    let mut v = vec![0.0; n.min(b.len())];
+    // No more room than the memory holds elements (a corrupt count asks for no huge allocation).
+    let mut v = vec![0.0; n.min(b.len() / type_size(ty).unwrap_or(1))];
     let got = elements(b, ty, &mut v);
     v.truncate(got);
     v

@@ -239,7 +239,7 @@ mod tests {
         };
         let floats = blob([0.5f32, -2.0, 3.25, 0.75], |x| x.to_ne_bytes().to_vec());
         let doubles = blob([0.5f64, -2.0, 3.25, 0.75], |x| x.to_ne_bytes().to_vec());
-        // glVertex3fv (read straight from the floats) as glVertex3dv (element by element).
+        // glVertex3fv (from floats) as glVertex3dv (from doubles): the same values.
         assert_eq!(decode("glVertex3fv", &floats[..12]), decode("glVertex3dv", &doubles[..24]));
         assert_eq!(decode("glVertex3fv", &floats[..12]), Given::Vertex(DVec4::new(0.5, -2.0, 3.25, 1.0)));
         assert_eq!(decode("glVertex4fv", &floats), Given::Vertex(DVec4::new(0.5, -2.0, 3.25, 0.75)));
