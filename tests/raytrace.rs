@@ -331,3 +331,36 @@ fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
         "{plain}"
     );
 }
+
+#[test]
+fn capture_follows_the_same_calls_with_and_without_a_trace_file() {
+    // Without a trace file, each call goes to capture as it is made; with one, capture reads
+    // the calls back from the trace's bytes. Every part of osmesa_scene (immediate mode, lists,
+    // client arrays, buffer objects, textures, lighting), three frames: the same scenes and the
+    // same picture either way.
+    let dir = scratch("rt-direct");
+    let program = example("osmesa_scene");
+    let run = |way: &str| {
+        let (png, scenes) = (dir.join(format!("{way}.png")), dir.join(format!("scenes-{way}")));
+        let mut cmd = command(Way::Preload, &[], &program, 60);
+        cmd.arg(&png).arg("3").env("GLRAY_PRESET", "gl").env("GLRAY_DUMP_SCENE", &scenes);
+        if way == "recorded" {
+            cmd.env("GLRAY_RECORD", dir.join("scene.trace"));
+        }
+        let out = run_ok(&mut cmd, &format!("osmesa_scene, {way}"));
+        assert!(stdout(&out).contains("glGetError 0x0"), "{way}: {}", stdout(&out));
+        (png, scenes)
+    };
+    let (direct, direct_scenes) = run("direct");
+    let (recorded, recorded_scenes) = run("recorded");
+    assert!(std::fs::metadata(dir.join("scene.trace")).is_ok_and(|m| m.len() > 1000), "a trace was written");
+    assert_same_file(&direct, &recorded, "the picture");
+    for frame in 0..3 {
+        for ext in ["obj", "json"] {
+            let name = format!("scene-{frame:04}.{ext}");
+            assert_same_file(&direct_scenes.join(&name), &recorded_scenes.join(&name), &name);
+        }
+    }
+    // Its lists (instances), buffer-object and client-array draws and immediate-mode quads.
+    assert_eq!(dumped(&direct_scenes), (80, 0), "the last scene holds the program's 80 triangles");
+}

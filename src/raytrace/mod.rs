@@ -16,9 +16,9 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
-use glray_capture::events::Capture;
+use glray_capture::events::{Capture, LiveCall};
 use glray_core::config::Config;
-use glray_core::trace::{Event, Reader};
+use glray_core::trace::{Event, Reader, Value};
 
 use crate::commands::cmd;
 use crate::dispatch::{self, Backend};
@@ -92,7 +92,8 @@ fn stop(why: &str) {
     glray_core::error!("ray tracing stopped: {why}; the program's own frames are shown from here on");
 }
 
-/// Capture follows the events of one recorded call; returns how many commands are named.
+/// Capture follows the events of one recorded call, read from the trace bytes the recorder
+/// made of them; returns how many commands are named.
 pub fn feed(bytes: &[u8], named: usize) -> usize {
     if !ON.load(Ordering::Relaxed) {
         return named;
@@ -107,14 +108,8 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
                 live.names.resize(number + 1, Vec::new());
                 live.names[number] = reader.name(number).to_vec();
             }
-            if let Event::Call { thread, .. } = event {
-                let ctx = live.capture.context(thread);
-                // Errors of a call the real GL did not get are glGetError's to report.
-                ctx.unseen = UNSEEN.with(|u| u.replace(false)) || in_skipped_begin();
-                ctx.core_profile = crate::profile::core();
-            }
             let names = &live.names;
-            live.capture.event(&event, |n| names.get(n).map_or(&[][..], |v| &v[..]));
+            follow_in(&mut live.capture, &event, &|n| names.get(n).map_or(&[][..], |v| &v[..]));
         }
         Ok(())
     }));
@@ -127,6 +122,59 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
         Err(_) => stop("internal error in capture"),
     }
     reader.named()
+}
+
+/// Capture follows one event the recorder made without encoding it (no trace file is
+/// written); `name` gives a Name event's command name.
+pub fn follow<'a>(event: &Event, name: &dyn Fn(usize) -> &'a [u8]) {
+    if !ON.load(Ordering::Relaxed) {
+        return;
+    }
+    let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(live) = guard.as_mut() else { return };
+    let started = live.stats.is_some().then(std::time::Instant::now);
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| follow_in(&mut live.capture, event, name)));
+    if let Some(t) = started {
+        live.capture_time += t.elapsed();
+    }
+    if result.is_err() {
+        stop("internal error in capture");
+    }
+}
+
+/// `capture` follows one event of the calling thread's.
+fn follow_in<'a>(capture: &mut Capture, event: &Event, name: &dyn Fn(usize) -> &'a [u8]) {
+    match event {
+        Event::Call { cmd, thread, args, ret } => capture.call(*cmd, *thread, args, ret.as_ref(), Some(live_call())),
+        _ => {
+            capture.event(event, name);
+        }
+    }
+}
+
+/// What capture is to know of the call this thread just made.
+fn live_call() -> LiveCall {
+    LiveCall { unseen: UNSEEN.with(|u| u.replace(false)) || in_skipped_begin(), core_profile: crate::profile::core() }
+}
+
+/// Capture follows one call the recorder made without encoding it (no trace file is
+/// written), as `follow` does an event.
+pub fn follow_call(cmd: usize, thread: u32, args: &[Value], ret: Option<&Value>) {
+    if !ON.load(Ordering::Relaxed) {
+        return;
+    }
+    let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(live) = guard.as_mut() else { return };
+    let started = live.stats.is_some().then(std::time::Instant::now);
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        live.capture.call(cmd, thread, args, ret, Some(live_call()))
+    }));
+    if let Some(t) = started {
+        live.capture_time += t.elapsed();
+    }
+    if result.is_err() {
+        stop("internal error in capture");
+    }
 }
 
 /// Called after this thread made a context current: capture follows only compatibility

@@ -10,6 +10,7 @@
 //! every few MiB, and at exit.
 
 mod arrays;
+mod out;
 pub mod sizes;
 
 use std::collections::{HashMap, HashSet};
@@ -20,6 +21,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, OnceLock};
 
 use glray_core::trace::Encoder;
+
+use out::Out;
 
 use crate::commands::{cmd, Class, COMMANDS};
 use crate::real;
@@ -184,6 +187,7 @@ pub fn with(f: impl FnOnce(&mut Recorder)) {
             rec.open()?;
         }
         f(rec);
+        rec.e.discard_call();
         if rec.capture {
             rec.feed_capture();
         }
@@ -243,7 +247,8 @@ enum Kind {
 }
 
 pub struct Recorder {
-    pub e: Encoder,
+    /// Where events go: trace bytes, or straight to capture when no file is written.
+    pub e: Out,
     /// The trace file, if recording to one.
     path: Option<PathBuf>,
     /// Whether calls go to glray's capture too.
@@ -267,7 +272,7 @@ pub struct Recorder {
 impl Recorder {
     fn new(path: Option<PathBuf>, capture: bool) -> Recorder {
         Recorder {
-            e: Encoder::new(),
+            e: Out::new(path.is_some() || !capture),
             path,
             capture,
             fed: 0,

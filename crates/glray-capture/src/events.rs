@@ -40,6 +40,22 @@ fn kind_of(name: &str) -> Option<Kind> {
     })
 }
 
+/// What the live library knows of a call that a trace does not say.
+#[derive(Debug, Clone, Copy)]
+pub struct LiveCall {
+    /// The real GL did not get the call: its errors are glGetError's to report.
+    pub unseen: bool,
+    /// The context is a core profile (capture follows none of its calls).
+    pub core_profile: bool,
+}
+
+impl LiveCall {
+    fn give(self, ctx: &mut Context) {
+        ctx.unseen = self.unseen;
+        ctx.core_profile = self.core_profile;
+    }
+}
+
 #[derive(Default)]
 pub struct Capture {
     /// What each command number the trace has named means.
@@ -76,32 +92,7 @@ impl Capture {
                 }
                 self.kinds[*number] = kind;
             }
-            Event::Call { cmd, thread, args, ret } => {
-                self.last_thread = *thread;
-                match self.kinds.get(*cmd).copied().flatten() {
-                    Some(Kind::Gl(op, ty)) => self.context(*thread).call(op, ty, args),
-                    Some(Kind::Create(share)) => {
-                        self.resolved = None;
-                        let created = ret.as_ref().map_or(0, Value::as_int) as u64;
-                        let share = args.get(share).map_or(0, Value::as_int) as u64;
-                        if created != 0 {
-                            let group = if share != 0 { *self.groups.get(&share).unwrap_or(&share) } else { created };
-                            self.groups.insert(created, group);
-                        }
-                    }
-                    Some(Kind::MakeCurrent(at)) => {
-                        self.resolved = None;
-                        let ok = ret.as_ref().is_none_or(|r| r.as_int() != 0);
-                        if ok {
-                            match args.get(at).map_or(0, Value::as_int) as u64 {
-                                0 => self.current.remove(thread),
-                                ctx => self.current.insert(*thread, ctx),
-                            };
-                        }
-                    }
-                    None => {}
-                }
-            }
+            Event::Call { cmd, thread, args, ret } => self.call(*cmd, *thread, args, ret.as_ref(), None),
             Event::Arrays { thread, arrays } => self.context(*thread).set_arrays(arrays),
             Event::Drawable { thread, width, height, .. } => self.context(*thread).set_drawable(*width, *height),
             Event::Frame { .. } => {
@@ -111,6 +102,47 @@ impl Capture {
             Event::End => {}
         }
         None
+    }
+
+    /// Follows one call; `live`, what the live library knows of it, is given to the context
+    /// the call goes to (as it was before the call, for a MakeCurrent). A call made live is
+    /// handed here without becoming an `Event`: moved into one and out again, its arguments
+    /// were copied twice per call.
+    pub fn call(&mut self, cmd: usize, thread: u32, args: &[Value], ret: Option<&Value>, live: Option<LiveCall>) {
+        self.last_thread = thread;
+        let kind = self.kinds.get(cmd).copied().flatten();
+        if let Some(Kind::Gl(op, ty)) = kind {
+            let ctx = self.context(thread);
+            if let Some(l) = live {
+                l.give(ctx);
+            }
+            return ctx.call(op, ty, args);
+        }
+        if let Some(l) = live {
+            l.give(self.context(thread));
+        }
+        match kind {
+            Some(Kind::Create(share)) => {
+                self.resolved = None;
+                let created = ret.map_or(0, Value::as_int) as u64;
+                let share = args.get(share).map_or(0, Value::as_int) as u64;
+                if created != 0 {
+                    let group = if share != 0 { *self.groups.get(&share).unwrap_or(&share) } else { created };
+                    self.groups.insert(created, group);
+                }
+            }
+            Some(Kind::MakeCurrent(at)) => {
+                self.resolved = None;
+                let ok = ret.is_none_or(|r| r.as_int() != 0);
+                if ok {
+                    match args.get(at).map_or(0, Value::as_int) as u64 {
+                        0 => self.current.remove(&thread),
+                        ctx => self.current.insert(thread, ctx),
+                    };
+                }
+            }
+            Some(Kind::Gl(..)) | None => {}
+        }
     }
 
     /// The context current on a thread, holding its share group's objects.

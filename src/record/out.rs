@@ -1,0 +1,455 @@
+//! Where the recorder's events go. With a trace file (`Out::Bytes`) they are encoded in the
+//! trace format, and capture (when ray tracing too) reads them back from those bytes, so that
+//! the file and the ray tracer see exactly the same calls. Without one (`Out::Events`, what
+//! `glray run` does by default) each event goes to capture as it is made: encoding every call
+//! only to decode it again was ~40% of what following a glVertex cost.
+//!
+//! Both take the same calls in the same order (the generated recorders in `generated` call
+//! `int`, `uint`, `f32`, ... on either), and `Events` hands capture the same `Event`s a
+//! `Reader` would make of the bytes.
+
+use std::io::{self, Write};
+use std::ops::Range;
+
+use glray_core::trace::{Args, ArrayData, Encoder, Event, Value};
+use smallvec::SmallVec;
+
+// One per process (the recorder's): the events' state inline saves a load on every call.
+#[allow(clippy::large_enum_variant)]
+pub enum Out {
+    Bytes(Encoder),
+    Events(Events),
+}
+
+impl Out {
+    /// `Events` when the events go to capture alone, else `Bytes`.
+    pub fn new(to_file: bool) -> Out {
+        if to_file {
+            Out::Bytes(Encoder::new())
+        } else {
+            Out::Events(Events::new(Sink::CAPTURE))
+        }
+    }
+
+    /// Encoded bytes not flushed yet (none for `Events`).
+    pub fn bytes(&self) -> &[u8] {
+        match self {
+            Out::Bytes(e) => e.bytes(),
+            Out::Events(_) => &[],
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.bytes().len()
+    }
+
+    pub fn clear(&mut self) {
+        if let Out::Bytes(e) = self {
+            e.clear()
+        }
+    }
+
+    pub fn flush_to(&mut self, w: &mut dyn Write) -> io::Result<()> {
+        match self {
+            Out::Bytes(e) => e.flush_to(w),
+            Out::Events(_) => Ok(()),
+        }
+    }
+
+    pub fn end(&mut self) {
+        if let Out::Bytes(e) = self {
+            e.end()
+        }
+    }
+
+    /// Names the next command number.
+    pub fn name(&mut self, name: &[u8]) {
+        match self {
+            Out::Bytes(e) => e.name(name),
+            Out::Events(d) => d.name(name),
+        }
+    }
+
+    pub fn begin_call(&mut self, cmd: usize, thread: u32, nargs: u8) {
+        match self {
+            Out::Bytes(e) => e.begin_call(cmd, thread, nargs),
+            Out::Events(d) => d.begin_call(cmd, thread, nargs),
+        }
+    }
+
+    #[inline(always)]
+    pub fn int(&mut self, v: i64) {
+        match self {
+            Out::Bytes(e) => e.int(v),
+            Out::Events(d) => d.value(Value::Int(v)),
+        }
+    }
+
+    #[inline(always)]
+    pub fn uint(&mut self, v: u64) {
+        match self {
+            Out::Bytes(e) => e.uint(v),
+            Out::Events(d) => d.value(Value::UInt(v)),
+        }
+    }
+
+    #[inline(always)]
+    pub fn f32(&mut self, v: f32) {
+        match self {
+            Out::Bytes(e) => e.f32(v),
+            Out::Events(d) => d.value(Value::F32(v)),
+        }
+    }
+
+    #[inline(always)]
+    pub fn f64(&mut self, v: f64) {
+        match self {
+            Out::Bytes(e) => e.f64(v),
+            Out::Events(d) => d.value(Value::F64(v)),
+        }
+    }
+
+    pub fn null(&mut self) {
+        match self {
+            Out::Bytes(e) => e.null(),
+            Out::Events(d) => d.value(Value::Null),
+        }
+    }
+
+    pub fn opaque(&mut self, v: u64) {
+        match self {
+            Out::Bytes(e) => e.opaque(v),
+            Out::Events(d) => d.value(Value::Opaque(v)),
+        }
+    }
+
+    pub fn offset(&mut self, v: u64) {
+        match self {
+            Out::Bytes(e) => e.offset(v),
+            Out::Events(d) => d.value(Value::Offset(v)),
+        }
+    }
+
+    #[inline(always)]
+    pub fn blob(&mut self, b: &[u8]) {
+        match self {
+            Out::Bytes(e) => e.blob(b),
+            Out::Events(d) => d.memory(|m| Kept::Blob(Events::keep(m, b))),
+        }
+    }
+
+    pub fn string(&mut self, b: &[u8]) {
+        match self {
+            Out::Bytes(e) => e.string(b),
+            Out::Events(d) => d.memory(|m| Kept::Str(Events::keep(m, b))),
+        }
+    }
+
+    pub fn strings(&mut self, list: &[&[u8]]) {
+        match self {
+            Out::Bytes(e) => e.strings(list),
+            Out::Events(d) => d.memory(|m| Kept::Strings(list.iter().map(|s| Events::keep(m, s)).collect())),
+        }
+    }
+
+    /// Ends a call with no return value.
+    #[inline(always)]
+    pub fn no_return(&mut self) {
+        match self {
+            Out::Bytes(e) => e.no_return(),
+            Out::Events(d) => d.end(false),
+        }
+    }
+
+    pub fn frame(&mut self, number: u64) {
+        match self {
+            Out::Bytes(e) => e.frame(number),
+            Out::Events(d) => (d.to.event)(&Event::Frame { number }, &|_| &[]),
+        }
+    }
+
+    pub fn drawable(&mut self, thread: u32, id: u64, width: u32, height: u32) {
+        match self {
+            Out::Bytes(e) => e.drawable(thread, id, width, height),
+            Out::Events(d) => (d.to.event)(&Event::Drawable { thread, id, width, height }, &|_| &[]),
+        }
+    }
+
+    pub fn arrays(&mut self, thread: u32, arrays: &[ArrayData]) {
+        match self {
+            Out::Bytes(e) => e.arrays(thread, arrays),
+            Out::Events(d) => (d.to.event)(&Event::Arrays { thread, arrays: arrays.to_vec() }, &|_| &[]),
+        }
+    }
+
+    /// Forgets a call begun and never ended (none is, but its values must not outlive the
+    /// recorder's turn).
+    pub fn discard_call(&mut self) {
+        if let Out::Events(d) = self {
+            d.call = None;
+            d.values.clear();
+            d.kept.clear();
+        }
+    }
+}
+
+/// Memory a pointer argument read, kept in `Events::memory` (copied, as the encoder copies it,
+/// so that no borrow of the program's memory outlives this call), and which value it becomes.
+enum Kept {
+    Blob(Range<usize>),
+    Str(Range<usize>),
+    Strings(Vec<Range<usize>>),
+}
+
+/// Where `Events` go: capture (`Sink::CAPTURE`), or a test's.
+#[derive(Clone, Copy)]
+pub struct Sink {
+    /// A call: command number, thread, arguments, return value.
+    pub call: fn(usize, u32, &[Value], Option<&Value>),
+    /// Any other event, and a Name event's name.
+    pub event: for<'a> fn(&Event, &dyn Fn(usize) -> &'a [u8]),
+}
+
+impl Sink {
+    pub const CAPTURE: Sink = Sink { call: crate::raytrace::follow_call, event: crate::raytrace::follow };
+}
+
+/// Events made as the recorder goes, each handed over whole as soon as it is made.
+pub struct Events {
+    to: Sink,
+    /// The call being made: command number, thread, number of arguments.
+    call: Option<(usize, u32, u8)>,
+    /// Its values so far (the return value last); memory is a `Null` here until the call
+    /// ends, when it becomes the value `kept` says, borrowing `memory`.
+    values: Args<'static>,
+    kept: SmallVec<[(usize, Kept); 2]>,
+    memory: Vec<u8>,
+    /// Commands named so far (a name defines the next number, as in a trace).
+    named: usize,
+}
+
+/// A call's arguments and return value (its last value, if `returned`).
+fn split<'v, 'a>(values: &'v [Value<'a>], returned: bool) -> (&'v [Value<'a>], Option<&'v Value<'a>>) {
+    match values.split_last() {
+        Some((ret, args)) if returned => (args, Some(ret)),
+        _ => (values, None),
+    }
+}
+
+/// A value of no borrowed memory, as one of a call borrowing some.
+fn shorten<'a>(v: Value<'static>) -> Value<'a> {
+    v
+}
+
+/// Memory kept beyond this between calls is given back (one glBufferData of a big mesh would
+/// otherwise hold its size for the rest of the run).
+const KEEP: usize = 1 << 20;
+
+impl Events {
+    pub fn new(to: Sink) -> Events {
+        Events { to, call: None, values: Args::new(), kept: SmallVec::new(), memory: Vec::new(), named: 0 }
+    }
+
+    fn name(&mut self, name: &[u8]) {
+        let number = self.named;
+        self.named += 1;
+        (self.to.event)(&Event::Name { number }, &|_| name);
+    }
+
+    fn begin_call(&mut self, cmd: usize, thread: u32, nargs: u8) {
+        self.call = Some((cmd, thread, nargs));
+        self.values.clear();
+        self.kept.clear();
+        self.memory.clear();
+    }
+
+    /// The call's next value: an argument, or, after the last, its return value (which ends
+    /// the call).
+    // Always inlined: called, the value was written to the stack in parts and read back
+    // whole, a store-forwarding stall on every argument (a tenth of a glNormal3f's time).
+    #[inline(always)]
+    fn value(&mut self, v: Value<'static>) {
+        let Some((_, _, nargs)) = self.call else { return };
+        self.values.push(v);
+        if self.values.len() > nargs as usize {
+            self.end(true);
+        }
+    }
+
+    /// Memory as the call's next value.
+    fn memory(&mut self, kept: impl FnOnce(&mut Vec<u8>) -> Kept) {
+        if self.call.is_some() {
+            let k = kept(&mut self.memory);
+            self.kept.push((self.values.len(), k));
+        }
+        self.value(Value::Null);
+    }
+
+    fn keep(memory: &mut Vec<u8>, b: &[u8]) -> Range<usize> {
+        let start = memory.len();
+        memory.extend_from_slice(b);
+        start..memory.len()
+    }
+
+    /// Ends the call (`returned`: its last value is its return value) and hands it over.
+    fn end(&mut self, returned: bool) {
+        let Some((cmd, thread, _)) = self.call.take() else { return };
+        if self.kept.is_empty() {
+            // Most calls (glNormal3f, glColor4ub, ...): their values where they are.
+            let (args, ret) = split(&self.values, returned);
+            (self.to.call)(cmd, thread, args, ret);
+        } else {
+            let memory = &self.memory[..];
+            let mut values: Args = self.values.iter().cloned().map(shorten).collect();
+            for (at, k) in &self.kept {
+                values[*at] = match k {
+                    Kept::Blob(r) => Value::Blob(&memory[r.clone()]),
+                    Kept::Str(r) => Value::Str(&memory[r.clone()]),
+                    Kept::Strings(list) => Value::Strings(list.iter().map(|r| &memory[r.clone()]).collect()),
+                };
+            }
+            let (args, ret) = split(&values, returned);
+            (self.to.call)(cmd, thread, args, ret);
+        }
+        self.values.clear();
+        self.kept.clear();
+        if self.memory.capacity() > KEEP {
+            self.memory = Vec::new();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glray_core::trace::Reader;
+    use std::cell::RefCell;
+
+    thread_local! {
+        static SEEN: RefCell<Vec<String>> = const { RefCell::new(Vec::new()) };
+    }
+
+    fn seen(text: String) {
+        SEEN.with(|s| s.borrow_mut().push(text));
+    }
+
+    fn shown(event: &Event, name: &[u8]) -> String {
+        match event {
+            Event::Name { number } => format!("name {number} {}", String::from_utf8_lossy(name)),
+            e => format!("{e:?}"),
+        }
+    }
+
+    const TEST: Sink = Sink {
+        call: |cmd, thread, args, ret| {
+            let event = Event::Call { cmd, thread, args: args.iter().cloned().collect(), ret: ret.cloned() };
+            seen(shown(&event, b""))
+        },
+        event: |event, name| {
+            let n = match event {
+                Event::Name { number } => name(*number),
+                _ => b"",
+            };
+            seen(shown(event, n))
+        },
+    };
+
+    /// Calls of every kind of value, with and without memory and return values, between
+    /// the other events.
+    fn record(out: &mut Out) {
+        let program = [1u8, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12];
+        out.name(b"glNormal3f");
+        out.begin_call(0, 0, 3);
+        out.f32(0.5);
+        out.f32(-1.0);
+        out.f32(2.0);
+        out.no_return();
+        out.name(b"glVertex3fv");
+        out.begin_call(1, 1, 1);
+        out.blob(&program);
+        out.no_return();
+        out.drawable(1, 77, 640, 480);
+        out.name(b"glGetString");
+        out.begin_call(2, 0, 1);
+        out.uint(0x1F00);
+        out.opaque(0xDEAD);
+        out.name(b"glShaderSource");
+        out.begin_call(3, 0, 4);
+        out.uint(5);
+        out.int(-2);
+        out.strings(&[b"void main()", b"{}"]);
+        out.null();
+        out.no_return();
+        out.name(b"glBindAttribLocation");
+        out.begin_call(4, 0, 6);
+        out.f64(1.25);
+        out.offset(64);
+        out.string(b"position");
+        out.blob(&program[..4]);
+        out.uint(9);
+        out.blob(&[]);
+        out.int(-7);
+        let arrays = [ArrayData {
+            kind: 1,
+            index: 0,
+            size: 3,
+            gl_type: 0x1406,
+            stride: 12,
+            normalized: false,
+            first: 4,
+            bytes: &program,
+        }];
+        out.arrays(0, &arrays);
+        out.frame(3);
+    }
+
+    #[test]
+    fn events_made_directly_are_the_events_read_back_from_the_trace_bytes() {
+        SEEN.with(|s| s.borrow_mut().clear());
+        let mut direct = Out::Events(Events::new(TEST));
+        record(&mut direct);
+        let direct: Vec<String> = SEEN.with(|s| s.borrow_mut().drain(..).collect());
+
+        let mut bytes = Out::new(true);
+        record(&mut bytes);
+        let mut reader = Reader::events(bytes.bytes(), 0);
+        let mut decoded = Vec::new();
+        while let Some(event) = reader.next_event().unwrap() {
+            let name = match event {
+                Event::Name { number } => reader.name(number),
+                _ => b"",
+            };
+            decoded.push(shown(&event, name));
+        }
+        assert_eq!(direct.len(), 13, "{direct:#?}");
+        assert_eq!(direct, decoded);
+        // The values themselves, not only that both ways agree.
+        assert!(
+            direct[1].contains("F32(0.5), F32(-1.0), F32(2.0)") && direct[1].contains("ret: None"),
+            "{}",
+            direct[1]
+        );
+        assert!(direct[6].contains("args: [UInt(7936)], ret: Some(Opaque(57005))"), "{}", direct[6]);
+        assert!(
+            direct[10].contains("Blob([1, 2, 3, 4])") && direct[10].contains("ret: Some(Int(-7))"),
+            "{}",
+            direct[10]
+        );
+    }
+
+    #[test]
+    fn a_call_never_ended_is_forgotten() {
+        SEEN.with(|s| s.borrow_mut().clear());
+        let mut out = Out::Events(Events::new(TEST));
+        out.begin_call(0, 0, 2);
+        out.uint(1);
+        out.discard_call();
+        out.uint(2);
+        out.no_return();
+        assert!(SEEN.with(|s| s.borrow().is_empty()));
+        out.begin_call(0, 0, 1);
+        out.uint(3);
+        out.no_return();
+        assert_eq!(SEEN.with(|s| s.borrow().clone()), ["Call { cmd: 0, thread: 0, args: [UInt(3)], ret: None }"]);
+    }
+}
