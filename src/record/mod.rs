@@ -386,7 +386,9 @@ impl Recorder {
         }
         // SAFETY: the program passed `p` to GL for GL to read `bytes` bytes (the registry's rule).
         let data = unsafe { std::slice::from_raw_parts(p as *const u8, bytes) };
-        self.e.blob(data);
+        // SAFETY: the program's memory stays as it is until its GL call returns, after this
+        // record of it ends.
+        unsafe { self.e.blob(data) };
     }
 
     pub fn c_string(&mut self, p: *mut c_void) {
@@ -395,7 +397,8 @@ impl Recorder {
         }
         // SAFETY: GL takes this argument as a NUL-terminated string.
         let s = unsafe { CStr::from_ptr(p as *const libc::c_char) };
-        self.e.string(s.to_bytes());
+        // SAFETY: as in `memory`.
+        unsafe { self.e.string(s.to_bytes()) };
     }
 
     pub fn string_with_length(&mut self, p: *mut c_void, len: i64) {
@@ -404,7 +407,8 @@ impl Recorder {
         }
         // SAFETY: GL reads `len` bytes of this string.
         let s = unsafe { std::slice::from_raw_parts(p as *const u8, len as usize) };
-        self.e.string(s);
+        // SAFETY: as in `memory`.
+        unsafe { self.e.string(s) };
     }
 
     /// An array of `count` strings, each NUL-terminated or of the length in `lengths`.
@@ -429,7 +433,8 @@ impl Recorder {
                 });
             }
         }
-        self.e.strings(&list);
+        // SAFETY: as in `memory` (the strings are the program's).
+        unsafe { self.e.strings(&list) };
     }
 
     /// glMultiDrawElements' per-draw index pointers: with an element buffer bound they are
@@ -444,7 +449,8 @@ impl Recorder {
         if bound_buffer(GL_ELEMENT_ARRAY_BUFFER_BINDING) != 0 {
             // SAFETY: GL reads `drawcount` pointers.
             let raw = unsafe { std::slice::from_raw_parts(ptrs as *const u8, n * std::mem::size_of::<usize>()) };
-            return self.e.blob(raw);
+            // SAFETY: as in `memory`.
+            return unsafe { self.e.blob(raw) };
         }
         let size = glray_core::gltypes::array_element_bytes(1, ty as u32) as usize;
         let counts = counts as *const i32;
@@ -456,7 +462,8 @@ impl Recorder {
                 list.push(if q.is_null() || size == 0 { &[][..] } else { std::slice::from_raw_parts(q, count * size) });
             }
         }
-        self.e.strings(&list);
+        // SAFETY: as in `memory` (the indices are the program's).
+        unsafe { self.e.strings(&list) };
     }
 
     /// A vertex array pointer: an offset when a buffer object is bound, else the address (the
@@ -525,7 +532,8 @@ impl Recorder {
                     self.e.uint(target as u64);
                     self.e.int(offset);
                     self.e.int(bytes.len() as i64);
-                    self.e.blob(&bytes);
+                    // SAFETY: `bytes` is dropped after the call ends, on the next line.
+                    unsafe { self.e.blob(&bytes) };
                     self.e.no_return();
                 }
             }

@@ -9,10 +9,8 @@
 //! `Reader` would make of the bytes.
 
 use std::io::{self, Write};
-use std::ops::Range;
 
 use glray_core::trace::{Args, ArrayData, Encoder, Event, Value};
-use smallvec::SmallVec;
 
 // One per process (the recorder's): the events' state inline saves a load on every call.
 #[allow(clippy::large_enum_variant)]
@@ -130,25 +128,42 @@ impl Out {
         }
     }
 
+    /// Memory a pointer argument read.
+    ///
+    /// # Safety
+    /// `b` is read when the call ends (its return value, or `no_return`): it must stay valid
+    /// and unchanged until then. The recorder's turn (`record::with`) ends every call it
+    /// begins, or forgets it (`discard_call`).
     #[inline(always)]
-    pub fn blob(&mut self, b: &[u8]) {
+    pub unsafe fn blob(&mut self, b: &[u8]) {
         match self {
             Out::Bytes(e) => e.blob(b),
-            Out::Events(d) => d.memory(|m| Kept::Blob(Events::keep(m, b))),
+            // SAFETY: the caller keeps `b` until the call ends, when `Events` lets it go.
+            Out::Events(d) => d.value(Value::Blob(unsafe { until_the_call_ends(b) })),
         }
     }
 
-    pub fn string(&mut self, b: &[u8]) {
+    /// A string argument.
+    ///
+    /// # Safety
+    /// As for `blob`.
+    pub unsafe fn string(&mut self, b: &[u8]) {
         match self {
             Out::Bytes(e) => e.string(b),
-            Out::Events(d) => d.memory(|m| Kept::Str(Events::keep(m, b))),
+            // SAFETY: as for `blob`.
+            Out::Events(d) => d.value(Value::Str(unsafe { until_the_call_ends(b) })),
         }
     }
 
-    pub fn strings(&mut self, list: &[&[u8]]) {
+    /// An array of strings.
+    ///
+    /// # Safety
+    /// As for `blob`, for each string (not `list` itself, which is copied).
+    pub unsafe fn strings(&mut self, list: &[&[u8]]) {
         match self {
             Out::Bytes(e) => e.strings(list),
-            Out::Events(d) => d.memory(|m| Kept::Strings(list.iter().map(|s| Events::keep(m, s)).collect())),
+            // SAFETY: as for `blob`.
+            Out::Events(d) => d.value(Value::Strings(list.iter().map(|s| unsafe { until_the_call_ends(s) }).collect())),
         }
     }
 
@@ -188,17 +203,19 @@ impl Out {
         if let Out::Events(d) = self {
             d.call = None;
             d.values.clear();
-            d.kept.clear();
         }
     }
 }
 
-/// Memory a pointer argument read, kept in `Events::memory` (copied, as the encoder copies it,
-/// so that no borrow of the program's memory outlives this call), and which value it becomes.
-enum Kept {
-    Blob(Range<usize>),
-    Str(Range<usize>),
-    Strings(Vec<Range<usize>>),
+/// Memory the program (or the recorder) holds, as long as the call being recorded: `Events`
+/// hands capture the call's values where they are (copied, they were a tenth of following a
+/// glVertex3fv), and lets them go when the call ends.
+///
+/// # Safety
+/// `b` must stay valid until the call ends (see `Out::blob`).
+unsafe fn until_the_call_ends(b: &[u8]) -> &'static [u8] {
+    // SAFETY: the caller's promise; `Events` never keeps a value past the call.
+    unsafe { std::slice::from_raw_parts(b.as_ptr(), b.len()) }
 }
 
 /// Where `Events` go: capture (`Sink::CAPTURE`), or a test's.
@@ -219,11 +236,9 @@ pub struct Events {
     to: Sink,
     /// The call being made: command number, thread, number of arguments.
     call: Option<(usize, u32, u8)>,
-    /// Its values so far (the return value last); memory is a `Null` here until the call
-    /// ends, when it becomes the value `kept` says, borrowing `memory`.
+    /// Its values so far (the return value last). Memory values borrow what the recorder
+    /// was given for the call only (`until_the_call_ends`): they are cleared when it ends.
     values: Args<'static>,
-    kept: SmallVec<[(usize, Kept); 2]>,
-    memory: Vec<u8>,
     /// Commands named so far (a name defines the next number, as in a trace).
     named: usize,
 }
@@ -236,18 +251,9 @@ fn split<'v, 'a>(values: &'v [Value<'a>], returned: bool) -> (&'v [Value<'a>], O
     }
 }
 
-/// A value of no borrowed memory, as one of a call borrowing some.
-fn shorten<'a>(v: Value<'static>) -> Value<'a> {
-    v
-}
-
-/// Memory kept beyond this between calls is given back (one glBufferData of a big mesh would
-/// otherwise hold its size for the rest of the run).
-const KEEP: usize = 1 << 20;
-
 impl Events {
     pub fn new(to: Sink) -> Events {
-        Events { to, call: None, values: Args::new(), kept: SmallVec::new(), memory: Vec::new(), named: 0 }
+        Events { to, call: None, values: Args::new(), named: 0 }
     }
 
     fn name(&mut self, name: &[u8]) {
@@ -259,8 +265,6 @@ impl Events {
     fn begin_call(&mut self, cmd: usize, thread: u32, nargs: u8) {
         self.call = Some((cmd, thread, nargs));
         self.values.clear();
-        self.kept.clear();
-        self.memory.clear();
     }
 
     /// The call's next value: an argument, or, after the last, its return value (which ends
@@ -276,46 +280,12 @@ impl Events {
         }
     }
 
-    /// Memory as the call's next value.
-    fn memory(&mut self, kept: impl FnOnce(&mut Vec<u8>) -> Kept) {
-        if self.call.is_some() {
-            let k = kept(&mut self.memory);
-            self.kept.push((self.values.len(), k));
-        }
-        self.value(Value::Null);
-    }
-
-    fn keep(memory: &mut Vec<u8>, b: &[u8]) -> Range<usize> {
-        let start = memory.len();
-        memory.extend_from_slice(b);
-        start..memory.len()
-    }
-
     /// Ends the call (`returned`: its last value is its return value) and hands it over.
     fn end(&mut self, returned: bool) {
         let Some((cmd, thread, _)) = self.call.take() else { return };
-        if self.kept.is_empty() {
-            // Most calls (glNormal3f, glColor4ub, ...): their values where they are.
-            let (args, ret) = split(&self.values, returned);
-            (self.to.call)(cmd, thread, args, ret);
-        } else {
-            let memory = &self.memory[..];
-            let mut values: Args = self.values.iter().cloned().map(shorten).collect();
-            for (at, k) in &self.kept {
-                values[*at] = match k {
-                    Kept::Blob(r) => Value::Blob(&memory[r.clone()]),
-                    Kept::Str(r) => Value::Str(&memory[r.clone()]),
-                    Kept::Strings(list) => Value::Strings(list.iter().map(|r| &memory[r.clone()]).collect()),
-                };
-            }
-            let (args, ret) = split(&values, returned);
-            (self.to.call)(cmd, thread, args, ret);
-        }
+        let (args, ret) = split(&self.values, returned);
+        (self.to.call)(cmd, thread, args, ret);
         self.values.clear();
-        self.kept.clear();
-        if self.memory.capacity() > KEEP {
-            self.memory = Vec::new();
-        }
     }
 }
 
@@ -357,6 +327,8 @@ mod tests {
     /// Calls of every kind of value, with and without memory and return values, between
     /// the other events.
     fn record(out: &mut Out) {
+        // SAFETY (the memory values below): everything they borrow outlives this function,
+        // which ends every call it begins.
         let program = [1u8, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12];
         out.name(b"glNormal3f");
         out.begin_call(0, 0, 3);
@@ -366,7 +338,7 @@ mod tests {
         out.no_return();
         out.name(b"glVertex3fv");
         out.begin_call(1, 1, 1);
-        out.blob(&program);
+        unsafe { out.blob(&program) };
         out.no_return();
         out.drawable(1, 77, 640, 480);
         out.name(b"glGetString");
@@ -377,17 +349,17 @@ mod tests {
         out.begin_call(3, 0, 4);
         out.uint(5);
         out.int(-2);
-        out.strings(&[b"void main()", b"{}"]);
+        unsafe { out.strings(&[b"void main()", b"{}"]) };
         out.null();
         out.no_return();
         out.name(b"glBindAttribLocation");
         out.begin_call(4, 0, 6);
         out.f64(1.25);
         out.offset(64);
-        out.string(b"position");
-        out.blob(&program[..4]);
+        unsafe { out.string(b"position") };
+        unsafe { out.blob(&program[..4]) };
         out.uint(9);
-        out.blob(&[]);
+        unsafe { out.blob(&[]) };
         out.int(-7);
         let arrays = [ArrayData {
             kind: 1,
