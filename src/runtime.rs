@@ -52,11 +52,9 @@ fn init() -> Runtime {
         if config.enable() { "" } else { " (pass-through: enable = false)" }
     );
     let capture = config.enable() && config.preset() != "off";
-    if capture {
-        crate::raytrace::configure(&config);
-    }
+    let live = capture.then(|| crate::raytrace::configure(&config));
     if capture || config.record().is_some() {
-        crate::record::start(config.record(), capture);
+        crate::record::start(config.record(), live);
     }
     Runtime { config, own_path, own_file, own_base: info.dli_fbase }
 }

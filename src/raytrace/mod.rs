@@ -14,7 +14,6 @@ mod stats;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Mutex;
 
 use glray_capture::events::{Capture, LiveCall};
 use glray_core::config::Config;
@@ -24,7 +23,6 @@ use crate::commands::cmd;
 use crate::dispatch::{self, Backend};
 
 static ON: AtomicBool = AtomicBool::new(false);
-static LIVE: Mutex<Option<Live>> = Mutex::new(None);
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Trigger {
@@ -35,7 +33,9 @@ enum Trigger {
     ReadPixels,
 }
 
-struct Live {
+/// What live ray tracing holds: capture, the tracer, what was shown. The recorder owns it
+/// (`record::with_live`), so that a call is recorded and followed under one lock.
+pub struct Live {
     capture: Capture,
     /// Command names by the recorder's numbers.
     names: Vec<Vec<u8>>,
@@ -59,8 +59,9 @@ struct Live {
     capture_time: std::time::Duration,
 }
 
-/// Turns live ray tracing on with the settings in force (before recording starts).
-pub fn configure(config: &Config) {
+/// Turns live ray tracing on with the settings in force; the recorder, started next, keeps
+/// what it returns.
+pub fn configure(config: &Config) -> Live {
     let trigger = match config.trigger() {
         "swap" => Trigger::Swap,
         "finish" => Trigger::Finish,
@@ -83,8 +84,8 @@ pub fn configure(config: &Config) {
         stats: config.stats().and_then(|spec| stats::Sink::open(spec).map_err(|e| glray_core::warn!("{e}")).ok()),
         capture_time: std::time::Duration::ZERO,
     };
-    *LIVE.lock().unwrap_or_else(|e| e.into_inner()) = Some(live);
     ON.store(true, Ordering::Relaxed);
+    live
 }
 
 fn stop(why: &str) {
@@ -94,12 +95,10 @@ fn stop(why: &str) {
 
 /// Capture follows the events of one recorded call, read from the trace bytes the recorder
 /// made of them; returns how many commands are named.
-pub fn feed(bytes: &[u8], named: usize) -> usize {
+pub fn feed(live: &mut Live, bytes: &[u8], named: usize) -> usize {
     if !ON.load(Ordering::Relaxed) {
         return named;
     }
-    let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
-    let Some(live) = guard.as_mut() else { return named };
     let mut reader = Reader::events(bytes, named);
     let started = live.stats.is_some().then(std::time::Instant::now);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<(), String> {
@@ -126,12 +125,11 @@ pub fn feed(bytes: &[u8], named: usize) -> usize {
 
 /// Capture follows one event the recorder made without encoding it (no trace file is
 /// written); `name` gives a Name event's command name.
-pub fn follow<'a>(event: &Event, name: &dyn Fn(usize) -> &'a [u8]) {
+pub fn follow<'a>(live: &mut Option<Live>, event: &Event, name: &dyn Fn(usize) -> &'a [u8]) {
     if !ON.load(Ordering::Relaxed) {
         return;
     }
-    let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
-    let Some(live) = guard.as_mut() else { return };
+    let Some(live) = live.as_mut() else { return };
     let started = live.stats.is_some().then(std::time::Instant::now);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| follow_in(&mut live.capture, event, name)));
     if let Some(t) = started {
@@ -159,12 +157,11 @@ fn live_call() -> LiveCall {
 
 /// Capture follows one call the recorder made without encoding it (no trace file is
 /// written), as `follow` does an event.
-pub fn follow_call(cmd: usize, thread: u32, args: &[Value], ret: Option<&Value>) {
+pub fn follow_call(live: &mut Option<Live>, cmd: usize, thread: u32, args: &[Value], ret: Option<&Value>) {
     if !ON.load(Ordering::Relaxed) {
         return;
     }
-    let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
-    let Some(live) = guard.as_mut() else { return };
+    let Some(live) = live.as_mut() else { return };
     let started = live.stats.is_some().then(std::time::Instant::now);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         live.capture.call(cmd, thread, args, ret, Some(live_call()))
@@ -262,40 +259,43 @@ fn skips(c: usize, _args: &[u64]) -> bool {
     }
     let Some(thread) = crate::record::thread_number() else { return false };
     let result = std::panic::catch_unwind(|| {
-        let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
-        let Some(live) = guard.as_mut() else { return false };
-        if geometry {
-            // Only once a frame of this thread has been presented: that proves its frames
-            // reach a trigger, so what is not rasterized will be shown.
-            let skip = live.shown.contains(&thread) && live.capture.context(thread).takes_draws();
-            if c == cmd::glBegin {
-                SKIPPED_BEGIN.with(|s| s.set(skip));
-            }
-            return skip;
-        }
-        if raster {
-            // Text and images drawn over the scene: the scene goes in first.
-            if !live.capture.context(thread).compiling() {
-                live.present(thread);
-            }
-            return false;
-        }
-        let fires = match (live.trigger, at) {
-            // A GLX/EGL frame ends at its swap; an OSMesa one (no swap) at glFinish or glFlush.
-            (Trigger::Auto, Some(Trigger::Swap | Trigger::ReadPixels)) => true,
-            (Trigger::Auto, Some(_)) => dispatch::backend() == Backend::OSMesa,
-            (t, Some(a)) => t == a,
-            _ => false,
-        };
-        if fires {
-            live.present(thread);
-        }
-        false
+        crate::record::with_live(|live| fire(live, c, thread, geometry, raster, at)).unwrap_or(false)
     });
     result.unwrap_or_else(|_| {
         stop("internal error while ray tracing a frame");
         false
     })
+}
+
+/// `skips` with the recorder's lock held.
+fn fire(live: &mut Live, c: usize, thread: u32, geometry: bool, raster: bool, at: Option<Trigger>) -> bool {
+    if geometry {
+        // Only once a frame of this thread has been presented: that proves its frames
+        // reach a trigger, so what is not rasterized will be shown.
+        let skip = live.shown.contains(&thread) && live.capture.context(thread).takes_draws();
+        if c == cmd::glBegin {
+            SKIPPED_BEGIN.with(|s| s.set(skip));
+        }
+        return skip;
+    }
+    if raster {
+        // Text and images drawn over the scene: the scene goes in first.
+        if !live.capture.context(thread).compiling() {
+            live.present(thread);
+        }
+        return false;
+    }
+    let fires = match (live.trigger, at) {
+        // A GLX/EGL frame ends at its swap; an OSMesa one (no swap) at glFinish or glFlush.
+        (Trigger::Auto, Some(Trigger::Swap | Trigger::ReadPixels)) => true,
+        (Trigger::Auto, Some(_)) => dispatch::backend() == Backend::OSMesa,
+        (t, Some(a)) => t == a,
+        _ => false,
+    };
+    if fires {
+        live.present(thread);
+    }
+    false
 }
 
 /// The first error this thread's context raised that the real GL could not (0: none).
@@ -304,8 +304,7 @@ pub fn take_unseen_error() -> u32 {
         return 0;
     }
     let Some(thread) = crate::record::thread_number() else { return 0 };
-    let mut guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
-    guard.as_mut().map_or(0, |live| live.capture.context(thread).take_unseen_error())
+    crate::record::with_live(|live| live.capture.context(thread).take_unseen_error()).unwrap_or(0)
 }
 
 impl Live {

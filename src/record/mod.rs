@@ -53,16 +53,17 @@ pub fn active() -> bool {
 }
 
 /// Starts recording: into the trace file `path` (opened at the first call; `%p` is the
-/// process id) and/or, with `capture`, into glray's capture (each call's events are handed to
-/// `crate::raytrace` as soon as they are recorded). One recorder serves both, so that the
-/// trace file and the ray tracer see exactly the same calls and client memory.
-pub fn start(path: Option<&str>, capture: bool) {
+/// process id) and/or, with `live`, into glray's capture (each call is handed to
+/// `crate::raytrace` as soon as it is recorded). One recorder serves both, so that the
+/// trace file and the ray tracer see exactly the same calls and client memory, and it keeps
+/// the live ray tracer's state under its own lock: one lock per call, not two.
+pub fn start(path: Option<&str>, live: Option<crate::raytrace::Live>) {
     if let Some(path) = path {
         *TEMPLATE.lock().unwrap_or_else(|e| e.into_inner()) = path.to_string();
     }
     let path = path.map(|p| PathBuf::from(p.replace("%p", &std::process::id().to_string())));
     TO_FILE.store(path.is_some(), Ordering::Relaxed);
-    *RECORDER.lock().unwrap_or_else(|e| e.into_inner()) = Some(Recorder::new(path, capture));
+    *RECORDER.lock().unwrap_or_else(|e| e.into_inner()) = Some(Recorder::new(path, live));
     ACTIVE.store(true, Ordering::Relaxed);
     // SAFETY: registering plain extern "C" functions with atexit and pthread_atfork.
     unsafe {
@@ -85,13 +86,14 @@ fn after_fork() {
         ACTIVE.store(false, Ordering::Relaxed);
         return;
     };
-    let capture = guard.as_ref().is_some_and(|r| r.capture);
+    // The child keeps ray tracing what it draws (from the state the parent had).
+    let live = guard.as_mut().and_then(|r| r.e.take_live());
     if template.contains("%p") {
         let path = template.replace("%p", &std::process::id().to_string());
-        *guard = Some(Recorder::new(Some(PathBuf::from(path)), capture));
-    } else if capture {
-        // The child keeps ray tracing what it draws, without the parent's trace file.
-        *guard = Some(Recorder::new(None, true));
+        *guard = Some(Recorder::new(Some(PathBuf::from(path)), live));
+    } else if live.is_some() {
+        // Without the parent's trace file.
+        *guard = Some(Recorder::new(None, live));
     } else {
         *guard = None;
         ACTIVE.store(false, Ordering::Relaxed);
@@ -163,14 +165,8 @@ pub fn leave() {
 /// Runs `f` with the recorder, under the lock and a panic guard: an I/O error or a panic stops
 /// recording (with a message) but never the program.
 pub fn with(f: impl FnOnce(&mut Recorder)) {
-    // A load, not a swap: a locked instruction on every call cost as much as the recorder's
-    // lock. Only a child just forked (one thread) ever finds it set.
-    if FORKED.load(Ordering::Relaxed) {
-        FORKED.store(false, Ordering::Relaxed);
-        after_fork();
-        if !active() {
-            return;
-        }
+    if !forked_check() {
+        return;
     }
     let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
     let Some(rec) = guard.as_mut() else { return };
@@ -204,6 +200,31 @@ pub fn with(f: impl FnOnce(&mut Recorder)) {
     glray_core::error!("recording stopped: {err}");
     ACTIVE.store(false, Ordering::Relaxed);
     *guard = None;
+}
+
+/// In a child just forked, makes the recorder the child's (`after_fork`); false if the child
+/// records nothing.
+#[inline]
+fn forked_check() -> bool {
+    // A load, not a swap: a locked instruction on every call cost as much as the recorder's
+    // lock. Only a child just forked (one thread) ever finds it set.
+    if FORKED.load(Ordering::Relaxed) {
+        FORKED.store(false, Ordering::Relaxed);
+        after_fork();
+        return active();
+    }
+    true
+}
+
+/// Runs `f` with the live ray tracer's state, under the recorder's lock; None when nothing is
+/// ray traced. Not to be called from inside `with` (the lock is not re-entrant): it serves
+/// the frame triggers and glGetError, which run outside a call's recording.
+pub fn with_live<R>(f: impl FnOnce(&mut crate::raytrace::Live) -> R) -> Option<R> {
+    if !forked_check() {
+        return None;
+    }
+    let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
+    guard.as_mut()?.e.live().map(f)
 }
 
 /// Called before the real call of commands that touch client state, with their arguments as
@@ -270,9 +291,10 @@ pub struct Recorder {
 }
 
 impl Recorder {
-    fn new(path: Option<PathBuf>, capture: bool) -> Recorder {
+    fn new(path: Option<PathBuf>, live: Option<crate::raytrace::Live>) -> Recorder {
+        let capture = live.is_some();
         Recorder {
-            e: Out::new(path.is_some() || !capture),
+            e: Out::new(path.is_some(), live),
             path,
             capture,
             fed: 0,
@@ -319,9 +341,12 @@ impl Recorder {
 
     /// Hands the events recorded since the last call to capture.
     fn feed_capture(&mut self) {
-        let bytes = &self.e.bytes()[self.fed..];
-        if !bytes.is_empty() {
-            self.fed_names = crate::raytrace::feed(bytes, self.fed_names);
+        let (fed, named) = (self.fed, self.fed_names);
+        if let Out::Bytes(e, Some(live)) = &mut self.e {
+            let bytes = &e.bytes()[fed..];
+            if !bytes.is_empty() {
+                self.fed_names = crate::raytrace::feed(live, bytes, named);
+            }
         }
         if self.file.is_none() {
             self.e.clear();

@@ -12,27 +12,45 @@ use std::io::{self, Write};
 
 use glray_core::trace::{Args, ArrayData, Encoder, Event, Value};
 
+use crate::raytrace::Live;
+
 // One per process (the recorder's): the events' state inline saves a load on every call.
 #[allow(clippy::large_enum_variant)]
 pub enum Out {
-    Bytes(Encoder),
+    /// Encoded; capture (the live ray tracer's state, when ray tracing) reads them back.
+    Bytes(Encoder, Option<Live>),
     Events(Events),
 }
 
 impl Out {
-    /// `Events` when the events go to capture alone, else `Bytes`.
-    pub fn new(to_file: bool) -> Out {
-        if to_file {
-            Out::Bytes(Encoder::new())
-        } else {
-            Out::Events(Events::new(Sink::CAPTURE))
+    /// `Events` when the events go to capture (`live`) alone, else `Bytes`.
+    pub fn new(to_file: bool, live: Option<Live>) -> Out {
+        match live {
+            Some(live) if !to_file => Out::Events(Events::new(Sink::CAPTURE, Some(live))),
+            live => Out::Bytes(Encoder::new(), live),
+        }
+    }
+
+    /// The live ray tracer's state, when ray tracing.
+    pub fn live(&mut self) -> Option<&mut Live> {
+        match self {
+            Out::Bytes(_, live) => live.as_mut(),
+            Out::Events(d) => d.live.as_mut(),
+        }
+    }
+
+    /// Takes the live ray tracer's state away (for a new recorder: a forked child's).
+    pub fn take_live(&mut self) -> Option<Live> {
+        match self {
+            Out::Bytes(_, live) => live.take(),
+            Out::Events(d) => d.live.take(),
         }
     }
 
     /// Encoded bytes not flushed yet (none for `Events`).
     pub fn bytes(&self) -> &[u8] {
         match self {
-            Out::Bytes(e) => e.bytes(),
+            Out::Bytes(e, _) => e.bytes(),
             Out::Events(_) => &[],
         }
     }
@@ -42,20 +60,20 @@ impl Out {
     }
 
     pub fn clear(&mut self) {
-        if let Out::Bytes(e) = self {
+        if let Out::Bytes(e, _) = self {
             e.clear()
         }
     }
 
     pub fn flush_to(&mut self, w: &mut dyn Write) -> io::Result<()> {
         match self {
-            Out::Bytes(e) => e.flush_to(w),
+            Out::Bytes(e, _) => e.flush_to(w),
             Out::Events(_) => Ok(()),
         }
     }
 
     pub fn end(&mut self) {
-        if let Out::Bytes(e) = self {
+        if let Out::Bytes(e, _) = self {
             e.end()
         }
     }
@@ -63,14 +81,14 @@ impl Out {
     /// Names the next command number.
     pub fn name(&mut self, name: &[u8]) {
         match self {
-            Out::Bytes(e) => e.name(name),
+            Out::Bytes(e, _) => e.name(name),
             Out::Events(d) => d.name(name),
         }
     }
 
     pub fn begin_call(&mut self, cmd: usize, thread: u32, nargs: u8) {
         match self {
-            Out::Bytes(e) => e.begin_call(cmd, thread, nargs),
+            Out::Bytes(e, _) => e.begin_call(cmd, thread, nargs),
             Out::Events(d) => d.begin_call(cmd, thread, nargs),
         }
     }
@@ -78,7 +96,7 @@ impl Out {
     #[inline(always)]
     pub fn int(&mut self, v: i64) {
         match self {
-            Out::Bytes(e) => e.int(v),
+            Out::Bytes(e, _) => e.int(v),
             Out::Events(d) => d.value(Value::Int(v)),
         }
     }
@@ -86,7 +104,7 @@ impl Out {
     #[inline(always)]
     pub fn uint(&mut self, v: u64) {
         match self {
-            Out::Bytes(e) => e.uint(v),
+            Out::Bytes(e, _) => e.uint(v),
             Out::Events(d) => d.value(Value::UInt(v)),
         }
     }
@@ -94,7 +112,7 @@ impl Out {
     #[inline(always)]
     pub fn f32(&mut self, v: f32) {
         match self {
-            Out::Bytes(e) => e.f32(v),
+            Out::Bytes(e, _) => e.f32(v),
             Out::Events(d) => d.value(Value::F32(v)),
         }
     }
@@ -102,28 +120,28 @@ impl Out {
     #[inline(always)]
     pub fn f64(&mut self, v: f64) {
         match self {
-            Out::Bytes(e) => e.f64(v),
+            Out::Bytes(e, _) => e.f64(v),
             Out::Events(d) => d.value(Value::F64(v)),
         }
     }
 
     pub fn null(&mut self) {
         match self {
-            Out::Bytes(e) => e.null(),
+            Out::Bytes(e, _) => e.null(),
             Out::Events(d) => d.value(Value::Null),
         }
     }
 
     pub fn opaque(&mut self, v: u64) {
         match self {
-            Out::Bytes(e) => e.opaque(v),
+            Out::Bytes(e, _) => e.opaque(v),
             Out::Events(d) => d.value(Value::Opaque(v)),
         }
     }
 
     pub fn offset(&mut self, v: u64) {
         match self {
-            Out::Bytes(e) => e.offset(v),
+            Out::Bytes(e, _) => e.offset(v),
             Out::Events(d) => d.value(Value::Offset(v)),
         }
     }
@@ -137,7 +155,7 @@ impl Out {
     #[inline(always)]
     pub unsafe fn blob(&mut self, b: &[u8]) {
         match self {
-            Out::Bytes(e) => e.blob(b),
+            Out::Bytes(e, _) => e.blob(b),
             // SAFETY: the caller keeps `b` until the call ends, when `Events` lets it go.
             Out::Events(d) => d.value(Value::Blob(unsafe { until_the_call_ends(b) })),
         }
@@ -149,7 +167,7 @@ impl Out {
     /// As for `blob`.
     pub unsafe fn string(&mut self, b: &[u8]) {
         match self {
-            Out::Bytes(e) => e.string(b),
+            Out::Bytes(e, _) => e.string(b),
             // SAFETY: as for `blob`.
             Out::Events(d) => d.value(Value::Str(unsafe { until_the_call_ends(b) })),
         }
@@ -161,7 +179,7 @@ impl Out {
     /// As for `blob`, for each string (not `list` itself, which is copied).
     pub unsafe fn strings(&mut self, list: &[&[u8]]) {
         match self {
-            Out::Bytes(e) => e.strings(list),
+            Out::Bytes(e, _) => e.strings(list),
             // SAFETY: as for `blob`.
             Out::Events(d) => d.value(Value::Strings(list.iter().map(|s| unsafe { until_the_call_ends(s) }).collect())),
         }
@@ -171,29 +189,29 @@ impl Out {
     #[inline(always)]
     pub fn no_return(&mut self) {
         match self {
-            Out::Bytes(e) => e.no_return(),
+            Out::Bytes(e, _) => e.no_return(),
             Out::Events(d) => d.end(false),
         }
     }
 
     pub fn frame(&mut self, number: u64) {
         match self {
-            Out::Bytes(e) => e.frame(number),
-            Out::Events(d) => (d.to.event)(&Event::Frame { number }, &|_| &[]),
+            Out::Bytes(e, _) => e.frame(number),
+            Out::Events(d) => (d.to.event)(&mut d.live, &Event::Frame { number }, &|_| &[]),
         }
     }
 
     pub fn drawable(&mut self, thread: u32, id: u64, width: u32, height: u32) {
         match self {
-            Out::Bytes(e) => e.drawable(thread, id, width, height),
-            Out::Events(d) => (d.to.event)(&Event::Drawable { thread, id, width, height }, &|_| &[]),
+            Out::Bytes(e, _) => e.drawable(thread, id, width, height),
+            Out::Events(d) => (d.to.event)(&mut d.live, &Event::Drawable { thread, id, width, height }, &|_| &[]),
         }
     }
 
     pub fn arrays(&mut self, thread: u32, arrays: &[ArrayData]) {
         match self {
-            Out::Bytes(e) => e.arrays(thread, arrays),
-            Out::Events(d) => (d.to.event)(&Event::Arrays { thread, arrays: arrays.to_vec() }, &|_| &[]),
+            Out::Bytes(e, _) => e.arrays(thread, arrays),
+            Out::Events(d) => (d.to.event)(&mut d.live, &Event::Arrays { thread, arrays: arrays.to_vec() }, &|_| &[]),
         }
     }
 
@@ -218,13 +236,16 @@ unsafe fn until_the_call_ends(b: &[u8]) -> &'static [u8] {
     unsafe { std::slice::from_raw_parts(b.as_ptr(), b.len()) }
 }
 
+/// The names of the commands a trace has named, by number.
+pub type Names<'a> = dyn Fn(usize) -> &'a [u8] + 'a;
+
 /// Where `Events` go: capture (`Sink::CAPTURE`), or a test's.
 #[derive(Clone, Copy)]
 pub struct Sink {
     /// A call: command number, thread, arguments, return value.
-    pub call: fn(usize, u32, &[Value], Option<&Value>),
+    pub call: fn(&mut Option<Live>, usize, u32, &[Value], Option<&Value>),
     /// Any other event, and a Name event's name.
-    pub event: for<'a> fn(&Event, &dyn Fn(usize) -> &'a [u8]),
+    pub event: for<'a> fn(&mut Option<Live>, &Event, &Names<'a>),
 }
 
 impl Sink {
@@ -234,6 +255,8 @@ impl Sink {
 /// Events made as the recorder goes, each handed over whole as soon as it is made.
 pub struct Events {
     to: Sink,
+    /// The live ray tracer's state (None in tests).
+    live: Option<Live>,
     /// The call being made: command number, thread, number of arguments.
     call: Option<(usize, u32, u8)>,
     /// Its values so far (the return value last). Memory values borrow what the recorder
@@ -252,14 +275,14 @@ fn split<'v, 'a>(values: &'v [Value<'a>], returned: bool) -> (&'v [Value<'a>], O
 }
 
 impl Events {
-    pub fn new(to: Sink) -> Events {
-        Events { to, call: None, values: Args::new(), named: 0 }
+    pub fn new(to: Sink, live: Option<Live>) -> Events {
+        Events { to, live, call: None, values: Args::new(), named: 0 }
     }
 
     fn name(&mut self, name: &[u8]) {
         let number = self.named;
         self.named += 1;
-        (self.to.event)(&Event::Name { number }, &|_| name);
+        (self.to.event)(&mut self.live, &Event::Name { number }, &|_| name);
     }
 
     fn begin_call(&mut self, cmd: usize, thread: u32, nargs: u8) {
@@ -284,7 +307,7 @@ impl Events {
     fn end(&mut self, returned: bool) {
         let Some((cmd, thread, _)) = self.call.take() else { return };
         let (args, ret) = split(&self.values, returned);
-        (self.to.call)(cmd, thread, args, ret);
+        (self.to.call)(&mut self.live, cmd, thread, args, ret);
         self.values.clear();
     }
 }
@@ -311,11 +334,11 @@ mod tests {
     }
 
     const TEST: Sink = Sink {
-        call: |cmd, thread, args, ret| {
+        call: |_, cmd, thread, args, ret| {
             let event = Event::Call { cmd, thread, args: args.iter().cloned().collect(), ret: ret.cloned() };
             seen(shown(&event, b""))
         },
-        event: |event, name| {
+        event: |_, event, name| {
             let n = match event {
                 Event::Name { number } => name(*number),
                 _ => b"",
@@ -378,11 +401,11 @@ mod tests {
     #[test]
     fn events_made_directly_are_the_events_read_back_from_the_trace_bytes() {
         SEEN.with(|s| s.borrow_mut().clear());
-        let mut direct = Out::Events(Events::new(TEST));
+        let mut direct = Out::Events(Events::new(TEST, None));
         record(&mut direct);
         let direct: Vec<String> = SEEN.with(|s| s.borrow_mut().drain(..).collect());
 
-        let mut bytes = Out::new(true);
+        let mut bytes = Out::new(true, None);
         record(&mut bytes);
         let mut reader = Reader::events(bytes.bytes(), 0);
         let mut decoded = Vec::new();
@@ -412,7 +435,7 @@ mod tests {
     #[test]
     fn a_call_never_ended_is_forgotten() {
         SEEN.with(|s| s.borrow_mut().clear());
-        let mut out = Out::Events(Events::new(TEST));
+        let mut out = Out::Events(Events::new(TEST, None));
         out.begin_call(0, 0, 2);
         out.uint(1);
         out.discard_call();
