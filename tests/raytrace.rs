@@ -364,3 +364,45 @@ fn capture_follows_the_same_calls_with_and_without_a_trace_file() {
     // Its lists (instances), buffer-object and client-array draws and immediate-mode quads.
     assert_eq!(dumped(&direct_scenes), (80, 0), "the last scene holds the program's 80 triangles");
 }
+
+#[test]
+fn a_forked_child_keeps_ray_tracing_and_records_a_trace_of_its_own() {
+    // tests/helpers/fork_draw.c: a frame in the parent, one in a child it forks, one in the
+    // parent again, each read back.
+    // (llvmpipe's own threads would hang a child forked after they started, with or without
+    // glray: the helper runs without them. glray's tracer threads are its own to remake.)
+    let dir = scratch("rt-fork");
+    let program = osmesa_helper(&dir, "fork_draw");
+    let mut plain = command(Way::Plain, &[], &program, 60);
+    let plain = stdout(&run_ok(plain.env("LP_NUM_THREADS", "0"), "fork_draw plain"));
+    assert_eq!(plain.lines().count(), 3, "{plain}");
+    assert!(plain.contains("child: centre 0 255 0, corner 0 0 255, error 0x0"), "{plain}");
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("LP_NUM_THREADS", "0").env("GLRAY_PRESET", "gl").env("GLRAY_STATS", "stderr");
+    cmd.env("GLRAY_RECORD", dir.join("fork-%p.trace"));
+    let traced = run_ok(&mut cmd, "fork_draw under glray");
+    assert_eq!(stdout(&traced), plain, "the frames read back under glray");
+    let err = stderr(&traced);
+    // The child's green triangle is a new picture, traced in the child (which hung when it
+    // waited on its parent's tracer threads); the parent's last frame repeats its first.
+    assert_eq!(err.matches("glray: frame ").count(), 3, "three frames, the child's too: {err}");
+    assert_eq!(err.matches("1 samples per pixel\n").count(), 2, "two traced, one shown again: {err}");
+    assert!(!err.contains("error"), "{err}");
+    let traces: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "trace"))
+        .collect();
+    assert_eq!(traces.len(), 2, "the parent's trace and the child's: {traces:?}");
+    let mut frames = Vec::new();
+    for trace in &traces {
+        // Each replays on its own.
+        let out = dir.join(trace.file_stem().unwrap());
+        let mut replay = Command::new(glray_bin());
+        replay.arg("replay").arg(trace).args(["--renderer", "glray", "--out"]).arg(&out);
+        run_ok(replay.env("GLRAY_PRESET", "gl"), &format!("replay {}", trace.display()));
+        frames.push(std::fs::read_dir(&out).unwrap().filter(|e| e.as_ref().unwrap().path().is_file()).count());
+    }
+    frames.sort();
+    assert_eq!(frames, [1, 2], "the child's frame in its trace, the parent's two in its own");
+}

@@ -57,6 +57,19 @@ pub struct Live {
     /// GLRAY_STATS, and the time capture took since the last frame (measured only for it).
     stats: Option<stats::Sink>,
     capture_time: std::time::Duration,
+    /// The threads that trace frames: glray's own, not rayon's global pool, so that a forked
+    /// child (which has none of its parent's threads) can be given new ones (`forked`).
+    pool: Option<rayon::ThreadPool>,
+}
+
+/// The tracer's threads (None, logged, if the system gives none: frames are then traced on
+/// rayon's global pool).
+fn tracer_pool() -> Option<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .thread_name(|i| format!("glray-trace-{i}"))
+        .build()
+        .map_err(|e| glray_core::warn!("cannot start the tracer's threads ({e}); using rayon's"))
+        .ok()
 }
 
 /// Turns live ray tracing on with the settings in force; the recorder, started next, keeps
@@ -83,6 +96,7 @@ pub fn configure(config: &Config) -> Live {
         frames: 0,
         stats: config.stats().and_then(|spec| stats::Sink::open(spec).map_err(|e| glray_core::warn!("{e}")).ok()),
         capture_time: std::time::Duration::ZERO,
+        pool: tracer_pool(),
     };
     ON.store(true, Ordering::Relaxed);
     live
@@ -308,6 +322,16 @@ pub fn take_unseen_error() -> u32 {
 }
 
 impl Live {
+    /// In a child just forked: the parent's tracer threads do not exist here (waiting on them
+    /// hung the child's first new frame); the child gets threads of its own. The old pool is
+    /// not dropped: that would signal threads that are not there.
+    pub fn forked(&mut self) {
+        if let Some(old) = self.pool.take() {
+            std::mem::forget(old);
+        }
+        self.pool = tracer_pool();
+    }
+
     fn present(&mut self, thread: u32) {
         let ctx = self.capture.context(thread);
         let revision = ctx.revision();
@@ -335,7 +359,11 @@ impl Live {
         if w == 0 || h == 0 {
             return;
         }
-        let rendered = self.renderer.render(frame, w, h, self.last.get(&thread));
+        let (renderer, last) = (&mut self.renderer, self.last.get(&thread));
+        let rendered = match &self.pool {
+            Some(pool) => pool.install(|| renderer.render(frame, w, h, last)),
+            None => renderer.render(frame, w, h, last),
+        };
         if let Some(dir) = &self.dump {
             if let Err(e) = dump::write(dir, self.frames, frame) {
                 glray_core::warn!("dump_scene: {e}");

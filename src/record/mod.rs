@@ -87,7 +87,10 @@ fn after_fork() {
         return;
     };
     // The child keeps ray tracing what it draws (from the state the parent had).
-    let live = guard.as_mut().and_then(|r| r.e.take_live());
+    let mut live = guard.as_mut().and_then(|r| r.e.take_live());
+    if let Some(live) = live.as_mut() {
+        live.forked();
+    }
     if template.contains("%p") {
         let path = template.replace("%p", &std::process::id().to_string());
         *guard = Some(Recorder::new(Some(PathBuf::from(path)), live));
