@@ -140,12 +140,18 @@ pub fn feed(live: &mut Live, bytes: &[u8], named: usize) -> usize {
 /// Capture follows one event the recorder made without encoding it (no trace file is
 /// written); `name` gives a Name event's command name.
 pub fn follow<'a>(live: &mut Option<Live>, event: &Event, name: &dyn Fn(usize) -> &'a [u8]) {
+    following(live, |capture| follow_in(capture, event, name));
+}
+
+/// Runs `f` on capture, timed for the statistics; a panic stops ray tracing, not the program.
+#[inline]
+fn following(live: &mut Option<Live>, f: impl FnOnce(&mut Capture)) {
     if !ON.load(Ordering::Relaxed) {
         return;
     }
     let Some(live) = live.as_mut() else { return };
     let started = live.stats.is_some().then(std::time::Instant::now);
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| follow_in(&mut live.capture, event, name)));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(&mut live.capture)));
     if let Some(t) = started {
         live.capture_time += t.elapsed();
     }
@@ -172,20 +178,7 @@ fn live_call() -> LiveCall {
 /// Capture follows one call the recorder made without encoding it (no trace file is
 /// written), as `follow` does an event.
 pub fn follow_call(live: &mut Option<Live>, cmd: usize, thread: u32, args: &[Value], ret: Option<&Value>) {
-    if !ON.load(Ordering::Relaxed) {
-        return;
-    }
-    let Some(live) = live.as_mut() else { return };
-    let started = live.stats.is_some().then(std::time::Instant::now);
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        live.capture.call(cmd, thread, args, ret, Some(live_call()))
-    }));
-    if let Some(t) = started {
-        live.capture_time += t.elapsed();
-    }
-    if result.is_err() {
-        stop("internal error in capture");
-    }
+    following(live, |capture| capture.call(cmd, thread, args, ret, Some(live_call())));
 }
 
 /// Called after this thread made a context current: capture follows only compatibility
