@@ -187,7 +187,7 @@ pub fn with(f: impl FnOnce(&mut Recorder)) {
         }
         f(rec);
         rec.e.discard_call();
-        if rec.capture {
+        if rec.e.live().is_some() {
             rec.feed_capture();
         }
         if rec.e.len() > (8 << 20) {
@@ -275,8 +275,6 @@ pub struct Recorder {
     pub e: Out,
     /// The trace file, if recording to one.
     path: Option<PathBuf>,
-    /// Whether calls go to glray's capture too.
-    capture: bool,
     /// How much of `e` capture has been given.
     fed: usize,
     /// How many commands capture knows the names of.
@@ -295,11 +293,9 @@ pub struct Recorder {
 
 impl Recorder {
     fn new(path: Option<PathBuf>, live: Option<crate::raytrace::Live>) -> Recorder {
-        let capture = live.is_some();
         Recorder {
             e: Out::new(path.is_some(), live),
             path,
-            capture,
             fed: 0,
             fed_names: 0,
             file: None,
@@ -327,7 +323,7 @@ impl Recorder {
     }
 
     fn flush(&mut self) {
-        if self.capture {
+        if self.e.live().is_some() {
             // Capture must see every event before the buffer is emptied.
             self.feed_capture();
         }
