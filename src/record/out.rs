@@ -197,21 +197,21 @@ impl Out {
     pub fn frame(&mut self, number: u64) {
         match self {
             Out::Bytes(e, _) => e.frame(number),
-            Out::Events(d) => (d.to.event)(&mut d.live, &Event::Frame { number }, &|_| &[]),
+            Out::Events(d) => d.event(&Event::Frame { number }),
         }
     }
 
     pub fn drawable(&mut self, thread: u32, id: u64, width: u32, height: u32) {
         match self {
             Out::Bytes(e, _) => e.drawable(thread, id, width, height),
-            Out::Events(d) => (d.to.event)(&mut d.live, &Event::Drawable { thread, id, width, height }, &|_| &[]),
+            Out::Events(d) => d.event(&Event::Drawable { thread, id, width, height }),
         }
     }
 
     pub fn arrays(&mut self, thread: u32, arrays: &[ArrayData]) {
         match self {
             Out::Bytes(e, _) => e.arrays(thread, arrays),
-            Out::Events(d) => (d.to.event)(&mut d.live, &Event::Arrays { thread, arrays: arrays.to_vec() }, &|_| &[]),
+            Out::Events(d) => d.event(&Event::Arrays { thread, arrays: arrays.to_vec() }),
         }
     }
 
@@ -283,6 +283,11 @@ impl Events {
         let number = self.named;
         self.named += 1;
         (self.to.event)(&mut self.live, &Event::Name { number }, &|_| name);
+    }
+
+    /// Hands over an event other than a call or a name.
+    fn event(&mut self, event: &Event) {
+        (self.to.event)(&mut self.live, event, &|_| &[]);
     }
 
     fn begin_call(&mut self, cmd: usize, thread: u32, nargs: u8) {
