@@ -298,6 +298,45 @@ fn core_profile_frames_stay_the_real_gls() {
 }
 
 #[test]
+fn an_osmesa_programs_first_frame_is_not_rasterized_as_well() {
+    // tests/helpers/first_frame.c counts, with an occlusion query, what the real GL rasterized
+    // of its first frame. Mesa alone: the triangle's samples. Under glray, by default, nothing
+    // (an OSMesa program sees its pixels only through a glFinish, glFlush or glReadPixels, each
+    // of which ends a frame), and the ray-traced triangle is in the buffer all the same. With a
+    // trigger the program never reaches (swap), draws are rasterized until a frame is shown:
+    // the program keeps its picture.
+    let dir = scratch("rt-first-frame");
+    let program = osmesa_helper(&dir, "first_frame");
+    let count = |out: &str| -> u32 {
+        let line = out.lines().find_map(|l| l.strip_prefix("rasterized ")).unwrap_or_else(|| panic!("{out}"));
+        line.parse().unwrap_or_else(|e| panic!("{line}: {e}"))
+    };
+    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "first_frame plain"));
+    assert!(count(&plain) > 100, "{plain}");
+    assert!(plain.contains("middle 255 0 0"), "{plain}");
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl");
+    let traced = stdout(&run_ok(&mut cmd, "first_frame under glray"));
+    assert_eq!(count(&traced), 0, "the first frame rasterized as well: {traced}");
+    assert!(traced.contains("middle 255 0 0"), "the ray-traced triangle: {traced}");
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl").env("GLRAY_TRIGGER", "swap");
+    let unshown = stdout(&run_ok(&mut cmd, "first_frame under glray, trigger=swap"));
+    assert_eq!(unshown, plain, "a frame never presented is the real GL's");
+    // A triangle and a shader draw in every frame: frames left to the real GL. The first one's
+    // triangle was not rasterized (lost); every frame after it is the real GL's in full.
+    let mut cmd = command(Way::Plain, &[], &program, 60);
+    let plain = stdout(&run_ok(cmd.arg("mixed"), "first_frame mixed plain"));
+    assert!(plain.contains("frame 2 middle 255 0 0 square 0 255 0"), "{plain}");
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.arg("mixed").env("GLRAY_PRESET", "gl");
+    let traced = stdout(&run_ok(&mut cmd, "first_frame mixed under glray"));
+    let after_first = |out: &str| out.lines().skip(1).map(String::from).collect::<Vec<_>>();
+    assert_eq!(after_first(&traced), after_first(&plain), "frames after the first, mixed");
+    assert!(traced.contains("frame 0 middle 0 0 255 square 0 255 0"), "{traced}");
+}
+
+#[test]
 fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
     // tests/helpers/readback.c reads depth as float and as unsigned int, and RGB bytes, then
     // prints the state it set before the reads (program, textures, masks...) and glGetError.
