@@ -10,7 +10,7 @@
 
 use std::io::{self, Write};
 
-use glray_core::trace::{Args, ArrayData, Encoder, Event, Value};
+use glray_core::trace::{ArrayData, Encoder, Event, Value};
 
 use crate::raytrace::Live;
 
@@ -260,8 +260,10 @@ pub struct Events {
     /// The call being made: command number, thread, number of arguments.
     call: Option<(usize, u32, u8)>,
     /// Its values so far (the return value last). Memory values borrow what the recorder
-    /// was given for the call only (`until_the_call_ends`): they are cleared when it ends.
-    values: Args<'static>,
+    /// was given for the call only (`until_the_call_ends`): they are cleared when it ends. A
+    /// vector kept from call to call, not `Args`: the small vector's checks of where its
+    /// elements live were a tenth of following a glNormal3f.
+    values: Vec<Value<'static>>,
     /// Commands named so far (a name defines the next number, as in a trace).
     named: usize,
 }
@@ -276,7 +278,7 @@ fn split<'v, 'a>(values: &'v [Value<'a>], returned: bool) -> (&'v [Value<'a>], O
 
 impl Events {
     pub fn new(to: Sink, live: Option<Live>) -> Events {
-        Events { to, live, call: None, values: Args::new(), named: 0 }
+        Events { to, live, call: None, values: Vec::with_capacity(16), named: 0 }
     }
 
     fn name(&mut self, name: &[u8]) {

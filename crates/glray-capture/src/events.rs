@@ -60,7 +60,10 @@ impl LiveCall {
 pub struct Capture {
     /// What each command number the trace has named means.
     kinds: Vec<Option<Kind>>,
-    contexts: HashMap<u64, Context>,
+    /// Each context's place in `slots`, by key (contexts are never dropped: a program makes a
+    /// few).
+    contexts: HashMap<u64, usize>,
+    slots: Vec<Context>,
     /// The context current on each thread.
     current: HashMap<u32, u64>,
     /// Each context's share group (a context alone is a group of its own).
@@ -69,10 +72,11 @@ pub struct Capture {
     holders: HashMap<u64, u64>,
     /// The thread of the last call: the one whose frame a frame event ends.
     last_thread: u32,
-    /// The last thread `context` resolved, and its context's key: calls come in long runs from
-    /// one thread, and the four lookups that resolve one are most of following a glVertex.
-    /// Forgotten when a context is created or made current.
-    resolved: Option<(u32, u64)>,
+    /// The last thread `context` resolved, and its context's place in `slots`: calls come in
+    /// long runs from one thread, and the lookups that resolve one were most of following a
+    /// glVertex (the last of them, by key, still a twentieth). Forgotten when a context is
+    /// created or made current.
+    resolved: Option<(u32, usize)>,
 }
 
 /// The key of a thread's context when it never made one current.
@@ -147,18 +151,29 @@ impl Capture {
 
     /// The context current on a thread, holding its share group's objects.
     pub fn context(&mut self, thread: u32) -> &mut Context {
-        if let Some((_, key)) = self.resolved.filter(|(t, _)| *t == thread) {
-            return self.contexts.entry(key).or_default();
+        if let Some((_, slot)) = self.resolved.filter(|(t, _)| *t == thread) {
+            return &mut self.slots[slot];
         }
         let key = self.current.get(&thread).copied().unwrap_or_else(|| thread_key(thread));
         let group = *self.groups.get(&key).unwrap_or(&key);
         let holder = self.holders.insert(group, key);
+        let slot = self.slot(key);
         if let Some(h) = holder.filter(|h| *h != key) {
-            let shared = self.contexts.get_mut(&h).map(Context::take_shared).unwrap_or_default();
-            self.contexts.entry(key).or_default().put_shared(shared);
+            let shared = self.contexts.get(&h).map(|&from| self.slots[from].take_shared()).unwrap_or_default();
+            self.slots[slot].put_shared(shared);
         }
-        self.resolved = Some((thread, key));
-        self.contexts.entry(key).or_default()
+        self.resolved = Some((thread, slot));
+        &mut self.slots[slot]
+    }
+
+    /// The place of context `key` in `slots`, made fresh the first time.
+    fn slot(&mut self, key: u64) -> usize {
+        let fresh = self.slots.len();
+        let slot = *self.contexts.entry(key).or_insert(fresh);
+        if slot == fresh {
+            self.slots.push(Context::default());
+        }
+        slot
     }
 }
 
