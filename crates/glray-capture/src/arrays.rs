@@ -68,6 +68,32 @@ impl<'a> Source<'a> {
         }
         Some(DVec4::from_array(x))
     }
+
+    /// Elements `lo..=hi` as `fetch` gives them, each made into `T` as it is read (no array of
+    /// doubles in between: at 10M triangles that was 160 MB per attribute, and most of an
+    /// indexed draw's capture); None when one is missing.
+    fn fetch_range<T>(&self, lo: u32, hi: u32, normalized: bool, make: impl Fn(DVec4) -> T) -> Option<Vec<T>> {
+        let mut out = Vec::with_capacity((hi - lo) as usize + 1);
+        if self.ty == args::GL_FLOAT && self.size >= 1 {
+            // Floats read as floats: the same values as through doubles, without the type's
+            // dispatch per element (floats are never normalised).
+            let n = self.size.min(4);
+            for i in lo..=hi {
+                let at = usize::try_from(u64::from(i).checked_sub(self.first)?).ok()?.checked_mul(self.stride)?;
+                let b = self.bytes.get(at..at.checked_add(4 * n)?)?;
+                let mut x = [0.0, 0.0, 0.0, 1.0];
+                for (c, v) in x.iter_mut().zip(b.chunks_exact(4)) {
+                    *c = f32::from_ne_bytes([v[0], v[1], v[2], v[3]]) as f64;
+                }
+                out.push(make(DVec4::from_array(x)));
+            }
+            return Some(out);
+        }
+        for i in lo..=hi {
+            out.push(make(self.fetch(u64::from(i), normalized)?));
+        }
+        Some(out)
+    }
 }
 
 /// Client state: array pointers, buffer bindings, pixel unpacking.
@@ -303,33 +329,29 @@ impl Context {
             return None;
         }
         let sources = self.sources();
-        let fetch_all = |k: usize, normalized: bool| -> Option<Option<Vec<DVec4>>> {
+        let range = |k: usize, normalized: bool| -> Option<Option<Vec<glam::Vec4>>> {
             match &sources[k] {
-                Some(s) => (lo..=hi).map(|i| s.fetch(u64::from(i), normalized)).collect::<Option<Vec<_>>>().map(Some),
+                Some(s) => s.fetch_range(lo, hi, normalized, |v| v.as_vec4()).map(Some),
                 None => Some(None),
             }
         };
-        let positions = fetch_all(0, false)??;
-        let normals = fetch_all(1, true)?;
-        let colors = fetch_all(2, true)?;
-        let texcoords = fetch_all(3, false)?;
+        let position = sources[0].as_ref()?;
+        let positions = position.fetch_range(lo, hi, false, |p| p.truncate().as_vec3())?;
+        // w is 1 unless the array gives it.
+        let ws = if position.size >= 4 { position.fetch_range(lo, hi, false, |p| p.w as f32)? } else { Vec::new() };
+        let normals = match &sources[1] {
+            Some(s) => Some(s.fetch_range(lo, hi, true, |n| n.truncate().as_vec3())?),
+            None => None,
+        };
+        let colors = range(2, true)?;
+        let texcoords = range(3, false)?;
         // What the last index leaves current, as the general path's last vertex does (a
-        // trailing index that makes no whole triangle included).
-        let last = (indices[indices.len() - 1] - lo) as usize;
-        let end = (
-            normals.as_ref().map(|v| v[last].truncate()),
-            colors.as_ref().map(|v| v[last]),
-            texcoords.as_ref().map(|v| v[last]),
-        );
+        // trailing index that makes no whole triangle included), exactly as given.
+        let last = u64::from(indices[indices.len() - 1]);
+        let current = |k: usize, normalized: bool| sources[k].as_ref().and_then(|s| s.fetch(last, normalized));
+        let end = (current(1, true).map(|n| n.truncate()), current(2, true), current(3, false));
         let triangles = indices.chunks_exact(3).map(|t| [t[0] - lo, t[1] - lo, t[2] - lo]).collect();
-        Some(Mesh::from_arrays(
-            positions,
-            normals.map(|v| v.iter().map(|n| n.truncate().as_vec3()).collect()),
-            colors.map(|v| v.iter().map(|c| c.as_vec4()).collect()),
-            texcoords.map(|v| v.iter().map(|t| t.as_vec4()).collect()),
-            triangles,
-            end,
-        ))
+        Some(Mesh::from_arrays(positions, ws, normals, colors, texcoords, triangles, end))
     }
 
     /// Where each array (vertex, normal, color, texcoord 0) of the next draw comes from.
@@ -384,5 +406,38 @@ impl Context {
         }
         self.arrays.clear();
         self.draw(mode, &outs);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::args::{GL_BYTE, GL_DOUBLE, GL_FLOAT, GL_SHORT};
+
+    #[test]
+    fn a_range_of_elements_is_what_fetching_each_gives() {
+        // Every type an array can have, 1 to 4 components, packed and with a stride, from a
+        // first element on, normalised and not: `fetch_range` (floats read straight as floats)
+        // against `fetch` element by element; and a range past the memory gives nothing.
+        let memory: Vec<u8> = (0..400u32).map(|k| (k * 37 + 11) as u8).collect();
+        for ty in [GL_BYTE, GL_UNSIGNED_BYTE, GL_SHORT, GL_UNSIGNED_SHORT, GL_INT, GL_UNSIGNED_INT, GL_FLOAT, GL_DOUBLE]
+        {
+            for size in 1..=4 {
+                for stride in [0, 36] {
+                    for normalized in [false, true] {
+                        let s = Source::new(size, ty, stride, 2, &memory).expect("a type glray reads");
+                        let whole = |p: DVec4| p.to_array().map(f64::to_bits);
+                        let each: Option<Vec<_>> = (3..=7u64).map(|i| s.fetch(i, normalized).map(whole)).collect();
+                        let each = each.expect("within the memory");
+                        assert_eq!(
+                            s.fetch_range(3, 7, normalized, whole),
+                            Some(each),
+                            "{ty:#x} x{size} stride {stride}"
+                        );
+                        assert_eq!(s.fetch_range(3, 500, normalized, whole), None, "past the memory");
+                    }
+                }
+            }
+        }
     }
 }

@@ -177,8 +177,10 @@ impl Mesh {
     /// An indexed array draw of GL_TRIANGLES, its vertices fetched once each: the arrays'
     /// values (None: that array is off, the value current at the call applies), the triangles'
     /// vertex indices, and what the draw leaves current (normal, colour, texture coordinates).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn from_arrays(
-        positions: Vec<DVec4>,
+        positions: Vec<Vec3>,
+        ws: Vec<f32>,
         normals: Option<Vec<Vec3>>,
         colors: Option<Vec<Vec4>>,
         texcoords: Option<Vec<Vec4>>,
@@ -186,8 +188,8 @@ impl Mesh {
         end: (Option<DVec3>, Option<DVec4>, Option<DVec4>),
     ) -> Mesh {
         let n = positions.len() as u32;
-        let ws = positions.iter().any(|p| p.w != 1.0).then(|| positions.iter().map(|p| p.w as f32).collect());
-        let positions = positions.iter().map(|p| p.truncate().as_vec3()).collect();
+        // Kept only when one is not 1 (an empty `ws`: every w is 1).
+        let ws = ws.iter().any(|&w| w != 1.0).then_some(ws);
         Mesh {
             ws,
             from_arrays: true,
