@@ -469,6 +469,20 @@ fn gen_real(cmds: &[&Command]) -> String {
     s
 }
 
+/// Whether GL refuses command `c` between glBegin and glEnd (OpenGL 2.1, section 2.6.3: only
+/// vertex attributes, generic ones included, glMaterial, glEvalCoord and glEvalPoint,
+/// glArrayElement, glCallList(s) and glEdgeFlag are allowed there), among the GL commands whose export calls the real one
+/// directly (handlers, glGetError among them, decide for themselves).
+fn refused_inside_begin(c: &Command) -> bool {
+    // Generic attributes too (glVertexAttrib4f, glVertexAttribI4i...), not their pointers.
+    let generic = c
+        .name
+        .strip_prefix("glVertexAttrib")
+        .is_some_and(|rest| rest.trim_start_matches(['I', 'L', 'P']).starts_with(|ch: char| ch.is_ascii_digit()));
+    let allowed = generic || ["glMaterial", "glEvalCoord", "glEvalPoint"].iter().any(|p| c.name.starts_with(p));
+    ["state", "dlist", "client", "query", "pass"].contains(&c.class.as_str()) && c.list != "-" && !c.handler && !allowed
+}
+
 fn gen_exports(cmds: &[&Command]) -> String {
     let mut s = String::new();
     let mut recorded = String::new();
@@ -505,12 +519,18 @@ fn gen_exports(cmds: &[&Command]) -> String {
         } else if c.class == "vertex" && c.name.starts_with("glVertex") {
             // Vertices of a glBegin the real GL did not get.
             "let skip__ = outer__ && crate::raytrace::in_skipped_begin();\n    ".to_string()
+        } else if refused_inside_begin(c) {
+            // A command GL refuses between glBegin and glEnd (INVALID_OPERATION, nothing done,
+            // 0 returned), made inside a glBegin the real GL did not get: the real GL, outside
+            // any glBegin, would do it (glGenLists would hand out a name). Capture raises the
+            // error glGetError reports.
+            "let skip__ = outer__ && crate::raytrace::in_skipped_begin();\n    ".to_string()
         } else {
             String::new()
         };
         let call = if before.is_empty() {
             call.clone()
-        } else if c.class == "geometry" || c.class == "vertex" {
+        } else if c.class == "geometry" || c.class == "vertex" || refused_inside_begin(c) {
             format!("if skip__ {{ Default::default() }} else {{ {call} }}")
         } else {
             format!("{{ let _ = skip__; {call} }}")
