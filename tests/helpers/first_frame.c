@@ -10,44 +10,32 @@
  * leaves frames with shader draws to the real GL; the first one's triangle, not rasterized,
  * is lost, and the frames after it must be the real GL's in full. Built by tests/raytrace.rs
  * with cc. */
-#define GL_GLEXT_PROTOTYPES
-#include <GL/osmesa.h>
-#include <GL/gl.h>
-#include <GL/glext.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "gl_functions.h"
+
+static void red_triangle(void) {
+  glColor3f(1, 0, 0);
+  glBegin(GL_TRIANGLES);
+  glVertex2f(-0.9f, -0.9f);
+  glVertex2f(0.9f, -0.9f);
+  glVertex2f(0.0f, 0.9f);
+  glEnd();
+}
+
 static void mixed(const unsigned char *buf, int w, int h) {
-  PFNGLCREATESHADERPROC create_shader = (PFNGLCREATESHADERPROC)OSMesaGetProcAddress("glCreateShader");
-  PFNGLSHADERSOURCEPROC source = (PFNGLSHADERSOURCEPROC)OSMesaGetProcAddress("glShaderSource");
-  PFNGLCOMPILESHADERPROC compile = (PFNGLCOMPILESHADERPROC)OSMesaGetProcAddress("glCompileShader");
-  PFNGLCREATEPROGRAMPROC create_program = (PFNGLCREATEPROGRAMPROC)OSMesaGetProcAddress("glCreateProgram");
-  PFNGLATTACHSHADERPROC attach = (PFNGLATTACHSHADERPROC)OSMesaGetProcAddress("glAttachShader");
-  PFNGLLINKPROGRAMPROC link = (PFNGLLINKPROGRAMPROC)OSMesaGetProcAddress("glLinkProgram");
-  PFNGLUSEPROGRAMPROC use = (PFNGLUSEPROGRAMPROC)OSMesaGetProcAddress("glUseProgram");
+  load_gl_functions();
   const char *vs = "#version 120\nvoid main() { gl_Position = gl_Vertex; }\n";
   const char *fs = "#version 120\nvoid main() { gl_FragColor = vec4(0.0, 1.0, 0.0, 1.0); }\n";
-  GLuint s1 = create_shader(GL_VERTEX_SHADER), s2 = create_shader(GL_FRAGMENT_SHADER);
-  source(s1, 1, &vs, NULL);
-  compile(s1);
-  source(s2, 1, &fs, NULL);
-  compile(s2);
-  GLuint prog = create_program();
-  attach(prog, s1);
-  attach(prog, s2);
-  link(prog);
+  GLuint prog = program_of(vs, fs);
   for (int frame = 0; frame < 3; frame++) {
     glClear(GL_COLOR_BUFFER_BIT);
-    glColor3f(1, 0, 0);
-    glBegin(GL_TRIANGLES);
-    glVertex2f(-0.9f, -0.9f);
-    glVertex2f(0.9f, -0.9f);
-    glVertex2f(0.0f, 0.9f);
-    glEnd();
-    use(prog);
+    red_triangle();
+    glUseProgram(prog);
     glRectf(-1.0f, -1.0f, -0.8f, -0.8f);
-    use(0);
+    glUseProgram(0);
     glFinish();
     const unsigned char *m = buf + 4 * (w * (h / 2) + w / 2), *q = buf + 4 * (w * 1 + 1);
     printf("frame %d middle %d %d %d square %d %d %d\n", frame, m[0], m[1], m[2], q[0], q[1], q[2]);
@@ -80,12 +68,7 @@ int main(int argc, char **argv) {
   glClearColor(0, 0, 1, 1);
   glClear(GL_COLOR_BUFFER_BIT);
   begin(GL_SAMPLES_PASSED, query);
-  glColor3f(1, 0, 0);
-  glBegin(GL_TRIANGLES);
-  glVertex2f(-0.9f, -0.9f);
-  glVertex2f(0.9f, -0.9f);
-  glVertex2f(0.0f, 0.9f);
-  glEnd();
+  red_triangle();
   end(GL_SAMPLES_PASSED);
   glFinish();
   GLuint samples = 0;

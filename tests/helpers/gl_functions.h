@@ -1,6 +1,6 @@
 /* The GL 2.0-3.3 functions the OSMesa test helpers call, looked up with OSMesaGetProcAddress
  * (libOSMesa need not export them), and a GLSL program made from two sources. Included by
- * readback.c and core_profile.c; call load_gl_functions() once a context is current. */
+ * readback.c, core_profile.c and first_frame.c; call load_gl_functions() once a context is current. */
 #ifndef GLRAY_TEST_GL_FUNCTIONS_H
 #define GLRAY_TEST_GL_FUNCTIONS_H
 #define GL_GLEXT_PROTOTYPES
