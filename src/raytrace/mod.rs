@@ -115,9 +115,8 @@ pub fn feed(live: &mut Live, bytes: &[u8], named: usize) -> usize {
         return named;
     }
     let mut reader = Reader::events(bytes, named);
-    let started = live.stats.is_some().then(std::time::Instant::now);
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<(), String> {
-        while let Some(event) = reader.next_event().map_err(|e| e.to_string())? {
+    guarded(live, |live| {
+        while let Some(event) = reader.next_event().map_err(|e| format!("capture could not read a call: {e}"))? {
             if let Event::Name { number } = event {
                 live.names.resize(number + 1, Vec::new());
                 live.names[number] = reader.name(number).to_vec();
@@ -126,15 +125,7 @@ pub fn feed(live: &mut Live, bytes: &[u8], named: usize) -> usize {
             follow_in(&mut live.capture, &event, &|n| names.get(n).map_or(&[][..], |v| &v[..]));
         }
         Ok(())
-    }));
-    if let Some(t) = started {
-        live.capture_time += t.elapsed();
-    }
-    match result {
-        Ok(Ok(())) => {}
-        Ok(Err(e)) => stop(&format!("capture could not read a call: {e}")),
-        Err(_) => stop("internal error in capture"),
-    }
+    });
     reader.named()
 }
 
@@ -144,20 +135,33 @@ pub fn follow<'a>(live: &mut Option<Live>, event: &Event, name: &dyn Fn(usize) -
     following(live, |capture| follow_in(capture, event, name));
 }
 
-/// Runs `f` on capture, timed for the statistics; a panic stops ray tracing, not the program.
+/// Runs `f` on capture (`guarded`), when ray tracing.
 #[inline]
 fn following(live: &mut Option<Live>, f: impl FnOnce(&mut Capture)) {
     if !ON.load(Ordering::Relaxed) {
         return;
     }
-    let Some(live) = live.as_mut() else { return };
+    if let Some(live) = live.as_mut() {
+        guarded(live, |live| {
+            f(&mut live.capture);
+            Ok(())
+        });
+    }
+}
+
+/// Runs `f` on the live state, timed for the statistics; an error it returns, or a panic,
+/// stops ray tracing, not the program.
+#[inline]
+fn guarded(live: &mut Live, f: impl FnOnce(&mut Live) -> Result<(), String>) {
     let started = live.stats.is_some().then(std::time::Instant::now);
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(&mut live.capture)));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(&mut *live)));
     if let Some(t) = started {
         live.capture_time += t.elapsed();
     }
-    if result.is_err() {
-        stop("internal error in capture");
+    match result {
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => stop(&e),
+        Err(_) => stop("internal error in capture"),
     }
 }
 
