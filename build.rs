@@ -471,8 +471,9 @@ fn gen_real(cmds: &[&Command]) -> String {
 
 /// Whether GL refuses command `c` between glBegin and glEnd (OpenGL 2.1, section 2.6.3: only
 /// vertex attributes, generic ones included, glMaterial, glEvalCoord and glEvalPoint,
-/// glArrayElement, glCallList(s) and glEdgeFlag are allowed there), among the GL commands whose export calls the real one
-/// directly (handlers, glGetError among them, decide for themselves).
+/// glArrayElement, glCallList(s) and glEdgeFlag are allowed there), among the GL commands
+/// whose export calls the real one directly (handlers, glGetError among them, decide for
+/// themselves).
 fn refused_inside_begin(c: &Command) -> bool {
     // Generic attributes too (glVertexAttrib4f, glVertexAttribI4i...), not their pointers.
     let generic = c
@@ -509,6 +510,7 @@ fn gen_exports(cmds: &[&Command]) -> String {
         // state may need to look at memory before the real call (a buffer about to be unmapped).
         // Geometry the ray tracer takes is not rasterized by the real GL (that is the speed-up):
         // before_real says so, and the real call is skipped.
+        let in_begin = (c.class == "vertex" && c.name.starts_with("glVertex")) || refused_inside_begin(c);
         let before = if ["geometry", "client", "context", "frame"].contains(&c.class.as_str()) {
             let b: Vec<String> = c.params.iter().map(|p| bits(&p.rust, &ident(&p.name))).collect();
             format!(
@@ -516,21 +518,18 @@ fn gen_exports(cmds: &[&Command]) -> String {
                 c.name,
                 b.join(", ")
             )
-        } else if c.class == "vertex" && c.name.starts_with("glVertex") {
-            // Vertices of a glBegin the real GL did not get.
-            "let skip__ = outer__ && crate::raytrace::in_skipped_begin();\n    ".to_string()
-        } else if refused_inside_begin(c) {
-            // A command GL refuses between glBegin and glEnd (INVALID_OPERATION, nothing done,
-            // 0 returned), made inside a glBegin the real GL did not get: the real GL, outside
-            // any glBegin, would do it (glGenLists would hand out a name). Capture raises the
-            // error glGetError reports.
+        } else if in_begin {
+            // Inside a glBegin the real GL did not get: its vertices, and the commands GL
+            // refuses between glBegin and glEnd (INVALID_OPERATION, nothing done, 0 returned),
+            // which the real GL, outside any glBegin, would carry out (glGenLists would hand
+            // out a name). Capture raises the error glGetError reports.
             "let skip__ = outer__ && crate::raytrace::in_skipped_begin();\n    ".to_string()
         } else {
             String::new()
         };
         let call = if before.is_empty() {
             call.clone()
-        } else if c.class == "geometry" || c.class == "vertex" || refused_inside_begin(c) {
+        } else if c.class == "geometry" || in_begin {
             format!("if skip__ {{ Default::default() }} else {{ {call} }}")
         } else {
             format!("{{ let _ = skip__; {call} }}")
