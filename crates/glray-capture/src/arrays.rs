@@ -336,9 +336,12 @@ impl Context {
             }
         };
         let position = sources[0].as_ref()?;
-        let positions = position.fetch_range(lo, hi, false, |p| p.truncate().as_vec3())?;
         // w is 1 unless the array gives it.
-        let ws = if position.size >= 4 { position.fetch_range(lo, hi, false, |p| p.w as f32)? } else { Vec::new() };
+        let (positions, ws) = if position.size >= 4 {
+            position.fetch_range(lo, hi, false, |p| (p.truncate().as_vec3(), p.w as f32))?.into_iter().unzip()
+        } else {
+            (position.fetch_range(lo, hi, false, |p| p.truncate().as_vec3())?, Vec::new())
+        };
         let normals = match &sources[1] {
             Some(s) => Some(s.fetch_range(lo, hi, true, |n| n.truncate().as_vec3())?),
             None => None,
