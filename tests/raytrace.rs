@@ -20,12 +20,8 @@ fn differing(a: &Path, b: &Path) -> f64 {
 
 /// The last scene glray dumped into `dir`: (triangles, unsupported draws).
 fn dumped(dir: &Path) -> (u64, u64) {
-    let mut jsons: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap_or_else(|e| panic!("{}: no scene dumped ({e}): was the frame ray traced?", dir.display()))
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .collect();
-    jsons.sort();
+    assert!(dir.is_dir(), "{}: no scene dumped: was the frame ray traced?", dir.display());
+    let jsons = files_ending(dir, "json");
     let text = std::fs::read_to_string(jsons.last().expect("a scene json")).unwrap();
     let field = |name: &str| -> u64 {
         let at = text.find(&format!("\"{name}\":")).unwrap_or_else(|| panic!("{name} in {text}")) + name.len() + 3;
@@ -427,11 +423,7 @@ fn a_forked_child_keeps_ray_tracing_and_records_a_trace_of_its_own() {
     assert_eq!(err.matches("glray: frame ").count(), 3, "three frames, the child's too: {err}");
     assert_eq!(err.matches("1 samples per pixel\n").count(), 2, "two traced, one shown again: {err}");
     assert!(!err.contains("error"), "{err}");
-    let traces: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "trace"))
-        .collect();
+    let traces = files_ending(&dir, "trace");
     assert_eq!(traces.len(), 2, "the parent's trace and the child's: {traces:?}");
     let mut frames = Vec::new();
     for trace in &traces {

@@ -33,12 +33,7 @@ fn suite() -> PathBuf {
 #[test]
 fn the_trace_suite_replays_to_its_reference_images() {
     let dir = scratch("suite");
-    let mut traces: Vec<PathBuf> = std::fs::read_dir(suite())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "trace"))
-        .collect();
-    traces.sort();
+    let traces = files_ending(&suite(), "trace");
     let names: Vec<String> = traces.iter().map(|t| t.file_stem().unwrap().to_string_lossy().into_owned()).collect();
     for part in ["lists", "immediate", "arrays", "buffers", "textures", "all"] {
         assert!(names.contains(&format!("osmesa-{part}")), "tests/traces lacks osmesa-{part}");
@@ -351,11 +346,7 @@ fn each_gl_process_records_its_own_trace() {
         Command::new(glray_bin()).arg("run").arg("--record").arg(&template).args(["--", "sh", "-c", &script]),
         "two recorded programs",
     );
-    let traces: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "trace"))
-        .collect();
+    let traces = files_ending(&dir, "trace");
     assert_eq!(traces.len(), 2, "{traces:?}");
     for t in &traces {
         let out = dir.join(t.file_stem().unwrap());

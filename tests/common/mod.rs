@@ -40,6 +40,17 @@ pub fn scratch(test: &str) -> PathBuf {
     dir
 }
 
+/// The files in `dir` whose names end in `.ext`, sorted.
+pub fn files_ending(dir: &Path, ext: &str) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == ext))
+        .collect();
+    files.sort();
+    files
+}
+
 /// The drop-in directory, made by `glray dropin-dir`.
 pub fn dropin_dir() -> PathBuf {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
