@@ -96,29 +96,91 @@ pub fn base_format(internal: u32) -> u32 {
     }
 }
 
-/// Decodes client pixels into RGBA texels; None for an unsupported format or type, or too
-/// little memory.
+/// A packed pixel type (GL 1.2's GL_UNSIGNED_SHORT_5_6_5, GL_UNSIGNED_INT_8_8_8_8_REV, ...):
+/// every component of a pixel in one element of `bytes` bytes (native byte order), the
+/// format's components in order taking `widths` bits each, the first in the highest bits, or
+/// with `reversed` (the `_REV` types) in the lowest.
+struct PackedType {
+    bytes: usize,
+    widths: &'static [u32],
+    reversed: bool,
+}
+
+impl PackedType {
+    fn of(ty: u32) -> Option<PackedType> {
+        let (bytes, widths, reversed): (usize, &'static [u32], bool) = match ty {
+            0x8032 => (1, &[3, 3, 2], false),       // GL_UNSIGNED_BYTE_3_3_2
+            0x8362 => (1, &[3, 3, 2], true),        // GL_UNSIGNED_BYTE_2_3_3_REV
+            0x8363 => (2, &[5, 6, 5], false),       // GL_UNSIGNED_SHORT_5_6_5
+            0x8364 => (2, &[5, 6, 5], true),        // GL_UNSIGNED_SHORT_5_6_5_REV
+            0x8033 => (2, &[4, 4, 4, 4], false),    // GL_UNSIGNED_SHORT_4_4_4_4
+            0x8365 => (2, &[4, 4, 4, 4], true),     // GL_UNSIGNED_SHORT_4_4_4_4_REV
+            0x8034 => (2, &[5, 5, 5, 1], false),    // GL_UNSIGNED_SHORT_5_5_5_1
+            0x8366 => (2, &[5, 5, 5, 1], true),     // GL_UNSIGNED_SHORT_1_5_5_5_REV
+            0x8035 => (4, &[8, 8, 8, 8], false),    // GL_UNSIGNED_INT_8_8_8_8
+            0x8367 => (4, &[8, 8, 8, 8], true),     // GL_UNSIGNED_INT_8_8_8_8_REV
+            0x8036 => (4, &[10, 10, 10, 2], false), // GL_UNSIGNED_INT_10_10_10_2
+            0x8368 => (4, &[10, 10, 10, 2], true),  // GL_UNSIGNED_INT_2_10_10_10_REV
+            _ => return None,
+        };
+        Some(PackedType { bytes, widths, reversed })
+    }
+
+    /// The components of the pixel at the start of `b`, normalised to [0, 1].
+    fn components(&self, b: &[u8]) -> Option<[f32; 4]> {
+        let word = match self.bytes {
+            1 => *b.first()? as u32,
+            2 => u16::from_ne_bytes(b.get(..2)?.try_into().ok()?) as u32,
+            _ => u32::from_ne_bytes(b.get(..4)?.try_into().ok()?),
+        };
+        let total: u32 = self.widths.iter().sum();
+        let mut c = [0.0; 4];
+        let mut before = 0;
+        for (i, &w) in self.widths.iter().enumerate() {
+            let shift = if self.reversed { before } else { total - before - w };
+            let max = (1u32 << w) - 1;
+            c[i] = ((word >> shift) & max) as f32 / max as f32;
+            before += w;
+        }
+        Some(c)
+    }
+}
+
+/// Decodes client pixels into RGBA texels; None for an unsupported format or type (or a
+/// packed type whose component count is not the format's: GL refuses those), or too little
+/// memory.
 pub fn decode(width: usize, height: usize, format: u32, ty: u32, unpack: &Unpack, data: &[u8]) -> Option<Vec<Vec4>> {
     let n = components(format)?;
-    let size = args::type_size(ty)?;
+    let packed = PackedType::of(ty);
+    let (size, pixel_bytes) = match &packed {
+        Some(p) if p.widths.len() == n => (p.bytes, p.bytes),
+        Some(_) => return None,
+        None => (args::type_size(ty)?, n * args::type_size(ty)?),
+    };
     let row_pixels = if unpack.row_length > 0 { unpack.row_length } else { width };
     let align = unpack.alignment.max(1);
-    let row_bytes = (row_pixels * n * size).div_ceil(align) * align;
+    let row_bytes = (row_pixels * pixel_bytes).div_ceil(align) * align;
     let mut out = Vec::with_capacity(width * height);
     for y in 0..height {
-        let row = (y + unpack.skip_rows) * row_bytes + unpack.skip_pixels * n * size;
+        let row = (y + unpack.skip_rows) * row_bytes + unpack.skip_pixels * pixel_bytes;
         for x in 0..width {
-            let first = (row + x * n * size) / size;
-            let mut c = [0.0f32; 4];
-            for (i, v) in c.iter_mut().enumerate().take(n) {
-                let raw = if row % size == 0 {
-                    args::element(data, ty, first + i)?
-                } else {
-                    let at = row + (x * n + i) * size;
-                    args::element(data.get(at..at + size)?, ty, 0)?
-                };
-                *v = args::normalize(raw, ty).clamp(0.0, 1.0) as f32;
-            }
+            let c = match &packed {
+                Some(p) => p.components(data.get(row + x * pixel_bytes..)?)?,
+                None => {
+                    let first = (row + x * pixel_bytes) / size;
+                    let mut c = [0.0f32; 4];
+                    for (i, v) in c.iter_mut().enumerate().take(n) {
+                        let raw = if row % size == 0 {
+                            args::element(data, ty, first + i)?
+                        } else {
+                            let at = row + (x * n + i) * size;
+                            args::element(data.get(at..at + size)?, ty, 0)?
+                        };
+                        *v = args::normalize(raw, ty).clamp(0.0, 1.0) as f32;
+                    }
+                    c
+                }
+            };
             out.push(match format {
                 GL_ALPHA => Vec4::new(0.0, 0.0, 0.0, c[0]),
                 GL_LUMINANCE | GL_INTENSITY => Vec4::new(c[0], c[0], c[0], 1.0),
@@ -257,6 +319,46 @@ mod tests {
         let t = decode(1, 1, GL_BGRA, UBYTE, &Unpack::default(), &[0, 0, 255, 0]).unwrap();
         assert_eq!(t, vec![Vec4::new(1.0, 0.0, 0.0, 0.0)]);
         assert!(decode(2, 2, GL_RGBA, UBYTE, &Unpack::default(), &[0; 15]).is_none());
+    }
+
+    #[test]
+    fn packed_pixel_types_decode_as_gl_reads_them() {
+        let un = Unpack::default();
+        // GL_UNSIGNED_INT_8_8_8_8_REV with RGBA: red in the lowest byte, the same bytes as
+        // GL_UNSIGNED_BYTE on a little-endian machine (xscreensaver loads its images so).
+        let word: u32 = 0x33 << 24 | 0xff << 8;
+        let rev = decode(1, 1, GL_RGBA, 0x8367, &un, &word.to_ne_bytes()).unwrap();
+        assert_eq!(rev, vec![Vec4::new(0.0, 1.0, 0.0, 0.2)]);
+        // The same word in GL_UNSIGNED_INT_8_8_8_8: red in the highest byte.
+        let forward = decode(1, 1, GL_RGBA, 0x8035, &un, &word.to_ne_bytes()).unwrap();
+        assert_eq!(forward, vec![Vec4::new(0.2, 0.0, 1.0, 0.0)]);
+        // BGRA with _REV: blue lowest (what X images and many loaders give).
+        let bgra = decode(1, 1, GL_BGRA, 0x8367, &un, &0x80ff_0000u32.to_ne_bytes()).unwrap();
+        assert_eq!(bgra[0].x, 1.0);
+        assert!((bgra[0].w - 128.0 / 255.0).abs() < 1e-6 && bgra[0].z == 0.0);
+        // 5_6_5: red in the top five bits; _REV: in the bottom five.
+        let pixels = [0xf800u16.to_ne_bytes(), 0x001fu16.to_ne_bytes()].concat();
+        let t = decode(2, 1, GL_RGB, 0x8363, &un, &pixels).unwrap();
+        assert_eq!(t, vec![Vec4::new(1.0, 0.0, 0.0, 1.0), Vec4::new(0.0, 0.0, 1.0, 1.0)]);
+        let t = decode(2, 1, GL_RGB, 0x8364, &un, &pixels).unwrap();
+        assert_eq!(t, vec![Vec4::new(0.0, 0.0, 1.0, 1.0), Vec4::new(1.0, 0.0, 0.0, 1.0)]);
+        // 4_4_4_4 and 5_5_5_1 (alpha the one bit), 3_3_2 and 2_10_10_10_REV.
+        let t = decode(1, 1, GL_RGBA, 0x8033, &un, &0x0f00u16.to_ne_bytes()).unwrap();
+        assert_eq!(t, vec![Vec4::new(0.0, 1.0, 0.0, 0.0)]);
+        let t = decode(1, 1, GL_RGBA, 0x8034, &un, &0x0001u16.to_ne_bytes()).unwrap();
+        assert_eq!(t, vec![Vec4::new(0.0, 0.0, 0.0, 1.0)]);
+        let t = decode(1, 1, GL_RGB, 0x8032, &un, &[0b1110_0000]).unwrap();
+        assert_eq!(t, vec![Vec4::new(1.0, 0.0, 0.0, 1.0)]);
+        let t = decode(1, 1, GL_RGBA, 0x8368, &un, &(3u32 << 30 | 0x3ff).to_ne_bytes()).unwrap();
+        assert_eq!(t, vec![Vec4::new(1.0, 0.0, 0.0, 1.0)]);
+        // Rows of 2-byte pixels padded to the unpack alignment: 3 pixels, 6 bytes, 8 a row.
+        let mut rows = vec![0u8; 16];
+        rows[8..10].copy_from_slice(&0xf800u16.to_ne_bytes());
+        let t = decode(3, 2, GL_RGB, 0x8363, &un, &rows).unwrap();
+        assert_eq!(t[3], Vec4::new(1.0, 0.0, 0.0, 1.0));
+        // A packed type whose component count is not the format's, and too little memory.
+        assert!(decode(1, 1, GL_RGBA, 0x8363, &un, &[0; 2]).is_none());
+        assert!(decode(2, 1, GL_RGBA, 0x8367, &un, &[0; 7]).is_none());
     }
 
     #[test]
