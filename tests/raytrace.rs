@@ -107,6 +107,7 @@ fn xscreensaver_hacks_are_ray_traced_like_mesa() {
         ("atlantis", "a background in another projection at z = 1, eye-linear texgen"),
         ("superquadrics", "two-sided lighting (GL_LIGHT_MODEL_TWO_SIDE)"),
         ("boxed", "points (particles) and lit balls"),
+        ("maze3d", "textures in GL_UNSIGNED_INT_8_8_8_8_REV"),
     ] {
         eprintln!("{name}: {kind}");
         ray_traced_like_mesa(name, &hack(name), &["-window"], 4, 0.02);
@@ -330,6 +331,25 @@ fn an_osmesa_programs_first_frame_is_not_rasterized_as_well() {
     let after_first = |out: &str| out.lines().skip(1).map(String::from).collect::<Vec<_>>();
     assert_eq!(after_first(&traced), after_first(&plain), "frames after the first, mixed");
     assert!(traced.contains("frame 0 middle 0 0 255 square 0 255 0"), "{traced}");
+}
+
+#[test]
+fn a_texture_copied_from_the_framebuffer_holds_the_ray_traced_picture() {
+    // tests/helpers/copy_texture.c draws into a corner of its buffer, copies it into a texture
+    // (glCopyTexImage2D, then glCopyTexSubImage2D for a part) and draws the texture over the
+    // whole buffer. Under glray the frame so far is put in place before each copy and the
+    // texture read back into capture: the picture is Mesa's. Before, the copies took the
+    // unrasterized buffer and capture drew the texture white.
+    let dir = scratch("rt-copy-texture");
+    let program = osmesa_helper(&dir, "copy_texture");
+    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "copy_texture plain"));
+    assert_eq!(plain, "left 0 255 0\nright 255 0 0\ncorner 255 255 0\nerror 0x0\n");
+    let scenes = dir.join("scenes");
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl").env("GLRAY_DUMP_SCENE", &scenes);
+    assert_eq!(stdout(&run_ok(&mut cmd, "copy_texture under glray")), plain);
+    // Three frames ray traced: before each copy, and the textured quad.
+    assert_eq!(files_ending(&scenes, "json").len(), 3);
 }
 
 #[test]

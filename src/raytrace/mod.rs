@@ -7,6 +7,7 @@
 //! Frames capture cannot follow (shaders, generic attributes) are left as the real GL drew
 //! them. Nothing here may stop the host: errors are logged and ray tracing turns off.
 
+mod copied;
 mod dump;
 mod present;
 mod stats;
@@ -168,7 +169,10 @@ fn guarded(live: &mut Live, f: impl FnOnce(&mut Live) -> Result<(), String>) {
 /// `capture` follows one event of the calling thread's.
 fn follow_in<'a>(capture: &mut Capture, event: &Event, name: &dyn Fn(usize) -> &'a [u8]) {
     match event {
-        Event::Call { cmd, thread, args, ret } => capture.call(*cmd, *thread, args, ret.as_ref(), Some(live_call())),
+        Event::Call { cmd, thread, args, ret } => {
+            capture.call(*cmd, *thread, args, ret.as_ref(), Some(live_call()));
+            copied::follow(capture, *cmd, *thread, args);
+        }
         _ => {
             capture.event(event, name);
         }
@@ -183,7 +187,10 @@ fn live_call() -> LiveCall {
 /// Capture follows one call the recorder made without encoding it (no trace file is
 /// written), as `follow` does an event.
 pub fn follow_call(live: &mut Option<Live>, cmd: usize, thread: u32, args: &[Value], ret: Option<&Value>) {
-    following(live, |capture| capture.call(cmd, thread, args, ret, Some(live_call())));
+    following(live, |capture| {
+        capture.call(cmd, thread, args, ret, Some(live_call()));
+        copied::follow(capture, cmd, thread, args);
+    });
 }
 
 /// Called after this thread made a context current: capture follows only compatibility
@@ -265,7 +272,7 @@ fn skips(c: usize, _args: &[u64]) -> bool {
         cmd::glReadPixels | cmd::glReadnPixels => Some(Trigger::ReadPixels),
         _ => None,
     };
-    let raster = matches!(c, cmd::glBitmap | cmd::glDrawPixels | cmd::glCopyPixels);
+    let raster = matches!(c, cmd::glBitmap | cmd::glDrawPixels | cmd::glCopyPixels) || copied::reads_framebuffer(c);
     if !geometry && at.is_none() && !raster {
         return false;
     }
@@ -303,7 +310,8 @@ fn fire(live: &mut Live, c: usize, thread: u32, geometry: bool, raster: bool, at
         return skip;
     }
     if raster {
-        // Text and images drawn over the scene: the scene goes in first.
+        // Text and images drawn over the scene, and copies that read it: the scene goes in
+        // first.
         if !live.capture.context(thread).compiling() {
             live.present(thread);
         }

@@ -981,6 +981,26 @@ impl Context {
         Ok(())
     }
 
+    /// Level `level` of the bound 2D texture as the real GL holds it after a copy from the
+    /// framebuffer (glCopyTexImage2D, glCopyTexSubImage2D): `texels` as glGetTexImage gives
+    /// them in RGBA, `internal` the level's internal format. Capture cannot see what a copy
+    /// took, so the live layer reads the level back and hands it here.
+    pub fn copied_texture(&mut self, level: usize, internal: u32, width: usize, height: usize, texels: Vec<Vec4>) {
+        if level >= 16 || texels.len() != width * height {
+            return;
+        }
+        let base = texture::base_format(internal);
+        let texels = texels.into_iter().map(|c| texture::to_base(c, base)).collect();
+        let t = self.texture_mut();
+        if level == 0 {
+            t.base_format = base;
+        }
+        if t.levels.len() <= level {
+            t.levels.resize(level + 1, Level::default());
+        }
+        t.levels[level] = Level { width, height, texels };
+    }
+
     fn material(&mut self, a: &[Value], ty: u32) -> GlResult {
         let (face, pname) = (args::uint(a, 0), args::uint(a, 1));
         let faces: &[usize] = match face {

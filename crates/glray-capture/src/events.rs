@@ -25,6 +25,9 @@ enum Kind {
     Create(usize),
     /// Makes the context at this argument index current on the calling thread.
     MakeCurrent(usize),
+    /// Copies the framebuffer into a 2D texture (glCopyTexImage2D, glCopyTexSubImage2D): what
+    /// it took is the real GL's to say (`Capture::copies_texture`).
+    CopiesTexture,
 }
 
 fn kind_of(name: &str) -> Option<Kind> {
@@ -36,6 +39,9 @@ fn kind_of(name: &str) -> Option<Kind> {
         "glXMakeCurrent" => Kind::MakeCurrent(2),
         "glXMakeContextCurrent" | "glXMakeCurrentReadSGI" | "eglMakeCurrent" => Kind::MakeCurrent(3),
         "OSMesaMakeCurrent" => Kind::MakeCurrent(0),
+        "glCopyTexImage2D" | "glCopyTexImage2DEXT" | "glCopyTexSubImage2D" | "glCopyTexSubImage2DEXT" => {
+            Kind::CopiesTexture
+        }
         _ => return op_for(name).map(|(op, ty)| Kind::Gl(op, ty)),
     })
 }
@@ -112,6 +118,12 @@ impl Capture {
     /// the call goes to (as it was before the call, for a MakeCurrent). A call made live is
     /// handed here without becoming an `Event`: moved into one and out again, its arguments
     /// were copied twice per call.
+    /// Whether call number `cmd` copies the framebuffer into a 2D texture, whose texels the
+    /// caller reads back from the real GL (`Context::copied_texture`).
+    pub fn copies_texture(&self, cmd: usize) -> bool {
+        matches!(self.kinds.get(cmd), Some(Some(Kind::CopiesTexture)))
+    }
+
     pub fn call(&mut self, cmd: usize, thread: u32, args: &[Value], ret: Option<&Value>, live: Option<LiveCall>) {
         self.last_thread = thread;
         let kind = self.kinds.get(cmd).copied().flatten();
@@ -145,7 +157,7 @@ impl Capture {
                     };
                 }
             }
-            Some(Kind::Gl(..)) | None => {}
+            Some(Kind::Gl(..) | Kind::CopiesTexture) | None => {}
         }
     }
 

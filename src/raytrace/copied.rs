@@ -1,0 +1,108 @@
+//! Textures a program fills from its framebuffer (glCopyTexImage2D, glCopyTexSubImage2D: a blur,
+//! a reflection or a picture-in-picture rendered first and then drawn as a texture). The frame
+//! drawn so far is presented before the copy (`reads_framebuffer`, as for glReadPixels), so
+//! the real GL copies the ray-traced picture; capture cannot see what the copy took, so the
+//! texture level is read back from the real GL afterwards (`follow`) and handed to capture.
+
+use std::ffi::c_void;
+
+use glam::Vec4;
+use glray_capture::args;
+use glray_capture::events::Capture;
+use glray_core::trace::Value;
+
+use crate::commands::cmd;
+use crate::real::{self, get_int};
+
+const GL_TEXTURE_2D: u32 = 0x0DE1;
+const GL_TEXTURE_WIDTH: u32 = 0x1000;
+const GL_TEXTURE_HEIGHT: u32 = 0x1001;
+const GL_TEXTURE_INTERNAL_FORMAT: u32 = 0x1003;
+const GL_RGBA: u32 = 0x1908;
+const GL_FLOAT: u32 = 0x1406;
+const GL_CLIENT_PIXEL_STORE_BIT: u32 = 0x0000_0001;
+const GL_PIXEL_PACK_BUFFER: u32 = 0x88EB;
+const GL_PIXEL_PACK_BUFFER_BINDING: u32 = 0x88ED;
+/// glPixelStore's pack state, and what a read into a tight float array wants of it.
+const PACK: &[(u32, i32)] = &[
+    (0x0D05, 4), // PACK_ALIGNMENT
+    (0x0D02, 0), // PACK_ROW_LENGTH
+    (0x0D03, 0), // PACK_SKIP_ROWS
+    (0x0D04, 0), // PACK_SKIP_PIXELS
+    (0x0D00, 0), // PACK_SWAP_BYTES
+    (0x0D01, 0), // PACK_LSB_FIRST
+];
+/// The largest texture level read back (GL implementations stop at 16K).
+const MOST_TEXELS: usize = 16384 * 16384;
+
+/// Whether command `c` reads the framebuffer into a texture or the accumulation buffer: the
+/// frame drawn so far is put in place first.
+pub fn reads_framebuffer(c: usize) -> bool {
+    matches!(
+        c,
+        cmd::glCopyTexImage1D
+            | cmd::glCopyTexImage1DEXT
+            | cmd::glCopyTexImage2D
+            | cmd::glCopyTexImage2DEXT
+            | cmd::glCopyTexSubImage1D
+            | cmd::glCopyTexSubImage1DEXT
+            | cmd::glCopyTexSubImage2D
+            | cmd::glCopyTexSubImage2DEXT
+            | cmd::glCopyTexSubImage3D
+            | cmd::glCopyTexSubImage3DEXT
+            | cmd::glAccum
+    )
+}
+
+/// After the real GL made call number `c` (the recorder's numbering) with `a` on `thread`: a copy
+/// into a 2D texture is read back into capture's texture.
+pub fn follow(capture: &mut Capture, c: usize, thread: u32, a: &[Value]) {
+    if !capture.copies_texture(c) || args::uint(a, 0) != GL_TEXTURE_2D || crate::profile::core() {
+        return;
+    }
+    let ctx = capture.context(thread);
+    // Compiled into a list (Mesa compiles the copies), it copies nothing until the list runs.
+    if ctx.compiling() {
+        return;
+    }
+    let Ok(level) = usize::try_from(args::int(a, 1)) else { return };
+    // SAFETY: the live layer follows a call on the thread that made it, whose context is
+    // current (the call just went to it).
+    if let Some((internal, width, height, texels)) = unsafe { read_back(level) } {
+        glray_core::debug!("a copy from the framebuffer: texture level {level} ({width}x{height}) read back");
+        ctx.copied_texture(level, internal, width, height, texels);
+    }
+}
+
+/// Level `level` of the bound 2D texture: its internal format, size and texels in RGBA.
+///
+/// # Safety
+/// A compatibility-profile GL context must be current on this thread.
+unsafe fn read_back(level: usize) -> Option<(u32, usize, usize, Vec<Vec4>)> {
+    let level = i32::try_from(level).ok()?;
+    let parameter = |pname: u32| {
+        let mut v = 0i32;
+        real::glGetTexLevelParameteriv(GL_TEXTURE_2D, level, pname, (&mut v as *mut i32).cast());
+        v
+    };
+    let (width, height) =
+        (usize::try_from(parameter(GL_TEXTURE_WIDTH)).ok()?, usize::try_from(parameter(GL_TEXTURE_HEIGHT)).ok()?);
+    let internal = parameter(GL_TEXTURE_INTERNAL_FORMAT) as u32;
+    let count = width.checked_mul(height).filter(|&n| n > 0 && n <= MOST_TEXELS)?;
+    let mut floats = vec![0.0f32; count * 4];
+    let pack_buffer = get_int(GL_PIXEL_PACK_BUFFER_BINDING);
+    if pack_buffer != 0 {
+        real::glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    }
+    real::glPushClientAttrib(GL_CLIENT_PIXEL_STORE_BIT);
+    for &(pname, value) in PACK {
+        real::glPixelStorei(pname, value);
+    }
+    real::glGetTexImage(GL_TEXTURE_2D, level, GL_RGBA, GL_FLOAT, floats.as_mut_ptr() as *mut c_void);
+    real::glPopClientAttrib();
+    if pack_buffer != 0 {
+        real::glBindBuffer(GL_PIXEL_PACK_BUFFER, pack_buffer as u32);
+    }
+    let texels = floats.chunks_exact(4).map(Vec4::from_slice).collect();
+    Some((internal, width, height, texels))
+}
