@@ -339,7 +339,8 @@ fn a_texture_copied_from_the_framebuffer_holds_the_ray_traced_picture() {
     // (glCopyTexImage2D, then glCopyTexSubImage2D for a part) and draws the texture over the
     // whole buffer. Under glray the frame so far is put in place before each copy and the
     // texture read back into capture: the picture is Mesa's. Before, the copies took the
-    // unrasterized buffer and capture drew the texture white.
+    // unrasterized buffer and capture drew the texture white. Last, a copy of depth into a
+    // depth texture: nothing is read back, so no error the program did not cause.
     let dir = scratch("rt-copy-texture");
     let program = osmesa_helper(&dir, "copy_texture");
     let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "copy_texture plain"));

@@ -74,6 +74,13 @@ pub fn follow(capture: &mut Capture, c: usize, thread: u32, a: &[Value]) {
     }
 }
 
+/// Whether internal format `internal` holds depth or stencil (no colour to read back):
+/// DEPTH_COMPONENT, 16/24/32, 32F; DEPTH_STENCIL, DEPTH24_STENCIL8, DEPTH32F_STENCIL8;
+/// STENCIL_INDEX, STENCIL_INDEX1/4/8/16.
+fn depth_or_stencil(internal: u32) -> bool {
+    matches!(internal, 0x1902 | 0x81A5..=0x81A7 | 0x8CAC | 0x84F9 | 0x88F0 | 0x8CAD | 0x1901 | 0x8D46..=0x8D49)
+}
+
 /// Level `level` of the bound 2D texture: its internal format, size and texels in RGBA.
 ///
 /// # Safety
@@ -88,6 +95,11 @@ unsafe fn read_back(level: usize) -> Option<(u32, usize, usize, Vec<Vec4>)> {
     let (width, height) =
         (usize::try_from(parameter(GL_TEXTURE_WIDTH)).ok()?, usize::try_from(parameter(GL_TEXTURE_HEIGHT)).ok()?);
     let internal = parameter(GL_TEXTURE_INTERNAL_FORMAT) as u32;
+    // Depth and stencil textures have no colour to read (glGetTexImage as RGBA would raise
+    // GL_INVALID_OPERATION, an error the program never caused); capture keeps none of them.
+    if depth_or_stencil(internal) {
+        return None;
+    }
     let count = width.checked_mul(height).filter(|&n| n > 0 && n <= MOST_TEXELS)?;
     let mut floats = vec![0.0f32; count * 4];
     let pack_buffer = get_int(GL_PIXEL_PACK_BUFFER_BINDING);

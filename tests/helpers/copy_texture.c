@@ -67,6 +67,12 @@ int main(void) {
   print("left", buf, w, 8, 32);
   print("right", buf, w, 56, 8);
   print("corner", buf, w, 8, 56);
+  /* A copy of depth into a depth texture: capture keeps no depth textures, and reading it back
+   * as colour would raise an error the program never caused. */
+  GLuint depth;
+  glGenTextures(1, &depth);
+  glBindTexture(GL_TEXTURE_2D, depth);
+  glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT, 0, 0, 16, 16, 0);
   printf("error 0x%x\n", glGetError());
   OSMesaDestroyContext(c);
   free(buf);
