@@ -354,6 +354,28 @@ fn a_texture_copied_from_the_framebuffer_holds_the_ray_traced_picture() {
 }
 
 #[test]
+fn polygon_offset_lets_lines_win_over_the_fill_they_lie_on() {
+    // tests/helpers/polygon_offset.c: a filled square pushed back with glPolygonOffset, white
+    // lines in its plane. Mesa shows every line; without the offset most of them lose to the
+    // fill at equal depth (what glray showed before it followed glPolygonOffset: 57 white
+    // pixels of Mesa's 138).
+    let dir = scratch("rt-polygon-offset");
+    let program = osmesa_helper(&dir, "polygon_offset");
+    let counts = |out: &str| -> (u32, u32) {
+        let v: Vec<u32> = out.split_whitespace().filter_map(|w| w.parse().ok()).collect();
+        (v[0], v[1])
+    };
+    let plain = counts(&stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "polygon_offset plain")));
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl");
+    let traced = counts(&stdout(&run_ok(&mut cmd, "polygon_offset under glray")));
+    assert!(plain.0 > 120, "Mesa's lines: {plain:?}");
+    // Lines' edge pixels may round differently (glray's lines are quads of the same width).
+    assert!(traced.0.abs_diff(plain.0) <= plain.0 / 20, "white pixels: glray {traced:?}, Mesa {plain:?}");
+    assert!(traced.1.abs_diff(plain.1) <= plain.1 / 20, "red pixels: glray {traced:?}, Mesa {plain:?}");
+}
+
+#[test]
 fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
     // tests/helpers/readback.c reads depth as float and as unsigned int, and RGB bytes, then
     // prints the state it set before the reads (program, textures, masks...) and glGetError.

@@ -489,6 +489,7 @@ impl Context {
             GL_NORMALIZE => s.normalize = on,
             GL_RESCALE_NORMAL => s.rescale_normal = on,
             GL_CULL_FACE => s.cull = on,
+            GL_POLYGON_OFFSET_FILL => s.polygon_offset_fill = on,
             GL_DEPTH_TEST => s.depth_test = on,
             GL_TEXTURE_2D => s.texture_2d = on,
             GL_FOG => s.fog_enabled = on,
@@ -877,6 +878,10 @@ impl Context {
             Op::AlphaFunc => self.s.alpha_func = (args::uint(a, 0), args::float(a, 1).clamp(0.0, 1.0) as f32),
             Op::DepthFunc => self.s.depth_func = args::uint(a, 0),
             Op::DepthMask => self.s.depth_mask = args::int(a, 0) != 0,
+            Op::PolygonOffset => {
+                let (factor, units) = (args::float(a, 0), args::float(a, 1));
+                self.s.polygon_offset = (factor as f32, units as f32);
+            }
             Op::PolygonMode => {
                 let mode = args::uint(a, 1);
                 if !matches!(mode, GL_POINT | GL_LINE | GL_FILL) {

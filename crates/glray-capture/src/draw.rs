@@ -46,7 +46,10 @@ pub(crate) fn culled(cull: Option<u32>, front: bool) -> bool {
 }
 
 impl Context {
-    pub(crate) fn surface(&mut self) -> u32 {
+    /// The draw's per-fragment state, as an index into the frame's surfaces (the last one
+    /// again when nothing changed); `polygons`: the draw fills polygons (glPolygonOffset
+    /// applies to them only).
+    pub(crate) fn surface(&mut self, polygons: bool) -> u32 {
         let s = &self.s;
         let texturing = if s.texture_2d {
             self.shared.textures.get(&s.bound_texture).filter(|t| t.complete()).map(|t| Texturing {
@@ -66,6 +69,7 @@ impl Context {
             blend: s.blend.then_some(s.blend_func),
             alpha_test: s.alpha_test.then_some(s.alpha_func),
             clip_planes: s.clip_planes.iter().filter(|p| p.0).map(|p| p.1).collect(),
+            polygon_offset: (polygons && s.polygon_offset_fill).then_some(s.polygon_offset),
         };
         let same = |a: &Surface, b: &Surface| {
             a.fog == b.fog
@@ -75,6 +79,7 @@ impl Context {
                 && a.blend == b.blend
                 && a.alpha_test == b.alpha_test
                 && a.clip_planes == b.clip_planes
+                && a.polygon_offset == b.polygon_offset
                 && match (&a.texturing, &b.texturing) {
                     (None, None) => true,
                     (Some(x), Some(y)) => {
@@ -94,7 +99,7 @@ impl Context {
 
     /// What every draw records in the frame: its camera (the first 3D draw's is the frame's),
     /// surface, lighting and place in drawing order.
-    fn draw_setup(&mut self) -> Setup {
+    fn draw_setup(&mut self, polygons: bool) -> Setup {
         let projection = *self.matrices.projection.top();
         let viewport = self.s.viewport;
         if self.frame.projection.is_none() {
@@ -110,7 +115,7 @@ impl Context {
                 (self.frame.cameras.len() - 1) as u32
             }
         };
-        let surface = self.surface();
+        let surface = self.surface(polygons);
         let lighting = if self.s.lighting {
             let l = self.lighting_state();
             if self.frame.lightings.last() != Some(&l) {
@@ -145,7 +150,8 @@ impl Context {
         if mesh.triangles.is_empty() {
             return;
         }
-        let setup = self.draw_setup();
+        // `instances`: filled triangles only.
+        let setup = self.draw_setup(true);
         let modelview = *self.matrices.modelview.top();
         let normal_matrix = self.normal_matrix(&modelview);
         let s = &self.s;
@@ -183,7 +189,10 @@ impl Context {
         if verts.is_empty() || (asm.triangles.is_empty() && asm.lines.is_empty() && asm.points.is_empty()) {
             return;
         }
-        let Setup { projection, viewport, camera, surface, lighting, sequence } = self.draw_setup();
+        // Polygons filled on both faces (a face drawn as lines or points is not offset: the
+        // rare mixed case is taken as lines).
+        let polygons = asm.lines.is_empty() && asm.points.is_empty() && self.s.polygon_mode == [GL_FILL; 2];
+        let Setup { projection, viewport, camera, surface, lighting, sequence } = self.draw_setup(polygons);
         let clip: Vec<DVec4> = verts.iter().map(|v| projection * v.eye).collect();
         let flat = self.s.flat;
         let color = |v: &Out, face: usize| vec4(v.colors[face]);

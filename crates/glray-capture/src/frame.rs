@@ -195,6 +195,9 @@ pub struct Surface {
     /// Enabled user clip planes (glClipPlane), in eye coordinates: a point is kept where
     /// plane . (x, y, z, 1) >= 0.
     pub clip_planes: Vec<DVec4>,
+    /// glPolygonOffset's (factor, units) for the filled polygons of the draw, when
+    /// GL_POLYGON_OFFSET_FILL is on (lines and points are not offset).
+    pub polygon_offset: Option<(f32, f32)>,
 }
 
 /// Which triangle of a frame: one of `Frame::triangles`, or one of an instance's mesh.
@@ -222,6 +225,7 @@ impl Surface {
             blend: None,
             alpha_test: None,
             clip_planes: Vec::new(),
+            polygon_offset: None,
         }
     }
 }

@@ -8,6 +8,7 @@ pub const GL_COLOR_MATERIAL: u32 = 0x0B57;
 pub const GL_NORMALIZE: u32 = 0x0BA1;
 pub const GL_RESCALE_NORMAL: u32 = 0x803A;
 pub const GL_CULL_FACE: u32 = 0x0B44;
+pub const GL_POLYGON_OFFSET_FILL: u32 = 0x8037;
 pub const GL_DEPTH_TEST: u32 = 0x0B71;
 pub const GL_TEXTURE_2D: u32 = 0x0DE1;
 pub const GL_FOG: u32 = 0x0B60;

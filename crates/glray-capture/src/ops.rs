@@ -132,6 +132,7 @@ ops! {
     DepthFunc = "glDepthFunc";
     DepthMask = "glDepthMask";
     PolygonMode = "glPolygonMode";
+    PolygonOffset = "glPolygonOffset" | "glPolygonOffsetEXT";
     LineWidth = "glLineWidth";
     PointSize = "glPointSize";
     ClipPlane = "glClipPlane";

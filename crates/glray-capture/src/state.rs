@@ -38,6 +38,9 @@ pub(crate) struct State {
     pub(crate) cull_face: u32,
     pub(crate) front_ccw: bool,
     pub(crate) polygon_mode: [u32; 2],
+    /// GL_POLYGON_OFFSET_FILL, and glPolygonOffset's (factor, units).
+    pub(crate) polygon_offset_fill: bool,
+    pub(crate) polygon_offset: (f32, f32),
     // GL_DEPTH_BUFFER_BIT
     pub(crate) depth_test: bool,
     pub(crate) depth_func: u32,
@@ -84,6 +87,8 @@ impl Default for State {
             cull_face: GL_BACK,
             front_ccw: true,
             polygon_mode: [GL_FILL; 2],
+            polygon_offset_fill: false,
+            polygon_offset: (0.0, 0.0),
             depth_test: false,
             depth_func: GL_LESS,
             depth_mask: true,
@@ -138,11 +143,13 @@ impl State {
         }
         if mask & (GL_POLYGON_BIT | GL_ENABLE_BIT) != 0 {
             self.cull = s.cull;
+            self.polygon_offset_fill = s.polygon_offset_fill;
         }
         if mask & GL_POLYGON_BIT != 0 {
             self.cull_face = s.cull_face;
             self.front_ccw = s.front_ccw;
             self.polygon_mode = s.polygon_mode;
+            self.polygon_offset = s.polygon_offset;
         }
         if mask & (GL_DEPTH_BUFFER_BIT | GL_ENABLE_BIT) != 0 {
             self.depth_test = s.depth_test;

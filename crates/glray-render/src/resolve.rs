@@ -4,8 +4,9 @@
 //! otherwise every hit along the ray is replayed in drawing order against a depth and colour
 //! that start as the clear values.
 
-use glam::{Vec3, Vec4, Vec4Swizzles};
-use glray_capture::frame::{Frame, Surface};
+use glam::{DVec3, Vec3, Vec4, Vec4Swizzles};
+use glray_capture::camera::Camera;
+use glray_capture::frame::{Frame, Surface, Triangle};
 
 use crate::fragment::Fragment;
 use crate::scene::Hit;
@@ -27,7 +28,26 @@ pub fn closest_hit_suffices(frame: &Frame) -> bool {
             && s.blend.is_none()
             && s.alpha_test.is_none()
             && s.clip_planes.is_empty()
+            && s.polygon_offset.is_none()
     })
+}
+
+/// The smallest difference of window depth that the depth buffer (24 bits) tells apart.
+const RESOLVABLE: f64 = 1.0 / ((1 << 24) - 1) as f64;
+
+/// `depth`, a fragment of triangle `t` (eye-space corners), moved by glPolygonOffset's `factor`
+/// and `units` (OpenGL 2.1, 3.5.5): factor times the triangle's largest window-depth slope
+/// across x or y, plus units times the smallest resolvable difference; clamped to [0, 1].
+pub fn offset_depth(camera: &Camera, t: &Triangle, depth: f64, (factor, units): (f32, f32)) -> f64 {
+    let window = t.positions.map(|p| {
+        let eye = p.as_dvec3();
+        let (x, y) = camera.window_position(eye);
+        DVec3::new(x, y, camera.window_depth(eye))
+    });
+    let n = (window[1] - window[0]).cross(window[2] - window[0]);
+    // Seen edge-on, the slope is unbounded; such a triangle covers no pixel anyway.
+    let slope = if n.z != 0.0 { (n.x / n.z).abs().max((n.y / n.z).abs()) } else { 0.0 };
+    (depth + factor as f64 * slope + units as f64 * RESOLVABLE).clamp(0.0, 1.0)
 }
 
 /// A comparison function of glDepthFunc and glAlphaFunc.

@@ -117,12 +117,13 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
         }
         s.texturing.is_some().hash(&mut h);
         format!(
-            "{:?} {:?} {:?} {:?} {:?}",
+            "{:?} {:?} {:?} {:?} {:?} {:?}",
             s.fog,
             s.blend,
             s.alpha_test,
             s.clip_planes,
-            (s.depth_test, s.depth_func, s.depth_mask)
+            (s.depth_test, s.depth_func, s.depth_mask),
+            s.polygon_offset
         )
         .hash(&mut h);
     }

@@ -14,7 +14,7 @@ use crate::effects::{leaving, lit_by, occlusion, Origin};
 use crate::fragment::{shade, Fragment};
 use crate::gouraud::{Corners, Gouraud};
 use crate::render::Options;
-use crate::resolve::{in_drawing_order, opaque};
+use crate::resolve::{in_drawing_order, offset_depth, opaque};
 use crate::sampling::{stratified, Sampler};
 use crate::scene::{Hit, Scene};
 use crate::smooth::{mirror, Smooth};
@@ -217,7 +217,11 @@ impl Tracer<'_> {
         s.frags.clear();
         for hit in &s.hits {
             if let Some(t) = self.frame.triangle(hit.id) {
-                s.frags.push((*hit, self.surface(&t, at(hit), r.direction, sampler, &s.rays, 0)));
+                let mut f = self.surface(&t, at(hit), r.direction, sampler, &s.rays, 0);
+                if let Some(offset) = self.frame.surfaces[f.surface as usize].polygon_offset {
+                    f.depth = offset_depth(self.camera, &t, f.depth, offset);
+                }
+                s.frags.push((*hit, f));
             }
         }
         Some(in_drawing_order(self.frame, &mut s.frags, under, depth_under))
