@@ -55,9 +55,19 @@ pub fn reads_framebuffer(c: usize) -> bool {
 }
 
 /// After the real GL made call number `c` (the recorder's numbering) with `a` on `thread`: a copy
-/// into a 2D texture is read back into capture's texture.
+/// into a 2D texture is read back into capture's texture. Every call a program makes comes
+/// through here: the test is inlined, the work is not.
+#[inline]
 pub fn follow(capture: &mut Capture, c: usize, thread: u32, a: &[Value]) {
-    if !capture.copies_texture(c) || args::uint(a, 0) != GL_TEXTURE_2D || crate::profile::core() {
+    if capture.copies_texture(c) {
+        read_into(capture, thread, a);
+    }
+}
+
+/// `follow` for a copy.
+#[cold]
+fn read_into(capture: &mut Capture, thread: u32, a: &[Value]) {
+    if args::uint(a, 0) != GL_TEXTURE_2D || crate::profile::core() {
         return;
     }
     let ctx = capture.context(thread);

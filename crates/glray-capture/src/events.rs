@@ -114,16 +114,17 @@ impl Capture {
         None
     }
 
-    /// Follows one call; `live`, what the live library knows of it, is given to the context
-    /// the call goes to (as it was before the call, for a MakeCurrent). A call made live is
-    /// handed here without becoming an `Event`: moved into one and out again, its arguments
-    /// were copied twice per call.
     /// Whether call number `cmd` copies the framebuffer into a 2D texture, whose texels the
-    /// caller reads back from the real GL (`Context::copied_texture`).
+    /// caller reads back from the real GL (`Context::copied_texture`). Asked after every call.
+    #[inline]
     pub fn copies_texture(&self, cmd: usize) -> bool {
         matches!(self.kinds.get(cmd), Some(Some(Kind::CopiesTexture)))
     }
 
+    /// Follows one call; `live`, what the live library knows of it, is given to the context
+    /// the call goes to (as it was before the call, for a MakeCurrent). A call made live is
+    /// handed here without becoming an `Event`: moved into one and out again, its arguments
+    /// were copied twice per call.
     pub fn call(&mut self, cmd: usize, thread: u32, args: &[Value], ret: Option<&Value>, live: Option<LiveCall>) {
         self.last_thread = thread;
         let kind = self.kinds.get(cmd).copied().flatten();
