@@ -18,12 +18,8 @@ static void print(const char *what, const unsigned char *buf, int w, int x, int 
 
 int main(void) {
   int w = 64, h = 64;
-  OSMesaContext c = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, NULL);
-  unsigned char *buf = malloc(w * h * 4);
-  if (!c || !OSMesaMakeCurrent(c, buf, GL_UNSIGNED_BYTE, w, h)) {
-    fprintf(stderr, "no OSMesa context\n");
-    return 1;
-  }
+  unsigned char *buf;
+  OSMesaContext c = osmesa_context(w, h, &buf);
   GLuint tex;
   glGenTextures(1, &tex);
   glBindTexture(GL_TEXTURE_2D, tex);

@@ -44,12 +44,8 @@ static void mixed(const unsigned char *buf, int w, int h) {
 
 int main(int argc, char **argv) {
   int w = 32, h = 32;
-  OSMesaContext c = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, NULL);
-  unsigned char *buf = malloc(w * h * 4);
-  if (!c || !OSMesaMakeCurrent(c, buf, GL_UNSIGNED_BYTE, w, h)) {
-    fprintf(stderr, "no OSMesa context\n");
-    return 1;
-  }
+  unsigned char *buf;
+  OSMesaContext c = osmesa_context(w, h, &buf);
   if (argc > 1 && strcmp(argv[1], "mixed") == 0) {
     glViewport(0, 0, w, h);
     glClearColor(0, 0, 1, 1);

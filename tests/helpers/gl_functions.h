@@ -1,12 +1,16 @@
-/* The GL 2.0-3.3 functions the OSMesa test helpers call, looked up with OSMesaGetProcAddress
- * (libOSMesa need not export them), and a GLSL program made from two sources. Included by
- * readback.c, core_profile.c and first_frame.c; call load_gl_functions() once a context is current. */
+/* What the OSMesa test helpers share: a compatibility context current on a w x h RGBA buffer,
+ * the GL 2.0-3.3 functions they call, looked up with OSMesaGetProcAddress (libOSMesa need not
+ * export them), and a GLSL program made from two sources. Included by readback.c,
+ * core_profile.c, first_frame.c, copy_texture.c and polygon_offset.c; call load_gl_functions()
+ * once a context is current. */
 #ifndef GLRAY_TEST_GL_FUNCTIONS_H
 #define GLRAY_TEST_GL_FUNCTIONS_H
 #define GL_GLEXT_PROTOTYPES
 #include <GL/osmesa.h>
 #include <GL/gl.h>
 #include <GL/glext.h>
+#include <stdio.h>
+#include <stdlib.h>
 
 #define GL_FUNCTIONS(X)                                                                          \
   X(PFNGLCREATESHADERPROC, glCreateShader)                                                       \
@@ -48,6 +52,18 @@ GL_FUNCTIONS(DECLARE)
 #define glActiveTexture p_glActiveTexture
 #define glGenSamplers p_glGenSamplers
 #define glBindSampler p_glBindSampler
+
+/* A compatibility context (24-bit depth) made current on a new w x h RGBA byte buffer, stored
+ * in *buf; the program exits with status 1 if OSMesa gives none. */
+static OSMesaContext osmesa_context(int w, int h, unsigned char **buf) {
+  OSMesaContext c = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, NULL);
+  *buf = malloc((size_t)w * h * 4);
+  if (!c || !*buf || !OSMesaMakeCurrent(c, *buf, GL_UNSIGNED_BYTE, w, h)) {
+    fprintf(stderr, "no OSMesa context\n");
+    exit(1);
+  }
+  return c;
+}
 
 static void load_gl_functions(void) {
 #define LOAD(type, name) p_##name = (type)OSMesaGetProcAddress(#name);

@@ -9,12 +9,8 @@
 
 int main(void) {
   int w = 64, h = 64;
-  OSMesaContext c = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, NULL);
-  unsigned char *buf = malloc(w * h * 4);
-  if (!c || !OSMesaMakeCurrent(c, buf, GL_UNSIGNED_BYTE, w, h)) {
-    fprintf(stderr, "no OSMesa context\n");
-    return 1;
-  }
+  unsigned char *buf;
+  OSMesaContext c = osmesa_context(w, h, &buf);
   glEnable(GL_DEPTH_TEST);
   glMatrixMode(GL_PROJECTION);
   glFrustum(-1, 1, -1, 1, 1, 20);

@@ -24,9 +24,8 @@ static void print_ints(const char *what, GLenum pname, int n) {
 
 int main(void) {
   int w = 64, h = 64;
-  OSMesaContext c = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, NULL);
-  void *buf = malloc(w * h * 4);
-  OSMesaMakeCurrent(c, buf, GL_UNSIGNED_BYTE, w, h);
+  unsigned char *buf;
+  osmesa_context(w, h, &buf);
   load_gl_functions();
   printf("version %s\n", (const char *)glGetString(GL_VERSION));
 
