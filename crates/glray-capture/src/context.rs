@@ -647,7 +647,8 @@ impl Context {
                 if args::uint(a, 0) & GL_DEPTH_BUFFER_BIT != 0 {
                     self.frame.depth_cleared = true;
                 }
-                if args::uint(a, 0) & GL_COLOR_BUFFER_BIT != 0 {
+                // With every colour channel masked, glClear leaves the colour buffer alone.
+                if args::uint(a, 0) & GL_COLOR_BUFFER_BIT != 0 && self.s.color_mask.contains(&true) {
                     // What was drawn before is covered: the frame starts again.
                     self.frame.unsupported_draws = 0;
                     self.frame.triangles.clear();
@@ -878,6 +879,7 @@ impl Context {
             Op::AlphaFunc => self.s.alpha_func = (args::uint(a, 0), args::float(a, 1).clamp(0.0, 1.0) as f32),
             Op::DepthFunc => self.s.depth_func = args::uint(a, 0),
             Op::DepthMask => self.s.depth_mask = args::int(a, 0) != 0,
+            Op::ColorMask => self.s.color_mask = std::array::from_fn(|k| args::int(a, k) != 0),
             Op::PolygonOffset => {
                 let (factor, units) = (args::float(a, 0), args::float(a, 1));
                 self.s.polygon_offset = (factor as f32, units as f32);

@@ -70,6 +70,7 @@ impl Context {
             alpha_test: s.alpha_test.then_some(s.alpha_func),
             clip_planes: s.clip_planes.iter().filter(|p| p.0).map(|p| p.1).collect(),
             polygon_offset: (polygons && s.polygon_offset_fill).then_some(s.polygon_offset),
+            color_mask: s.color_mask,
         };
         let same = |a: &Surface, b: &Surface| {
             a.fog == b.fog
@@ -80,6 +81,7 @@ impl Context {
                 && a.alpha_test == b.alpha_test
                 && a.clip_planes == b.clip_planes
                 && a.polygon_offset == b.polygon_offset
+                && a.color_mask == b.color_mask
                 && match (&a.texturing, &b.texturing) {
                     (None, None) => true,
                     (Some(x), Some(y)) => {

@@ -198,6 +198,9 @@ pub struct Surface {
     /// glPolygonOffset's (factor, units) for the filled polygons of the draw, when
     /// GL_POLYGON_OFFSET_FILL is on (lines and points are not offset).
     pub polygon_offset: Option<(f32, f32)>,
+    /// glColorMask: which of red, green, blue and alpha the draw writes (a draw with none
+    /// writes only depth, as the first pass of transparent shells does).
+    pub color_mask: [bool; 4],
 }
 
 /// Which triangle of a frame: one of `Frame::triangles`, or one of an instance's mesh.
@@ -226,6 +229,7 @@ impl Surface {
             alpha_test: None,
             clip_planes: Vec::new(),
             polygon_offset: None,
+            color_mask: [true; 4],
         }
     }
 }

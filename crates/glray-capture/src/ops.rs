@@ -131,6 +131,7 @@ ops! {
     AlphaFunc = "glAlphaFunc";
     DepthFunc = "glDepthFunc";
     DepthMask = "glDepthMask";
+    ColorMask = "glColorMask";
     PolygonMode = "glPolygonMode";
     PolygonOffset = "glPolygonOffset" | "glPolygonOffsetEXT";
     LineWidth = "glLineWidth";

@@ -54,6 +54,8 @@ pub(crate) struct State {
     pub(crate) blend_func: (u32, u32),
     pub(crate) alpha_test: bool,
     pub(crate) alpha_func: (u32, f32),
+    /// glColorMask: which of red, green, blue and alpha draws write.
+    pub(crate) color_mask: [bool; 4],
     // GL_TEXTURE_BIT
     pub(crate) texture_2d: bool,
     pub(crate) bound_texture: u32,
@@ -99,6 +101,7 @@ impl Default for State {
             blend_func: (1, 0),
             alpha_test: false,
             alpha_func: (GL_ALWAYS, 0.0),
+            color_mask: [true; 4],
             texture_2d: false,
             bound_texture: 0,
             env_mode: GL_MODULATE,
@@ -170,6 +173,7 @@ impl State {
             self.clear_color = s.clear_color;
             self.blend_func = s.blend_func;
             self.alpha_func = s.alpha_func;
+            self.color_mask = s.color_mask;
         }
         if mask & (GL_TEXTURE_BIT | GL_ENABLE_BIT) != 0 {
             self.texture_2d = s.texture_2d;

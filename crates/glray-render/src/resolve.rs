@@ -1,10 +1,10 @@
 //! Which fragments of a pixel survive, as GL's per-fragment operations decide in drawing order:
-//! the depth test (with its function and mask), the alpha test and blending. When every draw
+//! the depth test (with its function and mask), the alpha test, blending and the colour mask. When every draw
 //! of a frame is opaque and depth-tested with LESS or LEQUAL, that is simply the closest hit;
 //! otherwise every hit along the ray is replayed in drawing order against a depth and colour
 //! that start as the clear values.
 
-use glam::{DVec3, Vec3, Vec4, Vec4Swizzles};
+use glam::{BVec4A, DVec3, Vec3, Vec4, Vec4Swizzles};
 use glray_capture::camera::Camera;
 use glray_capture::frame::{Frame, Surface, Triangle};
 
@@ -29,6 +29,7 @@ pub fn closest_hit_suffices(frame: &Frame) -> bool {
             && s.alpha_test.is_none()
             && s.clip_planes.is_empty()
             && s.polygon_offset.is_none()
+            && s.color_mask == [true; 4]
     })
 }
 
@@ -115,7 +116,8 @@ pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4
                 depth = f.depth;
             }
         }
-        color = blend(s, f.color, color);
+        let blended = blend(s, f.color, color);
+        color = Vec4::select(BVec4A::from(s.color_mask), blended, color);
     }
     (color, depth)
 }
@@ -128,6 +130,7 @@ pub fn opaque(fragment: &Fragment) -> Vec4 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glray_capture::frame::TriangleId;
 
     #[test]
     fn comparisons_and_blending() {
@@ -135,5 +138,40 @@ mod tests {
         let s = Surface { blend: Some((0x0302, 0x0303)), ..Surface::depth_tested() };
         let c = blend(&s, Vec4::new(1.0, 0.0, 0.0, 0.25), Vec4::new(0.0, 0.0, 1.0, 1.0));
         assert!((c - Vec4::new(0.25, 0.0, 0.75, 0.8125)).length() < 1e-6, "{c}");
+    }
+
+    #[test]
+    fn a_colour_masked_draw_writes_only_the_channels_it_may() {
+        // Transparent shells as molecule draws them: a depth-only pass (every channel masked),
+        // then the same surface again with GL_EQUAL and blending, over a red model behind it.
+        let hit = |sequence: u32| Hit {
+            id: TriangleId { instance: 0, index: 0 },
+            t: 1.0,
+            sequence,
+            normal: Vec3::Z,
+            uv: Default::default(),
+        };
+        let fragment = |color: Vec4, depth: f64, surface: u32| Fragment { color, depth, eye: DVec3::ZERO, surface };
+        let masked = Surface { color_mask: [false; 4], ..Surface::depth_tested() };
+        let equal = Surface { depth_func: GL_EQUAL, blend: Some((0x0302, 0x0303)), ..Surface::depth_tested() };
+        let frame = Frame { surfaces: vec![Surface::depth_tested(), masked, equal], ..Frame::default() };
+        assert!(!closest_hit_suffices(&frame));
+        let shell = Vec4::new(0.0, 0.0, 1.0, 0.5);
+        let mut hits = [
+            (hit(0), fragment(Vec4::new(1.0, 0.0, 0.0, 1.0), 0.6, 0)),
+            (hit(1), fragment(shell, 0.4, 1)),
+            (hit(2), fragment(shell, 0.4, 2)),
+        ];
+        let (color, depth) = in_drawing_order(&frame, &mut hits, Vec4::ZERO, 1.0);
+        assert_eq!(depth, 0.4);
+        assert!((color - Vec4::new(0.5, 0.0, 0.5, 0.75)).length() < 1e-6, "{color}");
+        // Green alone masked: the draw keeps what was under it in green.
+        let frame = Frame {
+            surfaces: vec![Surface { color_mask: [true, false, true, true], ..Surface::depth_tested() }],
+            ..frame
+        };
+        let mut hits = [(hit(0), fragment(Vec4::ONE, 0.5, 0))];
+        let (color, _) = in_drawing_order(&frame, &mut hits, Vec4::new(0.0, 0.25, 0.0, 1.0), 1.0);
+        assert_eq!(color, Vec4::new(1.0, 0.25, 1.0, 1.0));
     }
 }

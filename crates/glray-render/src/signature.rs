@@ -117,13 +117,14 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
         }
         s.texturing.is_some().hash(&mut h);
         format!(
-            "{:?} {:?} {:?} {:?} {:?} {:?}",
+            "{:?} {:?} {:?} {:?} {:?} {:?} {:?}",
             s.fog,
             s.blend,
             s.alpha_test,
             s.clip_planes,
             (s.depth_test, s.depth_func, s.depth_mask),
-            s.polygon_offset
+            s.polygon_offset,
+            s.color_mask
         )
         .hash(&mut h);
     }
@@ -206,7 +207,7 @@ mod tests {
             Frame { triangles: vec![triangle(0)], solids: vec![line], surfaces: vec![surface], ..Frame::default() };
         let options = Options::default();
         let base = signature(&frame, 64, 64, &options);
-        let changes: [(&str, Change<Frame>); 7] = [
+        let changes: [(&str, Change<Frame>); 9] = [
             ("a line moved", |f| f.solids[0].b.y = 1.0),
             ("a line thicker", |f| f.solids[0].radius = 0.2),
             ("a line more", |f| f.solids.push(f.solids[0])),
@@ -214,6 +215,8 @@ mod tests {
             ("depth not cleared", |f| f.depth_cleared = !f.depth_cleared),
             ("the texture environment", |f| f.surfaces[0].texturing.as_mut().unwrap().env_mode = 0x1E01),
             ("the texture environment's colour", |f| f.surfaces[0].texturing.as_mut().unwrap().env_color.x = 1.0),
+            ("the colour mask", |f| f.surfaces[0].color_mask[1] = false),
+            ("the polygon offset", |f| f.surfaces[0].polygon_offset = Some((1.0, 1.0))),
         ];
         for (what, change) in changes {
             let mut changed = frame.clone();
