@@ -108,6 +108,7 @@ fn xscreensaver_hacks_are_ray_traced_like_mesa() {
         ("superquadrics", "two-sided lighting (GL_LIGHT_MODEL_TWO_SIDE)"),
         ("boxed", "points (particles) and lit balls"),
         ("maze3d", "textures in GL_UNSIGNED_INT_8_8_8_8_REV"),
+        ("molecule", "transparent shells: a colour-masked depth pass, then GL_EQUAL; labels placed through the modelview read back after a list"),
     ] {
         eprintln!("{name}: {kind}");
         ray_traced_like_mesa(name, &hack(name), &["-window"], 4, 0.02);
@@ -373,6 +374,34 @@ fn polygon_offset_lets_lines_win_over_the_fill_they_lie_on() {
     // Lines' edge pixels may round differently (glray's lines are quads of the same width).
     assert!(traced.0.abs_diff(plain.0) <= plain.0 / 20, "white pixels: glray {traced:?}, Mesa {plain:?}");
     assert!(traced.1.abs_diff(plain.1) <= plain.1 / 20, "red pixels: glray {traced:?}, Mesa {plain:?}");
+}
+
+#[test]
+fn transparent_shells_from_lists_are_blended_as_gl_blends_them() {
+    // tests/helpers/shells.c draws molecule's transparent shells: a depth-only pass with every
+    // colour channel masked, then the same list with glDepthFunc(GL_EQUAL) and blending; a
+    // masked glClear between them; and a list that moves the modelview, read back with
+    // glGetFloatv. Before glray followed glColorMask, the depth-only pass drew the shell
+    // opaque (the corner came out red and blue); before it gave the real GL the list's matrix,
+    // the modelview read back lacked the list's translation (0.0 instead of 0.25).
+    let dir = scratch("rt-shells");
+    let program = osmesa_helper(&dir, "shells");
+    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "shells plain"));
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl");
+    let traced = stdout(&run_ok(&mut cmd, "shells under glray"));
+    let numbers = |out: &str| -> Vec<f64> { out.split_whitespace().filter_map(|w| w.parse().ok()).collect() };
+    let (p, t) = (numbers(&plain), numbers(&traced));
+    assert_eq!(p.len(), 9, "{plain}");
+    assert_eq!(t.len(), 9, "{traced}");
+    // Mesa's picture: the red model under the half-transparent blue shell, the shell alone
+    // over the black background.
+    assert!(p[0] > 100.0 && p[2] > 100.0 && p[3] < 5.0 && p[5] > 100.0, "Mesa: {plain}");
+    for k in 0..6 {
+        assert!((p[k] - t[k]).abs() <= 3.0, "colour {k}: glray {traced}, Mesa {plain}");
+    }
+    assert_eq!(&t[6..9], &p[6..9], "the modelview after the list: glray {traced}, Mesa {plain}");
+    assert!(traced.contains("error 0x0"), "{traced}");
 }
 
 #[test]

@@ -9,6 +9,7 @@
 
 mod copied;
 mod dump;
+mod lists;
 mod present;
 mod stats;
 
@@ -169,10 +170,7 @@ fn guarded(live: &mut Live, f: impl FnOnce(&mut Live) -> Result<(), String>) {
 /// `capture` follows one event of the calling thread's.
 fn follow_in<'a>(capture: &mut Capture, event: &Event, name: &dyn Fn(usize) -> &'a [u8]) {
     match event {
-        Event::Call { cmd, thread, args, ret } => {
-            capture.call(*cmd, *thread, args, ret.as_ref(), Some(live_call()));
-            copied::follow(capture, *cmd, *thread, args);
-        }
+        Event::Call { cmd, thread, args, ret } => follow_live(capture, *cmd, *thread, args, ret.as_ref()),
         _ => {
             capture.event(event, name);
         }
@@ -187,10 +185,19 @@ fn live_call() -> LiveCall {
 /// Capture follows one call the recorder made without encoding it (no trace file is
 /// written), as `follow` does an event.
 pub fn follow_call(live: &mut Option<Live>, cmd: usize, thread: u32, args: &[Value], ret: Option<&Value>) {
-    following(live, |capture| {
-        capture.call(cmd, thread, args, ret, Some(live_call()));
-        copied::follow(capture, cmd, thread, args);
-    });
+    following(live, |capture| follow_live(capture, cmd, thread, args, ret));
+}
+
+/// Capture follows one call of this thread's; then the real GL is brought up to what the call
+/// did without it (a list it did not run) or capture to what it did without capture (a copy
+/// from the framebuffer).
+#[inline]
+fn follow_live(capture: &mut Capture, cmd: usize, thread: u32, args: &[Value], ret: Option<&Value>) {
+    let call = live_call();
+    let list = lists::before(capture, cmd, thread, call.unseen);
+    capture.call(cmd, thread, args, ret, Some(call));
+    lists::after(capture, thread, list);
+    copied::follow(capture, cmd, thread, args);
 }
 
 /// Called after this thread made a context current: capture follows only compatibility

@@ -121,6 +121,13 @@ impl Capture {
         matches!(self.kinds.get(cmd), Some(Some(Kind::CopiesTexture)))
     }
 
+    /// Whether call number `cmd` runs display lists (glCallList, glCallLists), whose state
+    /// changes the real GL misses when it is not given the call (see src/raytrace/lists.rs).
+    #[inline]
+    pub fn calls_lists(&self, cmd: usize) -> bool {
+        matches!(self.kinds.get(cmd), Some(Some(Kind::Gl(Op::CallList | Op::CallLists, _))))
+    }
+
     /// Follows one call; `live`, what the live library knows of it, is given to the context
     /// the call goes to (as it was before the call, for a MakeCurrent). A call made live is
     /// handed here without becoming an `Event`: moved into one and out again, its arguments

@@ -84,7 +84,36 @@ pub fn from_gl(m: &[f64; 16]) -> DMat4 {
     DMat4::from_cols_array(m)
 }
 
+/// What a display list can change of the matrix state (`Matrices::seen`): the mode, and the
+/// top and depth of the modelview, projection and active texture unit's stacks. The real GL
+/// misses these changes when glray takes a glCallList from it (see src/raytrace/lists.rs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Seen {
+    /// GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE or GL_COLOR.
+    pub mode: u32,
+    /// The modelview, projection and texture stacks, in that order: (GL mode, top, depth).
+    pub stacks: [(u32, DMat4, usize); 3],
+}
+
 impl Matrices {
+    /// The state `Seen` describes, as it is now.
+    pub fn seen(&self) -> Seen {
+        let texture = &self.texture[self.active_texture];
+        Seen {
+            mode: match self.mode {
+                Mode::ModelView => GL_MODELVIEW,
+                Mode::Projection => GL_PROJECTION,
+                Mode::Texture => GL_TEXTURE,
+                Mode::Color => GL_COLOR,
+            },
+            stacks: [
+                (GL_MODELVIEW, *self.modelview.top(), self.modelview.depth()),
+                (GL_PROJECTION, *self.projection.top(), self.projection.depth()),
+                (GL_TEXTURE, *texture.top(), texture.depth()),
+            ],
+        }
+    }
+
     fn current(&mut self) -> &mut Stack {
         match self.mode {
             Mode::ModelView => &mut self.modelview,
