@@ -1437,6 +1437,39 @@ mod tests {
     }
 
     #[test]
+    pub(crate) fn a_line_reaching_behind_the_viewer_keeps_its_part_in_front() {
+        // A perspective camera (near plane at 1); a line from 4 in front to 4 behind the eye,
+        // red to blue. GL clips it at the near plane; glray had dropped it whole.
+        let mut c = context();
+        call(&mut c, "glMatrixMode", &[i(0x1701)]);
+        call(&mut c, "glLoadIdentity", &[]);
+        call(&mut c, "glFrustum", &[f(-1.0), f(1.0), f(-1.0), f(1.0), f(1.0), f(100.0)]);
+        call(&mut c, "glMatrixMode", &[i(0x1700)]);
+        call(&mut c, "glBegin", &[i(1)]); // GL_LINES
+        call(&mut c, "glColor3f", &[f(1.0), f(0.0), f(0.0)]);
+        call(&mut c, "glVertex3f", &[f(0.0), f(-0.5), f(-4.0)]);
+        call(&mut c, "glColor3f", &[f(0.0), f(0.0), f(1.0)]);
+        call(&mut c, "glVertex3f", &[f(0.0), f(-0.5), f(4.0)]);
+        call(&mut c, "glEnd", &[]);
+        let (t, s) = (&c.frame().triangles, &c.frame().solids);
+        assert_eq!((t.len(), s.len()), (2, 1));
+        // The part from z = -4 to the near plane, z = -1: three eighths of the way.
+        assert_eq!(s[0].a, Vec3::new(0.0, -0.5, -4.0));
+        assert!((s[0].b - Vec3::new(0.0, -0.5, -1.0)).length() < 1e-5, "{}", s[0].b);
+        for p in t.iter().flat_map(|t| t.positions) {
+            assert!(p.z <= -1.0 + 1e-5 && p.z >= -4.0 - 1e-4, "{p}");
+        }
+        let far_end = t.iter().flat_map(|t| t.colors).fold(Vec4::ZERO, |m, c| m.max(c));
+        assert!((far_end.z - 0.375).abs() < 1e-5 && far_end.x == 1.0, "{far_end}");
+        // All of it behind: nothing.
+        call(&mut c, "glBegin", &[i(1)]);
+        call(&mut c, "glVertex3f", &[f(0.0), f(0.0), f(0.5)]);
+        call(&mut c, "glVertex3f", &[f(0.0), f(0.0), f(4.0)]);
+        call(&mut c, "glEnd", &[]);
+        assert_eq!(c.frame().triangles.len(), 2);
+    }
+
+    #[test]
     pub(crate) fn arrays_from_buffers_and_client_memory() {
         let mut c = context();
         let floats: Vec<u8> = [0f32, 0.0, 1.0, 0.0, 0.0, 1.0].iter().flat_map(|v| v.to_ne_bytes()).collect();

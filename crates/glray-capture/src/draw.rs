@@ -37,6 +37,18 @@ pub(crate) fn window_facing(clip: [DVec4; 3], front_ccw: bool) -> Option<bool> {
 
 /// Whether glCullFace's `cull` (when GL_CULL_FACE is on) removes a triangle of this facing.
 #[inline]
+/// The part of the segment from clip position `a` to `b` in front of the near plane (z >= -w),
+/// as the fractions of the way from `a` where it starts and ends; None when it is all behind.
+pub(crate) fn near_part(a: DVec4, b: DVec4) -> Option<(f64, f64)> {
+    let (da, db) = (a.z + a.w, b.z + b.w);
+    match (da >= 0.0, db >= 0.0) {
+        (true, true) => Some((0.0, 1.0)),
+        (false, false) => None,
+        (true, false) => Some((0.0, da / (da - db))),
+        (false, true) => Some((da / (da - db), 1.0)),
+    }
+}
+
 pub(crate) fn culled(cull: Option<u32>, front: bool) -> bool {
     match cull {
         Some(GL_FRONT_AND_BACK) => true,
@@ -286,6 +298,10 @@ impl Context {
         let line_half = self.s.line_width / 2.0;
         for &([i, j], provoking) in &lines {
             let (ca, cb) = (clip[i as usize], clip[j as usize]);
+            // The part in front of the near plane, as GL clips it: a floor grid's lines that
+            // run past the viewer (winduprobot's, handsy's) keep what is in view.
+            let Some((sa, sb)) = near_part(ca, cb) else { continue };
+            let (ca, cb) = (ca.lerp(cb, sa), ca.lerp(cb, sb));
             if ca.w <= 0.0 || cb.w <= 0.0 {
                 continue;
             }
@@ -295,10 +311,20 @@ impl Context {
             // The solid shadows and occlusion see: the segment between the vertices, as thick
             // as the line is on the screen (the quad's width at each end, averaged).
             let radius = ((q[1] - q[0]).length() + (q[2] - q[3]).length()) / 4.0;
-            solids.push(Solid { a: eye3(&verts[i as usize]), b: eye3(&verts[j as usize]), radius, sequence, camera });
             let (va, vb, pv) = (&verts[i as usize], &verts[j as usize], &verts[provoking as usize]);
-            let (c0, c1) = if flat { (color(pv, 0), color(pv, 0)) } else { (color(va, 0), color(vb, 0)) };
-            let (t0, t1) = (tex(va), tex(vb));
+            // Clip coordinates are linear in eye coordinates: the clipped ends' attributes are
+            // the same mix of the vertices'.
+            let (sa, sb) = (sa as f32, sb as f32);
+            let (ea, eb) = (eye3(va), eye3(vb));
+            solids.push(Solid { a: ea.lerp(eb, sa), b: ea.lerp(eb, sb), radius, sequence, camera });
+            let (c0, c1) = if flat {
+                (color(pv, 0), color(pv, 0))
+            } else {
+                let (ca, cb) = (color(va, 0), color(vb, 0));
+                (ca.lerp(cb, sa), ca.lerp(cb, sb))
+            };
+            let (ta, tb) = (tex(va), tex(vb));
+            let (t0, t1) = (ta.lerp(tb, sa), ta.lerp(tb, sb));
             for tri in [[0, 1, 2], [0, 2, 3]] {
                 let pick = |k: usize| if k < 2 { (c0, t0) } else { (c1, t1) };
                 tris.push(Triangle {
