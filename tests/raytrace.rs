@@ -109,6 +109,7 @@ fn xscreensaver_hacks_are_ray_traced_like_mesa() {
         ("boxed", "points (particles) and lit balls"),
         ("maze3d", "textures in GL_UNSIGNED_INT_8_8_8_8_REV"),
         ("molecule", "transparent shells: a colour-masked depth pass, then GL_EQUAL; labels placed through the modelview read back after a list"),
+        ("gibson", "linear fog over a floor that runs under the viewer"),
     ] {
         eprintln!("{name}: {kind}");
         ray_traced_like_mesa(name, &hack(name), &["-window"], 4, 0.02);
@@ -402,6 +403,27 @@ fn transparent_shells_from_lists_are_blended_as_gl_blends_them() {
     }
     assert_eq!(&t[6..9], &p[6..9], "the modelview after the list: glray {traced}, Mesa {plain}");
     assert!(traced.contains("error 0x0"), "{traced}");
+}
+
+#[test]
+fn fog_under_the_viewer_is_worked_out_at_the_corners_as_gl_does() {
+    // tests/helpers/fog_floor.c: a floor from behind the eye into the distance, in linear fog.
+    // GL's fog coordinate is the corners' distances mixed across the (clipped) floor, so near
+    // the viewer it is darker than the point's own distance gives: glray, fogging by the
+    // point's distance, drew the bottom row at 249 where Mesa has 191 (gibson was 43% off).
+    let dir = scratch("rt-fog-floor");
+    let program = osmesa_helper(&dir, "fog_floor");
+    let rows = |out: &str| -> Vec<i32> { out.split_whitespace().filter_map(|w| w.parse().ok()).collect() };
+    let plain = rows(&stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "fog_floor plain")));
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl");
+    let traced = rows(&stdout(&run_ok(&mut cmd, "fog_floor under glray")));
+    assert_eq!(plain.len(), 8, "{plain:?}");
+    assert!(plain[0] < 220 && plain[0] > plain[7], "Mesa's floor: {plain:?}");
+    assert_eq!(traced.len(), plain.len(), "{traced:?}");
+    for (k, (t, p)) in traced.iter().zip(&plain).enumerate() {
+        assert!((t - p).abs() <= 2, "row {k}: glray {traced:?}, Mesa {plain:?}");
+    }
 }
 
 #[test]

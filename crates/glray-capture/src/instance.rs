@@ -133,6 +133,11 @@ impl Instance {
 
     /// Vertex `i`'s eye-space position.
     #[inline]
+    /// The eye-space z of triangle `index`'s corners (what fog is worked out from).
+    pub fn corner_depths(&self, index: usize) -> [f32; 3] {
+        self.mesh.corner_indices(index).map(|i| self.eye(i).z as f32)
+    }
+
     fn eye(&self, i: u32) -> DVec3 {
         let m = &self.mesh;
         // Affine: the division by eye w (exactly 1) can go; glam's affine transform adds the

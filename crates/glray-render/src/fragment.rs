@@ -1,7 +1,8 @@
 //! The GL look of one hit: the fragment a rasterizer would have produced at that pixel.
 //! Colours and texture coordinates are interpolated with the hit's barycentric coordinates in
 //! eye space, which is GL's perspective-correct interpolation; then texturing with the texture
-//! environment, the secondary colour, and fog from the eye distance (OpenGL 2.1, 3.8-3.10).
+//! environment, the secondary colour, and fog from the corners' eye distances (OpenGL 2.1,
+//! 3.8-3.10).
 
 use glam::{DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
 use glray_capture::camera::Camera;
@@ -168,7 +169,7 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
             _ => c,
         };
     }
-    finish(frame, camera, t.surface, c, sec, p)
+    finish(frame, camera, t.surface, c, sec, p, || fog_distance(t.positions.map(|q| q.z), b))
 }
 
 /// The fragment of an untextured triangle on surface `surface` at eye-space point `p` from
@@ -182,19 +183,37 @@ pub fn mixed(
     (primary, secondary): &([Vec4; 3], [Vec3; 3]),
     b: Vec3,
     p: DVec3,
+    corner_z: impl FnOnce() -> [f32; 3],
 ) -> Fragment {
     let c = primary[0] * b.x + primary[1] * b.y + primary[2] * b.z;
     let sec = secondary[0] * b.x + secondary[1] * b.y + secondary[2] * b.z;
-    finish(frame, camera, surface, c, sec, p)
+    finish(frame, camera, surface, c, sec, p, || fog_distance(corner_z(), b))
+}
+
+/// Mesa's fog coordinate where the corners' weights are `b`: each corner's eye-space distance
+/// along z (`corner_z`, eye z), mixed across the triangle. GL works it out per vertex; within a
+/// triangle in front of the eye the mix is the point's own distance, but a triangle reaching
+/// behind the eye (a floor running under the viewer: gibson's) is clipped, and its clipped
+/// corners keep the mix of distances, larger than the point's own near the eye.
+fn fog_distance(corner_z: [f32; 3], b: Vec3) -> f32 {
+    corner_z[0].abs() * b.x + corner_z[1].abs() * b.y + corner_z[2].abs() * b.z
 }
 
 /// The end of every fragment (OpenGL 2.1, 3.9-3.10): colour `c` (textured already) plus the
-/// secondary colour `sec`, fogged by eye distance as surface `surface` says, at point `p`.
-fn finish(frame: &Frame, camera: &Camera, surface: u32, c: Vec4, sec: Vec3, p: DVec3) -> Fragment {
+/// secondary colour `sec`, fogged as surface `surface` says by the fog coordinate `fog_z` gives
+/// (`fog_distance`), at point `p`.
+fn finish(
+    frame: &Frame,
+    camera: &Camera,
+    surface: u32,
+    c: Vec4,
+    sec: Vec3,
+    p: DVec3,
+    fog_z: impl FnOnce() -> f32,
+) -> Fragment {
     let mut c = (c.xyz() + sec).min(Vec3::ONE).extend(c.w);
     if let Some(fog) = &frame.surfaces[surface as usize].fog {
-        // Mesa's fog coordinate: the eye-space distance along z.
-        let z = p.z.abs() as f32;
+        let z = fog_z();
         let f = match fog.mode {
             GL_LINEAR => {
                 if fog.end == fog.start {

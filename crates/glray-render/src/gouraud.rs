@@ -91,6 +91,7 @@ impl Gouraud {
             Some(instance.corner_colors(hit.id.index as usize, &frame.lightings, front))
         })?;
         let b = Vec3::new(1.0 - hit.uv.x - hit.uv.y, hit.uv.x, hit.uv.y);
-        Some(mixed(frame, camera, instance.surface, corners, b, p))
+        let corner_z = || instance.corner_depths(hit.id.index as usize);
+        Some(mixed(frame, camera, instance.surface, corners, b, p, corner_z))
     }
 }
