@@ -427,6 +427,29 @@ fn fog_under_the_viewer_is_worked_out_at_the_corners_as_gl_does() {
 }
 
 #[test]
+fn mipmap_levels_are_chosen_per_pixel_as_gl_chooses_them() {
+    // tests/helpers/mipmap_floor.c: a floor at a grazing angle, each mipmap level a colour of
+    // its own; it prints the level the centre pixel of every other row shows. glray chose one
+    // level per triangle (level 2 in every row), where GL takes 0 near the viewer and coarser
+    // ones towards the horizon.
+    let dir = scratch("rt-mipmap-floor");
+    let program = osmesa_helper(&dir, "mipmap_floor");
+    let levels = |out: &str| -> Vec<i32> { out.split_whitespace().filter_map(|w| w.parse().ok()).collect() };
+    let plain = levels(&stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "mipmap_floor plain")));
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl");
+    let traced = levels(&stdout(&run_ok(&mut cmd, "mipmap_floor under glray")));
+    assert!(plain.len() > 10 && plain[0] == 0 && plain.iter().max() > Some(&2), "Mesa's levels: {plain:?}");
+    // A row right at a level's boundary may round the other way.
+    assert_eq!(traced.len(), plain.len(), "{traced:?}");
+    let off: Vec<usize> = (0..plain.len()).filter(|&k| traced[k] != plain[k]).collect();
+    assert!(
+        off.len() <= 1 && off.iter().all(|&k| (traced[k] - plain[k]).abs() == 1),
+        "levels by row: glray {traced:?}, Mesa {plain:?}"
+    );
+}
+
+#[test]
 fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
     // tests/helpers/readback.c reads depth as float and as unsigned int, and RGB bytes, then
     // prints the state it set before the reads (program, textures, masks...) and glGetError.

@@ -4,7 +4,7 @@
 //! environment, the secondary colour, and fog from the corners' eye distances (OpenGL 2.1,
 //! 3.8-3.10).
 
-use glam::{DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
+use glam::{DVec2, DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
 use glray_capture::camera::Camera;
 use glray_capture::frame::{Frame, Triangle, NO_LIGHTING};
 use glray_capture::lighting::{light_vertex_prepared, Light};
@@ -58,10 +58,10 @@ fn weights(frame: &Frame, t: &Triangle, camera: &Camera, p: DVec3) -> DVec3 {
     }
     let w = t.positions.map(|v| {
         let (x, y) = camera.window_position(v.as_dvec3());
-        glam::DVec2::new(x, y)
+        DVec2::new(x, y)
     });
     let (x, y) = camera.window_position(p);
-    let q = glam::DVec2::new(x, y);
+    let q = DVec2::new(x, y);
     let area = (w[1] - w[0]).perp_dot(w[2] - w[0]);
     if area == 0.0 || !area.is_finite() {
         return barycentric(t, p);
@@ -88,20 +88,35 @@ pub(crate) fn own_camera(frame: &Frame, index: u32, camera: &Camera) -> bool {
         .is_some_and(|v| v.viewport == camera.viewport && v.projection == *camera.projection())
 }
 
-/// The texture level of detail of a triangle: log2 of texels per pixel, from its area on the
-/// screen and in the texture (constant over the triangle).
-fn lod(t: &Triangle, camera: &Camera, texels: f64) -> f32 {
-    let w = t.positions.map(|p| {
-        let (x, y) = camera.window_position(p.as_dvec3());
-        glam::DVec2::new(x, y)
-    });
-    let screen = ((w[1] - w[0]).perp_dot(w[2] - w[0])).abs();
+/// The texture level of detail at point `p` of triangle `t` (OpenGL 2.1, 3.8.8): log2 of the
+/// longer of the steps, in texels of a texture of `size` (its base level's width and height),
+/// that one pixel to the right and one pixel up make in the texture. Per pixel, as the
+/// rasterizer works it out (per 2x2 quad): a long triangle seen at a grazing angle (a tunnel's
+/// wall) takes sharper levels near the viewer than far away. The neighbouring pixels' points
+/// are where their camera rays meet the triangle's plane, so that corners behind the eye need
+/// no projecting.
+fn lod(t: &Triangle, camera: &Camera, p: DVec3, size: DVec2) -> f32 {
+    let [a, b, c] = t.positions.map(|v| v.as_dvec3());
+    let n = (b - a).cross(c - a);
     let uv = t.texcoords.map(|c| c.as_dvec2());
-    let tex = ((uv[1] - uv[0]).perp_dot(uv[2] - uv[0])).abs() * texels;
-    if screen <= 0.0 || tex <= 0.0 {
-        return 0.0;
+    let uv_at = |q: DVec3| {
+        let w = barycentric(t, q);
+        uv[0] * w.x + uv[1] * w.y + uv[2] * w.z
+    };
+    let on_plane = |x: f64, y: f64| {
+        let r = camera.ray(x, y);
+        let along = r.direction.dot(n);
+        (along != 0.0).then(|| r.origin + r.direction * ((a - r.origin).dot(n) / along))
+    };
+    let (x, y) = camera.window_position(p);
+    let (Some(right), Some(up)) = (on_plane(x + 1.0, y), on_plane(x, y + 1.0)) else { return 0.0 };
+    let here = uv_at(p);
+    let rho = ((uv_at(right) - here) * size).length().max(((uv_at(up) - here) * size).length());
+    if rho > 0.0 && rho.is_finite() {
+        rho.log2() as f32
+    } else {
+        0.0
     }
-    (0.5 * (tex / screen).log2()) as f32
 }
 
 /// How much of each light reaches a point (shadows: 0 blocked, 1 unobstructed, between
@@ -146,7 +161,7 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
     };
     if let Some(tx) = &surface.texturing {
         let l0 = &tx.texture.levels[0];
-        let lod = lod(t, camera, (l0.width * l0.height) as f64);
+        let lod = lod(t, camera, p, DVec2::new(l0.width as f64, l0.height as f64));
         let s = tx.texture.sample(mix2(t.texcoords), lod);
         let base = tx.texture.base_format;
         let (cf, af, ct, at) = (c.xyz(), c.w, s.xyz(), s.w);
