@@ -450,6 +450,21 @@ fn mipmap_levels_are_chosen_per_pixel_as_gl_chooses_them() {
 }
 
 #[test]
+fn views_in_viewports_side_by_side_are_each_traced_through_their_own_camera() {
+    // tests/helpers/two_views.c: a perspective view on the left, an orthographic one on the
+    // right, a third small view over the right one's corner that is depth tested against it.
+    // glray traced one camera's viewport (the left half): the rest of the window stayed black.
+    let dir = scratch("rt-two-views");
+    let program = osmesa_helper(&dir, "two_views");
+    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "two_views plain"));
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl");
+    let traced = stdout(&run_ok(&mut cmd, "two_views under glray"));
+    assert_eq!(plain.trim(), "left 255 0 0 right 0 255 0 behind 0 255 0 over 0 0 255", "Mesa");
+    assert_eq!(traced.trim(), plain.trim(), "glray against Mesa");
+}
+
+#[test]
 fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
     // tests/helpers/readback.c reads depth as float and as unsigned int, and RGB bytes, then
     // prints the state it set before the reads (program, textures, masks...) and glGetError.

@@ -364,6 +364,89 @@ impl Frame {
         (0..counts.len()).max_by_key(|&i| (counts[i], std::cmp::Reverse(i))).unwrap_or(0) as u32
     }
 
+    /// The frame split by viewport when it draws in more than one (views side by side in one
+    /// window: antmaze's three, a layout of several views): one frame per viewport, in the order
+    /// they were first drawn in, each with only the draws made in it, to be traced through its
+    /// own camera into its own part of the window, each over what the ones before left (they
+    /// share the colour and depth buffers, as in GL). None when every draw went to one viewport:
+    /// other projections within it (backgrounds, overlays) are brought into one camera by
+    /// `unified`.
+    pub fn by_viewport(&self) -> Option<Vec<Frame>> {
+        let used = |camera: u32| {
+            self.triangles.iter().any(|t| t.camera == camera)
+                || self.instances.iter().any(|i| i.camera == camera)
+                || self.solids.iter().any(|s| s.camera == camera)
+        };
+        let mut viewports: Vec<Viewport> = Vec::new();
+        for (k, view) in self.cameras.iter().enumerate() {
+            if !viewports.contains(&view.viewport) && used(k as u32) {
+                viewports.push(view.viewport);
+            }
+        }
+        if viewports.len() < 2 {
+            return None;
+        }
+        let parts = viewports
+            .iter()
+            .enumerate()
+            .map(|(n, &viewport)| {
+                let inside = |camera: u32| self.cameras.get(camera as usize).is_some_and(|v| v.viewport == viewport);
+                let first = self.cameras.iter().position(|v| v.viewport == viewport).unwrap_or(0);
+                Frame {
+                    triangles: self.triangles.iter().filter(|t| inside(t.camera)).copied().collect(),
+                    instances: self.instances.iter().filter(|i| inside(i.camera)).cloned().collect(),
+                    solids: self.solids.iter().filter(|s| inside(s.camera)).copied().collect(),
+                    projection: Some(self.cameras[first].projection),
+                    viewport: Some(viewport),
+                    // The views after the first draw over what the ones before left.
+                    cleared: self.cleared && n == 0,
+                    depth_cleared: self.depth_cleared && n == 0,
+                    ..self.clone_without_draws()
+                }
+            })
+            .collect();
+        Some(parts)
+    }
+
+    /// The frame's state without its draws (for `by_viewport`, which hands them out). Every
+    /// field named, so that a new one is not forgotten here.
+    fn clone_without_draws(&self) -> Frame {
+        let Frame {
+            triangles: _,
+            instances: _,
+            solids: _,
+            surfaces,
+            projection,
+            viewport,
+            depth_range,
+            clear_color,
+            cleared,
+            depth_cleared,
+            lightings,
+            cameras,
+            unsupported_draws,
+            width,
+            height,
+        } = self;
+        Frame {
+            triangles: Vec::new(),
+            instances: Vec::new(),
+            solids: Vec::new(),
+            surfaces: surfaces.clone(),
+            projection: *projection,
+            viewport: *viewport,
+            depth_range: *depth_range,
+            clear_color: *clear_color,
+            cleared: *cleared,
+            depth_cleared: *depth_cleared,
+            lightings: lightings.clone(),
+            cameras: cameras.clone(),
+            unsupported_draws: *unsupported_draws,
+            width: *width,
+            height: *height,
+        }
+    }
+
     /// The frame seen through one camera: the one most triangles were drawn with. Triangles
     /// drawn with another projection or viewport (a background, a 2D overlay, an inset) are
     /// carried into that camera's eye space through clip space, which keeps every pixel they

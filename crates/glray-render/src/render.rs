@@ -313,6 +313,9 @@ struct Job<'a> {
 impl Job<'_> {
     /// The image, its colours before rounding (when asked), and what it took.
     fn run(&mut self, meshes: &mut Meshes, linear: bool) -> (Rendered, Option<Vec<Vec4>>, Stats) {
+        if let Some(views) = self.frame.by_viewport() {
+            return self.run_views(&views, meshes, linear);
+        }
         let unified;
         let frame = if self.frame.cameras.len() > 1 {
             unified = self.frame.unified();
@@ -451,6 +454,44 @@ impl Job<'_> {
         stats.trace = start.elapsed();
         stats.rays = rays.load(Ordering::Relaxed);
         (Rendered { width, height, rgba, depth }, colors, stats)
+    }
+
+    /// A frame drawn in several viewports (`Frame::by_viewport`): each view traced in turn, over
+    /// the picture the ones before left.
+    fn run_views(&self, views: &[Frame], meshes: &mut Meshes, linear: bool) -> (Rendered, Option<Vec<Vec4>>, Stats) {
+        let mut last: Option<(Rendered, Option<Vec<Vec4>>)> = None;
+        let mut stats = Stats::default();
+        for view in views {
+            let previous = last.as_ref().map(|(r, _)| r).or(self.previous);
+            let mut job = Job { frame: view, previous, ..*self };
+            let (rendered, colors, s) = job.run(meshes, linear);
+            (stats.build, stats.trace) = (stats.build + s.build, stats.trace + s.trace);
+            (stats.rays, stats.triangles) = (stats.rays + s.rays, stats.triangles + s.triangles);
+            // The colours before rounding start from the clear colour in each view: the view's
+            // own pixels over the views' before.
+            let colors = match (last.take().and_then(|(_, c)| c), colors, view.viewport) {
+                (Some(mut before), Some(now), Some(v)) => {
+                    let w = self.width as usize;
+                    let inside = |k: usize| {
+                        let (x, y) = ((k % w) as i64, (k / w) as i64);
+                        x >= v.x as i64
+                            && x < v.x as i64 + v.width as i64
+                            && y >= v.y as i64
+                            && y < v.y as i64 + v.height as i64
+                    };
+                    for (k, (b, n)) in before.iter_mut().zip(now).enumerate() {
+                        if inside(k) {
+                            *b = n;
+                        }
+                    }
+                    Some(before)
+                }
+                (_, now, _) => now,
+            };
+            last = Some((rendered, colors));
+        }
+        let (rendered, colors) = last.expect("by_viewport gives two views or more");
+        (rendered, colors, stats)
     }
 }
 
