@@ -465,6 +465,25 @@ fn views_in_viewports_side_by_side_are_each_traced_through_their_own_camera() {
 }
 
 #[test]
+fn wide_aliased_lines_are_widened_along_their_minor_axis_as_gl_does() {
+    // tests/helpers/wide_lines.c prints the pixels lines three pixels wide light, at slopes
+    // from 0.3 to 0.9 both ways. Made as rectangles across the line, glray's were 1/cos of the
+    // slope thicker (73 pixels apart from Mesa's 947); as GL's parallelograms, 10.
+    let dir = scratch("rt-wide-lines");
+    let program = osmesa_helper(&dir, "wide_lines");
+    let lit = |out: &str| -> std::collections::BTreeSet<u32> {
+        out.split_whitespace().filter_map(|w| w.parse().ok()).collect()
+    };
+    let plain = lit(&stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "wide_lines plain")));
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl");
+    let traced = lit(&stdout(&run_ok(&mut cmd, "wide_lines under glray")));
+    assert!(plain.len() > 800, "Mesa lit {} pixels", plain.len());
+    let apart = plain.symmetric_difference(&traced).count();
+    assert!(apart <= plain.len() / 40, "{apart} pixels apart: glray {}, Mesa {}", traced.len(), plain.len());
+}
+
+#[test]
 fn glreadpixels_returns_the_ray_traced_colour_and_depth() {
     // tests/helpers/readback.c reads depth as float and as unsigned int, and RGB bytes, then
     // prints the state it set before the reads (program, textures, masks...) and glGetError.

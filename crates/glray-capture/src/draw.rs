@@ -306,7 +306,11 @@ impl Context {
                 continue;
             }
             let d = DVec2::new((cb.x / cb.w - ca.x / ca.w) * hw, (cb.y / cb.w - ca.y / ca.w) * hh);
-            let perp = DVec2::new(-d.y, d.x).normalize_or_zero() * line_half;
+            // GL widens an aliased line along its minor axis (OpenGL 2.1, 3.4.2.1): an x-major
+            // line is a parallelogram `width` pixels tall, one pixel per column at width 1, not a
+            // rectangle across the line (which covers 1/cos of a pixel per column and rounds
+            // to other pixels: a grid of thin lines came out thicker and a pixel off).
+            let perp = if d.x.abs() >= d.y.abs() { DVec2::new(0.0, line_half) } else { DVec2::new(line_half, 0.0) };
             let Some(q) = quad([(ca, -perp), (ca, perp), (cb, perp), (cb, -perp)]) else { continue };
             // The solid shadows and occlusion see: the segment between the vertices, as thick
             // as the line is on the screen (the quad's width at each end, averaged).
