@@ -490,6 +490,8 @@ impl Context {
             GL_RESCALE_NORMAL => s.rescale_normal = on,
             GL_CULL_FACE => s.cull = on,
             GL_POLYGON_OFFSET_FILL => s.polygon_offset_fill = on,
+            GL_LINE_SMOOTH => s.line_smooth = on,
+            GL_POINT_SMOOTH => s.point_smooth = on,
             GL_DEPTH_TEST => s.depth_test = on,
             GL_TEXTURE_2D => s.texture_2d = on,
             GL_FOG => s.fog_enabled = on,

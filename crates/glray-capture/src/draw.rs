@@ -8,7 +8,7 @@ use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
 
 use crate::camera::Viewport;
 use crate::context::{vec4, Context, Out};
-use crate::frame::{Solid, Surface, Texturing, Triangle, View, NO_LIGHTING};
+use crate::frame::{Coverage, Solid, Surface, Texturing, Triangle, View, NO_LIGHTING};
 use crate::gl::*;
 use crate::instance::{facing_flip, Instance};
 use crate::mesh::Mesh;
@@ -83,7 +83,20 @@ impl Context {
             clip_planes: s.clip_planes.iter().filter(|p| p.0).map(|p| p.1).collect(),
             polygon_offset: (polygons && s.polygon_offset_fill).then_some(s.polygon_offset),
             color_mask: s.color_mask,
+            coverage: None,
         };
+        self.add_surface(surface)
+    }
+
+    /// Surface `index` for the antialiased lines or points of its draw (`Coverage`).
+    fn covered_surface(&mut self, index: u32, coverage: Coverage) -> u32 {
+        let Some(base) = self.frame.surfaces.get(index as usize) else { return index };
+        let surface = Surface { coverage: Some(coverage), ..base.clone() };
+        self.add_surface(surface)
+    }
+
+    /// `surface`'s index among the frame's surfaces: the last one again when they are the same.
+    fn add_surface(&mut self, surface: Surface) -> u32 {
         let same = |a: &Surface, b: &Surface| {
             a.fog == b.fog
                 && a.depth_test == b.depth_test
@@ -94,6 +107,7 @@ impl Context {
                 && a.clip_planes == b.clip_planes
                 && a.polygon_offset == b.polygon_offset
                 && a.color_mask == b.color_mask
+                && a.coverage == b.coverage
                 && match (&a.texturing, &b.texturing) {
                     (None, None) => true,
                     (Some(x), Some(y)) => {
@@ -295,7 +309,20 @@ impl Context {
             Some(out)
         };
         let mut solids = Vec::new();
-        let line_half = self.s.line_width / 2.0;
+        // Antialiased lines and points: quads half a pixel wider all round, their own surface
+        // saying how much of each pixel they cover.
+        let (line_smooth, point_smooth) = (self.s.line_smooth, self.s.point_smooth);
+        let line_surface = if line_smooth && !lines.is_empty() {
+            self.covered_surface(surface, Coverage::Line(self.s.line_width as f32))
+        } else {
+            surface
+        };
+        let point_surface = if point_smooth && !points.is_empty() {
+            self.covered_surface(surface, Coverage::Point(self.s.point_size as f32))
+        } else {
+            surface
+        };
+        let line_half = self.s.line_width / 2.0 + if line_smooth { 0.5 } else { 0.0 };
         for &([i, j], provoking) in &lines {
             let (ca, cb) = (clip[i as usize], clip[j as usize]);
             // The part in front of the near plane, as GL clips it: a floor grid's lines that
@@ -310,7 +337,14 @@ impl Context {
             // line is a parallelogram `width` pixels tall, one pixel per column at width 1, not a
             // rectangle across the line (which covers 1/cos of a pixel per column and rounds
             // to other pixels: a grid of thin lines came out thicker and a pixel off).
-            let perp = if d.x.abs() >= d.y.abs() { DVec2::new(0.0, line_half) } else { DVec2::new(line_half, 0.0) };
+            // (An antialiased line is a rectangle across the line.)
+            let perp = if line_smooth {
+                DVec2::new(-d.y, d.x).normalize_or_zero() * line_half
+            } else if d.x.abs() >= d.y.abs() {
+                DVec2::new(0.0, line_half)
+            } else {
+                DVec2::new(line_half, 0.0)
+            };
             let Some(q) = quad([(ca, -perp), (ca, perp), (cb, perp), (cb, -perp)]) else { continue };
             // The solid shadows and occlusion see: the segment between the vertices, as thick
             // as the line is on the screen (the quad's width at each end, averaged).
@@ -329,14 +363,15 @@ impl Context {
             };
             let (ta, tb) = (tex(va), tex(vb));
             let (t0, t1) = (ta.lerp(tb, sa), ta.lerp(tb, sb));
-            for tri in [[0, 1, 2], [0, 2, 3]] {
+            // Corners 0-1 across the line, 1-2 along it, in both triangles (`Coverage`).
+            for tri in [[0, 1, 2], [2, 3, 0]] {
                 let pick = |k: usize| if k < 2 { (c0, t0) } else { (c1, t1) };
                 tris.push(Triangle {
                     positions: tri.map(|k| q[k]),
                     colors: tri.map(|k| pick(k).0),
                     secondary: [Vec3::ZERO; 3],
                     texcoords: tri.map(|k| pick(k).1),
-                    surface,
+                    surface: line_surface,
                     sequence,
                     camera,
                     clip_w: tri.map(|k| if k < 2 { ca.w } else { cb.w } as f32),
@@ -347,7 +382,7 @@ impl Context {
                 });
             }
         }
-        let point_half = self.s.point_size / 2.0;
+        let point_half = self.s.point_size / 2.0 + if point_smooth { 0.5 } else { 0.0 };
         for &i in &points {
             let c = clip[i as usize];
             let h = point_half;
@@ -356,13 +391,14 @@ impl Context {
             let v = &verts[i as usize];
             let center = eye3(v);
             solids.push(Solid { a: center, b: center, radius: (q[1] - q[0]).length() / 2.0, sequence, camera });
-            for tri in [[0, 1, 2], [0, 2, 3]] {
+            // Corners 0 and 2 opposite in both triangles (`Coverage`).
+            for tri in [[0, 1, 2], [2, 3, 0]] {
                 tris.push(Triangle {
                     positions: tri.map(|k| q[k]),
                     colors: [color(v, 0); 3],
                     secondary: [Vec3::ZERO; 3],
                     texcoords: [tex(v); 3],
-                    surface,
+                    surface: point_surface,
                     sequence,
                     camera,
                     clip_w: [c.w as f32; 3],

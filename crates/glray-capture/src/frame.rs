@@ -201,6 +201,22 @@ pub struct Surface {
     /// glColorMask: which of red, green, blue and alpha the draw writes (a draw with none
     /// writes only depth, as the first pass of transparent shells does).
     pub color_mask: [bool; 4],
+    /// The draw's lines or points are antialiased (GL_LINE_SMOOTH, GL_POINT_SMOOTH): each
+    /// fragment's alpha is scaled by how much of its pixel they cover.
+    pub coverage: Option<Coverage>,
+}
+
+/// How an antialiased line or round point covers the pixels of the quad made for it, half a
+/// pixel wider than it on every side (OpenGL 2.1, 3.4.2.2 and 3.3.1): the coverage falls from 1
+/// to 0 over the pixel around the edge. The quad's triangles keep the corners in an order that
+/// tells its shape: corners 0 and 1 are the ends of a side across the line, 1 to 2 runs along
+/// it; a point's corners 0 and 2 are opposite.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Coverage {
+    /// A line this many pixels wide.
+    Line(f32),
+    /// A round point this many pixels across.
+    Point(f32),
 }
 
 /// Which triangle of a frame: one of `Frame::triangles`, or one of an instance's mesh.
@@ -230,6 +246,7 @@ impl Surface {
             clip_planes: Vec::new(),
             polygon_offset: None,
             color_mask: [true; 4],
+            coverage: None,
         }
     }
 }

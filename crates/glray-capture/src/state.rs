@@ -68,6 +68,9 @@ pub(crate) struct State {
     // GL_LINE_BIT, GL_POINT_BIT
     pub(crate) line_width: f64,
     pub(crate) point_size: f64,
+    /// GL_LINE_SMOOTH and GL_POINT_SMOOTH: antialiased lines and round points.
+    pub(crate) line_smooth: bool,
+    pub(crate) point_smooth: bool,
 }
 
 impl Default for State {
@@ -111,6 +114,8 @@ impl Default for State {
             fog: Fog { mode: GL_EXP, density: 1.0, start: 0.0, end: 1.0, color: Vec4::ZERO },
             line_width: 1.0,
             point_size: 1.0,
+            line_smooth: false,
+            point_smooth: false,
         }
     }
 }
@@ -192,8 +197,14 @@ impl State {
         if mask & GL_FOG_BIT != 0 {
             self.fog = s.fog;
         }
+        if mask & (GL_LINE_BIT | GL_ENABLE_BIT) != 0 {
+            self.line_smooth = s.line_smooth;
+        }
         if mask & GL_LINE_BIT != 0 {
             self.line_width = s.line_width;
+        }
+        if mask & (GL_POINT_BIT | GL_ENABLE_BIT) != 0 {
+            self.point_smooth = s.point_smooth;
         }
         if mask & GL_POINT_BIT != 0 {
             self.point_size = s.point_size;

@@ -6,7 +6,7 @@
 
 use glam::{DVec2, DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
 use glray_capture::camera::Camera;
-use glray_capture::frame::{Frame, Triangle, NO_LIGHTING};
+use glray_capture::frame::{Coverage, Frame, Triangle, NO_LIGHTING};
 use glray_capture::lighting::{light_vertex_prepared, Light};
 use glray_capture::texture::{GL_ALPHA, GL_RGB};
 
@@ -184,7 +184,31 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
             _ => c,
         };
     }
+    if let Some(coverage) = surface.coverage {
+        c.w *= covered(coverage, t, camera, p);
+    }
     finish(frame, camera, t.surface, c, sec, p, || fog_distance(t.positions.map(|q| q.z), b))
+}
+
+/// How much of the pixel at point `p` an antialiased line or round point covers, on the quad
+/// triangle `t` made for it (see `Coverage` for its corners' order): 1 within half a pixel
+/// inside its edge, falling to 0 half a pixel outside, by the pixel centre's distance from the
+/// line's axis or the point's centre on the window.
+fn covered(coverage: Coverage, t: &Triangle, camera: &Camera, p: DVec3) -> f32 {
+    let window = |e: DVec3| {
+        let (x, y) = camera.window_position(e);
+        DVec2::new(x, y)
+    };
+    let w = t.positions.map(|v| window(v.as_dvec3()));
+    let q = window(p);
+    let (half, distance) = match coverage {
+        Coverage::Line(width) => {
+            let along = (w[2] - w[1]).normalize_or_zero();
+            (width as f64 / 2.0, (q - (w[0] + w[1]) / 2.0).perp_dot(along).abs())
+        }
+        Coverage::Point(size) => (size as f64 / 2.0, (q - (w[0] + w[2]) / 2.0).length()),
+    };
+    (half + 0.5 - distance).clamp(0.0, 1.0) as f32
 }
 
 /// The fragment of an untextured triangle on surface `surface` at eye-space point `p` from

@@ -117,14 +117,15 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
         }
         s.texturing.is_some().hash(&mut h);
         format!(
-            "{:?} {:?} {:?} {:?} {:?} {:?} {:?}",
+            "{:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
             s.fog,
             s.blend,
             s.alpha_test,
             s.clip_planes,
             (s.depth_test, s.depth_func, s.depth_mask),
             s.polygon_offset,
-            s.color_mask
+            s.color_mask,
+            s.coverage
         )
         .hash(&mut h);
     }
@@ -207,7 +208,7 @@ mod tests {
             Frame { triangles: vec![triangle(0)], solids: vec![line], surfaces: vec![surface], ..Frame::default() };
         let options = Options::default();
         let base = signature(&frame, 64, 64, &options);
-        let changes: [(&str, Change<Frame>); 9] = [
+        let changes: [(&str, Change<Frame>); 10] = [
             ("a line moved", |f| f.solids[0].b.y = 1.0),
             ("a line thicker", |f| f.solids[0].radius = 0.2),
             ("a line more", |f| f.solids.push(f.solids[0])),
@@ -217,6 +218,7 @@ mod tests {
             ("the texture environment's colour", |f| f.surfaces[0].texturing.as_mut().unwrap().env_color.x = 1.0),
             ("the colour mask", |f| f.surfaces[0].color_mask[1] = false),
             ("the polygon offset", |f| f.surfaces[0].polygon_offset = Some((1.0, 1.0))),
+            ("antialiased lines", |f| f.surfaces[0].coverage = Some(glray_capture::frame::Coverage::Line(1.0))),
         ];
         for (what, change) in changes {
             let mut changed = frame.clone();
