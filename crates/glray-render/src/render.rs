@@ -346,7 +346,14 @@ impl Job<'_> {
             }
             _ => (clear.repeat(w * h), vec![1.0f32; w * h]),
         };
-        let mut colors = linear.then(|| vec![frame.clear_color; w * h]);
+        // The colours before rounding start as the picture under the frame: the clear colour,
+        // or (a view after the first of a frame drawn in several viewports) what is there.
+        let mut colors = linear.then(|| match self.previous {
+            Some(p) if !frame.cleared && (p.width, p.height) == (width, height) => {
+                p.rgba.chunks_exact(4).map(from_u8).collect()
+            }
+            _ => vec![frame.clear_color; w * h],
+        });
         let mut stats = Stats { triangles: frame.triangle_count() as u64, ..Stats::default() };
         let camera = match (frame.projection, frame.viewport) {
             (Some(p), Some(v)) if !frame.is_empty() => Camera::new(p, v, frame.depth_range),
@@ -457,7 +464,8 @@ impl Job<'_> {
     }
 
     /// A frame drawn in several viewports (`Frame::by_viewport`): each view traced in turn, over
-    /// the picture the ones before left.
+    /// the picture the ones before left (their colours before rounding too: each view's start
+    /// from the picture under it).
     fn run_views(&self, views: &[Frame], meshes: &mut Meshes, linear: bool) -> (Rendered, Option<Vec<Vec4>>, Stats) {
         let mut last: Option<(Rendered, Option<Vec<Vec4>>)> = None;
         let mut stats = Stats::default();
@@ -467,27 +475,6 @@ impl Job<'_> {
             let (rendered, colors, s) = job.run(meshes, linear);
             (stats.build, stats.trace) = (stats.build + s.build, stats.trace + s.trace);
             (stats.rays, stats.triangles) = (stats.rays + s.rays, stats.triangles + s.triangles);
-            // The colours before rounding start from the clear colour in each view: the view's
-            // own pixels over the views' before.
-            let colors = match (last.take().and_then(|(_, c)| c), colors, view.viewport) {
-                (Some(mut before), Some(now), Some(v)) => {
-                    let w = self.width as usize;
-                    let inside = |k: usize| {
-                        let (x, y) = ((k % w) as i64, (k / w) as i64);
-                        x >= v.x as i64
-                            && x < v.x as i64 + v.width as i64
-                            && y >= v.y as i64
-                            && y < v.y as i64 + v.height as i64
-                    };
-                    for (k, (b, n)) in before.iter_mut().zip(now).enumerate() {
-                        if inside(k) {
-                            *b = n;
-                        }
-                    }
-                    Some(before)
-                }
-                (_, now, _) => now,
-            };
             last = Some((rendered, colors));
         }
         let (rendered, colors) = last.expect("by_viewport gives two views or more");
