@@ -274,6 +274,18 @@ fn osmesa_helper(dir: &Path, name: &str) -> PathBuf {
     program
 }
 
+/// What OSMesa helper `name` (tests/helpers/NAME.c) prints without glray and under glray in the
+/// GL look.
+fn plain_and_traced(name: &str) -> (String, String) {
+    let dir = scratch(&format!("rt-{name}"));
+    let program = osmesa_helper(&dir, name);
+    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), &format!("{name} plain")));
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl");
+    let traced = stdout(&run_ok(&mut cmd, &format!("{name} under glray")));
+    (plain, traced)
+}
+
 #[test]
 fn core_profile_frames_stay_the_real_gls() {
     // tests/helpers/core_profile.c: a GL 3.3 core context, a refused glBegin, a shader draw.
@@ -362,18 +374,14 @@ fn polygon_offset_lets_lines_win_over_the_fill_they_lie_on() {
     // lines in its plane. Mesa shows every line; without the offset most of them lose to the
     // fill at equal depth (what glray showed before it followed glPolygonOffset: 57 white
     // pixels of Mesa's 138).
-    let dir = scratch("rt-polygon-offset");
-    let program = osmesa_helper(&dir, "polygon_offset");
+    let (plain, traced) = plain_and_traced("polygon_offset");
     let counts = |out: &str| -> (u32, u32) {
         let v: Vec<u32> = out.split_whitespace().filter_map(|w| w.parse().ok()).collect();
         (v[0], v[1])
     };
-    let plain = counts(&stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "polygon_offset plain")));
-    let mut cmd = command(Way::Preload, &[], &program, 60);
-    cmd.env("GLRAY_PRESET", "gl");
-    let traced = counts(&stdout(&run_ok(&mut cmd, "polygon_offset under glray")));
+    let (plain, traced) = (counts(&plain), counts(&traced));
     assert!(plain.0 > 120, "Mesa's lines: {plain:?}");
-    // Lines' edge pixels may round differently (glray's lines are quads of the same width).
+    // Lines' end pixels may round differently (GL's one-pixel lines follow the diamond-exit rule).
     assert!(traced.0.abs_diff(plain.0) <= plain.0 / 20, "white pixels: glray {traced:?}, Mesa {plain:?}");
     assert!(traced.1.abs_diff(plain.1) <= plain.1 / 20, "red pixels: glray {traced:?}, Mesa {plain:?}");
 }
@@ -386,12 +394,7 @@ fn transparent_shells_from_lists_are_blended_as_gl_blends_them() {
     // glGetFloatv. Before glray followed glColorMask, the depth-only pass drew the shell
     // opaque (the corner came out red and blue); before it gave the real GL the list's matrix,
     // the modelview read back lacked the list's translation (0.0 instead of 0.25).
-    let dir = scratch("rt-shells");
-    let program = osmesa_helper(&dir, "shells");
-    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "shells plain"));
-    let mut cmd = command(Way::Preload, &[], &program, 60);
-    cmd.env("GLRAY_PRESET", "gl");
-    let traced = stdout(&run_ok(&mut cmd, "shells under glray"));
+    let (plain, traced) = plain_and_traced("shells");
     let numbers = |out: &str| -> Vec<f64> { out.split_whitespace().filter_map(|w| w.parse().ok()).collect() };
     let (p, t) = (numbers(&plain), numbers(&traced));
     assert_eq!(p.len(), 9, "{plain}");
@@ -412,13 +415,9 @@ fn fog_under_the_viewer_is_worked_out_at_the_corners_as_gl_does() {
     // GL's fog coordinate is the corners' distances mixed across the (clipped) floor, so near
     // the viewer it is darker than the point's own distance gives: glray, fogging by the
     // point's distance, drew the bottom row at 249 where Mesa has 191 (gibson was 43% off).
-    let dir = scratch("rt-fog-floor");
-    let program = osmesa_helper(&dir, "fog_floor");
+    let (plain, traced) = plain_and_traced("fog_floor");
     let rows = |out: &str| -> Vec<i32> { out.split_whitespace().filter_map(|w| w.parse().ok()).collect() };
-    let plain = rows(&stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "fog_floor plain")));
-    let mut cmd = command(Way::Preload, &[], &program, 60);
-    cmd.env("GLRAY_PRESET", "gl");
-    let traced = rows(&stdout(&run_ok(&mut cmd, "fog_floor under glray")));
+    let (plain, traced) = (rows(&plain), rows(&traced));
     assert_eq!(plain.len(), 8, "{plain:?}");
     assert!(plain[0] < 220 && plain[0] > plain[7], "Mesa's floor: {plain:?}");
     assert_eq!(traced.len(), plain.len(), "{traced:?}");
@@ -433,13 +432,9 @@ fn mipmap_levels_are_chosen_per_pixel_as_gl_chooses_them() {
     // its own; it prints the level the centre pixel of every other row shows. glray chose one
     // level per triangle (level 2 in every row), where GL takes 0 near the viewer and coarser
     // ones towards the horizon.
-    let dir = scratch("rt-mipmap-floor");
-    let program = osmesa_helper(&dir, "mipmap_floor");
+    let (plain, traced) = plain_and_traced("mipmap_floor");
     let levels = |out: &str| -> Vec<i32> { out.split_whitespace().filter_map(|w| w.parse().ok()).collect() };
-    let plain = levels(&stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "mipmap_floor plain")));
-    let mut cmd = command(Way::Preload, &[], &program, 60);
-    cmd.env("GLRAY_PRESET", "gl");
-    let traced = levels(&stdout(&run_ok(&mut cmd, "mipmap_floor under glray")));
+    let (plain, traced) = (levels(&plain), levels(&traced));
     assert!(plain.len() > 10 && plain[0] == 0 && plain.iter().max() > Some(&2), "Mesa's levels: {plain:?}");
     // A row right at a level's boundary may round the other way.
     assert_eq!(traced.len(), plain.len(), "{traced:?}");
@@ -474,15 +469,11 @@ fn wide_aliased_lines_are_widened_along_their_minor_axis_as_gl_does() {
     // tests/helpers/wide_lines.c prints the pixels lines three pixels wide light, at slopes
     // from 0.3 to 0.9 both ways. Made as rectangles across the line, glray's were 1/cos of the
     // slope thicker (73 pixels apart from Mesa's 947); as GL's parallelograms, 10.
-    let dir = scratch("rt-wide-lines");
-    let program = osmesa_helper(&dir, "wide_lines");
+    let (plain, traced) = plain_and_traced("wide_lines");
     let lit = |out: &str| -> std::collections::BTreeSet<u32> {
         out.split_whitespace().filter_map(|w| w.parse().ok()).collect()
     };
-    let plain = lit(&stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "wide_lines plain")));
-    let mut cmd = command(Way::Preload, &[], &program, 60);
-    cmd.env("GLRAY_PRESET", "gl");
-    let traced = lit(&stdout(&run_ok(&mut cmd, "wide_lines under glray")));
+    let (plain, traced) = (lit(&plain), lit(&traced));
     assert!(plain.len() > 800, "Mesa lit {} pixels", plain.len());
     let apart = plain.symmetric_difference(&traced).count();
     assert!(apart <= plain.len() / 40, "{apart} pixels apart: glray {}, Mesa {}", traced.len(), plain.len());
@@ -493,18 +484,14 @@ fn antialiased_lines_and_round_points_cover_their_pixels_as_gl_does() {
     // tests/helpers/smooth_lines.c: GL_LINE_SMOOTH lines and GL_POINT_SMOOTH points, blended;
     // it prints every lit pixel's red. Drawn hard-edged (what glray did), 256 of Mesa's 705 lit
     // pixels were over a quarter apart and the red summed 30% apart; with coverage, 39 and 4%.
-    let dir = scratch("rt-smooth-lines");
-    let program = osmesa_helper(&dir, "smooth_lines");
+    let (plain, traced) = plain_and_traced("smooth_lines");
     let lit = |out: &str| -> std::collections::BTreeMap<u32, i32> {
         out.split_whitespace()
             .filter_map(|w| w.split_once(':'))
             .filter_map(|(i, v)| Some((i.parse().ok()?, v.parse().ok()?)))
             .collect()
     };
-    let plain = lit(&stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "smooth_lines plain")));
-    let mut cmd = command(Way::Preload, &[], &program, 60);
-    cmd.env("GLRAY_PRESET", "gl");
-    let traced = lit(&stdout(&run_ok(&mut cmd, "smooth_lines under glray")));
+    let (plain, traced) = (lit(&plain), lit(&traced));
     let partial = plain.values().filter(|v| **v < 250).count();
     assert!(plain.len() > 500 && partial > plain.len() / 3, "Mesa: {} lit, {partial} partly", plain.len());
     let pixels: std::collections::BTreeSet<u32> = plain.keys().chain(traced.keys()).copied().collect();

@@ -65,6 +65,16 @@ static OSMesaContext osmesa_context(int w, int h, unsigned char **buf) {
   return c;
 }
 
+/* A square 2 * half across in the plane z, facing +z (immediate mode). */
+static inline void square(float half, float z) {
+  glBegin(GL_QUADS);
+  glVertex3f(-half, -half, z);
+  glVertex3f(half, -half, z);
+  glVertex3f(half, half, z);
+  glVertex3f(-half, half, z);
+  glEnd();
+}
+
 static void load_gl_functions(void) {
 #define LOAD(type, name) p_##name = (type)OSMesaGetProcAddress(#name);
   GL_FUNCTIONS(LOAD)

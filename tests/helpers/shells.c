@@ -15,15 +15,6 @@
 
 #include "gl_functions.h"
 
-static void square(float half, float z) {
-  glBegin(GL_QUADS);
-  glVertex3f(-half, -half, z);
-  glVertex3f(half, -half, z);
-  glVertex3f(half, half, z);
-  glVertex3f(-half, half, z);
-  glEnd();
-}
-
 int main(void) {
   int w = 64, h = 64;
   unsigned char *buf;
