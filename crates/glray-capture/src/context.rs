@@ -14,7 +14,7 @@ use crate::args::{self, GL_DOUBLE, GL_FLOAT, GL_INT, GL_UNSIGNED_INT};
 use crate::arrays::{BufferDraw, Client};
 use crate::camera::Viewport;
 use crate::error::{ErrorFlag, GlError, GlResult};
-use crate::frame::Frame;
+use crate::frame::{Frame, ScissoredClear};
 use crate::gl::*;
 use crate::immediate::{Immediate, TEXCOORD_UNITS};
 use crate::lists::{DisplayLists, MAX_NESTING};
@@ -183,6 +183,18 @@ fn unkeep(k: &Kept) -> Value<'_> {
 
 impl Context {
     /// The drawable size, when the trace or the library knows it.
+    /// Whether the scissor test keeps a clear from part of the drawable.
+    fn scissored(&self) -> bool {
+        let (w, h) = (self.frame.width as i64, self.frame.height as i64);
+        match (self.s.scissor_test, self.s.scissor) {
+            (true, Some(b)) => {
+                let (x, y) = (b.x as i64, b.y as i64);
+                x > 0 || y > 0 || (x + b.width as i64) < w || (y + b.height as i64) < h
+            }
+            _ => false,
+        }
+    }
+
     pub fn set_drawable(&mut self, width: u32, height: u32) {
         self.frame.width = width;
         self.frame.height = height;
@@ -491,6 +503,7 @@ impl Context {
             GL_CULL_FACE => s.cull = on,
             GL_POLYGON_OFFSET_FILL => s.polygon_offset_fill = on,
             GL_LINE_SMOOTH => s.line_smooth = on,
+            GL_SCISSOR_TEST => s.scissor_test = on,
             GL_POINT_SMOOTH => s.point_smooth = on,
             GL_DEPTH_TEST => s.depth_test = on,
             GL_TEXTURE_2D => s.texture_2d = on,
@@ -646,11 +659,23 @@ impl Context {
             }
             Op::Clear => {
                 self.revision += 1;
-                if args::uint(a, 0) & GL_DEPTH_BUFFER_BIT != 0 {
+                let (color, depth) =
+                    (args::uint(a, 0) & GL_COLOR_BUFFER_BIT != 0, args::uint(a, 0) & GL_DEPTH_BUFFER_BIT != 0);
+                // With every colour channel masked, glClear leaves the colour buffer alone.
+                let color = color && self.s.color_mask.contains(&true);
+                if let Some(rect) = self.s.scissor.filter(|_| self.scissored()) {
+                    // One view of several clearing its own part of the window: what was drawn
+                    // elsewhere stays, and the box is filled before the frame is traced.
+                    if color || depth {
+                        let color = color.then_some(self.s.clear_color);
+                        self.frame.scissored_clears.push(ScissoredClear { rect, color, depth });
+                    }
+                    return Ok(());
+                }
+                if depth {
                     self.frame.depth_cleared = true;
                 }
-                // With every colour channel masked, glClear leaves the colour buffer alone.
-                if args::uint(a, 0) & GL_COLOR_BUFFER_BIT != 0 && self.s.color_mask.contains(&true) {
+                if color {
                     // What was drawn before is covered: the frame starts again.
                     self.frame.unsupported_draws = 0;
                     self.frame.triangles.clear();
@@ -661,6 +686,7 @@ impl Context {
                     self.frame.projection = None;
                     self.frame.viewport = None;
                     self.frame.cameras.clear();
+                    self.frame.scissored_clears.clear();
                     self.frame.clear_color = self.s.clear_color;
                     self.frame.cleared = true;
                 }
@@ -882,6 +908,14 @@ impl Context {
             Op::DepthFunc => self.s.depth_func = args::uint(a, 0),
             Op::DepthMask => self.s.depth_mask = args::int(a, 0) != 0,
             Op::ColorMask => self.s.color_mask = std::array::from_fn(|k| args::int(a, k) != 0),
+            Op::Scissor => {
+                let (width, height) = (args::int(a, 2), args::int(a, 3));
+                if width < 0 || height < 0 {
+                    return Err(GlError::InvalidValue);
+                }
+                let (x, y) = (args::int(a, 0) as i32, args::int(a, 1) as i32);
+                self.s.scissor = Some(Viewport { x, y, width: width as i32, height: height as i32 });
+            }
             Op::PolygonOffset => {
                 let (factor, units) = (args::float(a, 0), args::float(a, 1));
                 self.s.polygon_offset = (factor as f32, units as f32);

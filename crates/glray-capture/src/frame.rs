@@ -219,6 +219,15 @@ pub enum Coverage {
     Point(f32),
 }
 
+/// A glClear within a scissor box: the colour it fills the box with (None when the colour buffer
+/// was not cleared), and whether it cleared depth there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScissoredClear {
+    pub rect: Viewport,
+    pub color: Option<Vec4>,
+    pub depth: bool,
+}
+
 /// Which triangle of a frame: one of `Frame::triangles`, or one of an instance's mesh.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct TriangleId {
@@ -273,6 +282,9 @@ pub struct Frame {
     pub cleared: bool,
     /// Whether the depth buffer was cleared this frame.
     pub depth_cleared: bool,
+    /// Clears within a scissor box smaller than the drawable since the last full one (each view
+    /// of several clearing its own part of the window), in order.
+    pub scissored_clears: Vec<ScissoredClear>,
     /// The lighting of lit draws (`Triangle::lighting` indexes it).
     pub lightings: Vec<Lighting>,
     /// Every projection and viewport the frame's draws used (3D scene, backgrounds, 2D
@@ -418,6 +430,7 @@ impl Frame {
                     // The views after the first draw over what the ones before left.
                     cleared: self.cleared && n == 0,
                     depth_cleared: self.depth_cleared && n == 0,
+                    scissored_clears: if n == 0 { self.scissored_clears.clone() } else { Vec::new() },
                     ..self.clone_without_draws()
                 }
             })
@@ -439,6 +452,7 @@ impl Frame {
             clear_color,
             cleared,
             depth_cleared,
+            scissored_clears,
             lightings,
             cameras,
             unsupported_draws,
@@ -456,6 +470,7 @@ impl Frame {
             clear_color: *clear_color,
             cleared: *cleared,
             depth_cleared: *depth_cleared,
+            scissored_clears: scissored_clears.clone(),
             lightings: lightings.clone(),
             cameras: cameras.clone(),
             unsupported_draws: *unsupported_draws,

@@ -97,5 +97,7 @@ pub const GL_DEPTH_BUFFER_BIT: u32 = 0x0100;
 pub const GL_VIEWPORT_BIT: u32 = 0x0800;
 pub const GL_TRANSFORM_BIT: u32 = 0x1000;
 pub const GL_ENABLE_BIT: u32 = 0x2000;
+pub const GL_SCISSOR_BIT: u32 = 0x0008_0000;
+pub const GL_SCISSOR_TEST: u32 = 0x0C11;
 pub const GL_TEXTURE_BIT: u32 = 0x40000;
 pub const MAX_ATTRIB_DEPTH: usize = 16;

@@ -132,6 +132,7 @@ ops! {
     DepthFunc = "glDepthFunc";
     DepthMask = "glDepthMask";
     ColorMask = "glColorMask";
+    Scissor = "glScissor";
     PolygonMode = "glPolygonMode";
     PolygonOffset = "glPolygonOffset" | "glPolygonOffsetEXT";
     LineWidth = "glLineWidth";

@@ -45,6 +45,10 @@ pub(crate) struct State {
     pub(crate) depth_test: bool,
     pub(crate) depth_func: u32,
     pub(crate) depth_mask: bool,
+    // GL_SCISSOR_BIT
+    /// GL_SCISSOR_TEST, and glScissor's box (None until it is given: the whole drawable).
+    pub(crate) scissor_test: bool,
+    pub(crate) scissor: Option<Viewport>,
     // GL_VIEWPORT_BIT
     pub(crate) viewport: Viewport,
     pub(crate) depth_range: (f64, f64),
@@ -97,6 +101,8 @@ impl Default for State {
             depth_test: false,
             depth_func: GL_LESS,
             depth_mask: true,
+            scissor_test: false,
+            scissor: None,
             viewport: Viewport { x: 0, y: 0, width: 0, height: 0 },
             depth_range: (0.0, 1.0),
             clear_color: Vec4::ZERO,
@@ -165,6 +171,12 @@ impl State {
         if mask & GL_DEPTH_BUFFER_BIT != 0 {
             self.depth_func = s.depth_func;
             self.depth_mask = s.depth_mask;
+        }
+        if mask & (GL_SCISSOR_BIT | GL_ENABLE_BIT) != 0 {
+            self.scissor_test = s.scissor_test;
+        }
+        if mask & GL_SCISSOR_BIT != 0 {
+            self.scissor = s.scissor;
         }
         if mask & GL_VIEWPORT_BIT != 0 {
             self.viewport = s.viewport;

@@ -293,6 +293,31 @@ impl<'a> Ahead<'a> {
     }
 }
 
+/// The frame's clears within a scissor box (`Frame::scissored_clears`), in order: each fills its
+/// box, cut to the image, with its colour and a depth of 1 where it cleared those.
+fn fill_scissored_clears(frame: &Frame, w: usize, rgba: &mut [u8], depth: &mut [f32], mut colors: Option<&mut [Vec4]>) {
+    let h = depth.len() / w.max(1);
+    for c in &frame.scissored_clears {
+        let r = c.rect;
+        let (x0, x1) = ((r.x.max(0) as usize).min(w), ((r.x as i64 + r.width as i64).max(0) as usize).min(w));
+        let (y0, y1) = ((r.y.max(0) as usize).min(h), ((r.y as i64 + r.height as i64).max(0) as usize).min(h));
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let k = y * w + x;
+                if let Some(color) = c.color {
+                    rgba[4 * k..4 * k + 4].copy_from_slice(&to_u8(color));
+                    if let Some(colors) = colors.as_deref_mut() {
+                        colors[k] = color;
+                    }
+                }
+                if c.depth {
+                    depth[k] = 1.0;
+                }
+            }
+        }
+    }
+}
+
 /// Up to this many triangles in instances, a frame of camera rays alone is traced as flat
 /// triangles (see `Renderer::flatten_below`).
 pub const FLATTEN_INSTANCES: usize = 8192;
@@ -354,6 +379,7 @@ impl Job<'_> {
             }
             _ => vec![frame.clear_color; w * h],
         });
+        fill_scissored_clears(frame, w, &mut rgba, &mut depth, colors.as_deref_mut());
         let mut stats = Stats { triangles: frame.triangle_count() as u64, ..Stats::default() };
         let camera = match (frame.projection, frame.viewport) {
             (Some(p), Some(v)) if !frame.is_empty() => Camera::new(p, v, frame.depth_range),

@@ -109,6 +109,7 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
     for l in &frame.lightings {
         format!("{l:?}").hash(&mut h);
     }
+    format!("{:?}", frame.scissored_clears).hash(&mut h);
     for s in &frame.surfaces {
         // Textures by identity: a changed texture is a new object in capture.
         if let Some(t) = &s.texturing {
@@ -208,7 +209,7 @@ mod tests {
             Frame { triangles: vec![triangle(0)], solids: vec![line], surfaces: vec![surface], ..Frame::default() };
         let options = Options::default();
         let base = signature(&frame, 64, 64, &options);
-        let changes: [(&str, Change<Frame>); 10] = [
+        let changes: [(&str, Change<Frame>); 11] = [
             ("a line moved", |f| f.solids[0].b.y = 1.0),
             ("a line thicker", |f| f.solids[0].radius = 0.2),
             ("a line more", |f| f.solids.push(f.solids[0])),
@@ -219,6 +220,10 @@ mod tests {
             ("the colour mask", |f| f.surfaces[0].color_mask[1] = false),
             ("the polygon offset", |f| f.surfaces[0].polygon_offset = Some((1.0, 1.0))),
             ("antialiased lines", |f| f.surfaces[0].coverage = Some(glray_capture::frame::Coverage::Line(1.0))),
+            ("a scissored clear", |f| {
+                let rect = glray_capture::camera::Viewport { x: 0, y: 0, width: 8, height: 8 };
+                f.scissored_clears.push(glray_capture::frame::ScissoredClear { rect, color: None, depth: true })
+            }),
         ];
         for (what, change) in changes {
             let mut changed = frame.clone();
