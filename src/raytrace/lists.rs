@@ -11,8 +11,9 @@ use glray_capture::matrix::Seen;
 
 use crate::real;
 
-/// Before capture follows call number `c` (the recorder's numbering) of `thread`, which the real GL did not get when `unseen`:
-/// the matrix state to compare with afterwards, for a list call.
+/// Before capture follows call number `c` (the recorder's numbering) of `thread`, which the
+/// real GL did not get when `unseen`: the matrix state to compare with afterwards, for a list
+/// call.
 #[inline]
 pub fn before(capture: &mut Capture, c: usize, thread: u32, unseen: bool) -> Option<Seen> {
     if !unseen || !capture.calls_lists(c) {

@@ -35,8 +35,19 @@ pub(crate) fn window_facing(clip: [DVec4; 3], front_ccw: bool) -> Option<bool> {
     (det != 0.0).then_some((det > 0.0) == front_ccw)
 }
 
-/// Whether glCullFace's `cull` (when GL_CULL_FACE is on) removes a triangle of this facing.
-#[inline]
+/// The point a fraction `s` of the way from `a` to `b` (glam's `lerp`), but `b` itself at the
+/// end: `a + (b - a) * 1` can round off `b`, and a line not clipped keeps its vertices' numbers
+/// (at the start, `a + (b - a) * 0` is `a` already).
+macro_rules! toward {
+    ($a:expr, $b:expr, $s:expr) => {
+        if $s == 1.0 {
+            $b
+        } else {
+            $a.lerp($b, $s)
+        }
+    };
+}
+
 /// The part of the segment from clip position `a` to `b` in front of the near plane (z >= -w),
 /// as the fractions of the way from `a` where it starts and ends; None when it is all behind.
 pub(crate) fn near_part(a: DVec4, b: DVec4) -> Option<(f64, f64)> {
@@ -49,6 +60,8 @@ pub(crate) fn near_part(a: DVec4, b: DVec4) -> Option<(f64, f64)> {
     }
 }
 
+/// Whether glCullFace's `cull` (when GL_CULL_FACE is on) removes a triangle of this facing.
+#[inline]
 pub(crate) fn culled(cull: Option<u32>, front: bool) -> bool {
     match cull {
         Some(GL_FRONT_AND_BACK) => true,
@@ -328,7 +341,7 @@ impl Context {
             // The part in front of the near plane, as GL clips it: a floor grid's lines that
             // run past the viewer (winduprobot's, handsy's) keep what is in view.
             let Some((sa, sb)) = near_part(ca, cb) else { continue };
-            let (ca, cb) = (ca.lerp(cb, sa), ca.lerp(cb, sb));
+            let (ca, cb) = (ca.lerp(cb, sa), toward!(ca, cb, sb));
             if ca.w <= 0.0 || cb.w <= 0.0 {
                 continue;
             }
@@ -354,15 +367,15 @@ impl Context {
             // the same mix of the vertices'.
             let (sa, sb) = (sa as f32, sb as f32);
             let (ea, eb) = (eye3(va), eye3(vb));
-            solids.push(Solid { a: ea.lerp(eb, sa), b: ea.lerp(eb, sb), radius, sequence, camera });
+            solids.push(Solid { a: ea.lerp(eb, sa), b: toward!(ea, eb, sb), radius, sequence, camera });
             let (c0, c1) = if flat {
                 (color(pv, 0), color(pv, 0))
             } else {
                 let (ca, cb) = (color(va, 0), color(vb, 0));
-                (ca.lerp(cb, sa), ca.lerp(cb, sb))
+                (ca.lerp(cb, sa), toward!(ca, cb, sb))
             };
             let (ta, tb) = (tex(va), tex(vb));
-            let (t0, t1) = (ta.lerp(tb, sa), ta.lerp(tb, sb));
+            let (t0, t1) = (ta.lerp(tb, sa), toward!(ta, tb, sb));
             // Corners 0-1 across the line, 1-2 along it, in both triangles (`Coverage`).
             for tri in [[0, 1, 2], [2, 3, 0]] {
                 let pick = |k: usize| if k < 2 { (c0, t0) } else { (c1, t1) };
