@@ -111,6 +111,7 @@ fn xscreensaver_hacks_are_ray_traced_like_mesa() {
         ("molecule", "transparent shells: a colour-masked depth pass, then GL_EQUAL; labels placed through the modelview read back after a list"),
         ("gibson", "linear fog over a floor that runs under the viewer"),
         ("gravitywell", "antialiased lines (GL_LINE_SMOOTH) from client arrays, blended"),
+        ("blocktube", "a display list of quads called 1,000 times, sphere-map texgen, fog"),
     ] {
         eprintln!("{name}: {kind}");
         ray_traced_like_mesa(name, &hack(name), &["-window"], 4, 0.02);
@@ -609,4 +610,39 @@ fn a_forked_child_keeps_ray_tracing_and_records_a_trace_of_its_own() {
     }
     frames.sort();
     assert_eq!(frames, [1, 2], "the child's frame in its trace, the parent's two in its own");
+}
+
+#[test]
+fn quads_are_cut_along_the_diagonal_mesa_cuts_them_and_sphere_maps_reflect_short_normals() {
+    // tests/helpers/quad_corners.c: a quad with red, green, blue and black corners, drawn with
+    // glBegin, glDrawArrays, glDrawElements and from two display lists; the centre lies on one
+    // diagonal or the other. glray cut every quad along 0-2, where Mesa cuts indexed and listed
+    // quads along 1-3 (blocktube's boxes, a display list of quads, were 19% off). Then a
+    // sphere-mapped quad with a normal 0.7 long: glray normalized it and looked the texture up
+    // elsewhere (120,136 where Mesa has 113,141).
+    let (plain, traced) = plain_and_traced("quad_corners");
+    let along_1_3 = "centre 0 126 4";
+    let along_0_2 = "centre 126 0 129";
+    for (way, diagonal) in [
+        ("glBegin", along_0_2),
+        ("glDrawArrays", along_0_2),
+        ("glDrawElements", along_1_3),
+        ("list of glBegin", along_1_3),
+        ("list of glDrawArrays", along_1_3),
+    ] {
+        let line = format!("{way}: {diagonal}\n");
+        assert!(plain.contains(&line), "Mesa, {way}: {plain}");
+        assert!(traced.contains(&line), "glray, {way}: {traced}\nMesa: {plain}");
+    }
+    let texels = |out: &str| -> Vec<i32> {
+        let row = out.lines().find_map(|l| l.strip_prefix("sphere map:")).unwrap_or_default();
+        row.split([' ', ',']).filter_map(|w| w.parse().ok()).collect()
+    };
+    let (p, t) = (texels(&plain), texels(&traced));
+    assert!(p.len() == 16 && p.iter().filter(|v| **v > 50).count() >= 6, "Mesa's sphere map row: {plain}");
+    assert_eq!(t.len(), p.len(), "{traced}");
+    for k in 0..p.len() {
+        assert!((p[k] - t[k]).abs() <= 2, "sphere map texel {k}: glray {t:?}, Mesa {p:?}");
+    }
+    assert!(traced.contains("error 0x0"), "{traced}");
 }

@@ -12,7 +12,7 @@ use crate::gl::*;
 use crate::immediate::TEXCOORD_UNITS;
 use crate::mesh::Mesh;
 use crate::ops::Op;
-use crate::primitive::{GL_POLYGON, GL_TRIANGLES};
+use crate::primitive::{QuadSplit, GL_POLYGON, GL_TRIANGLES};
 use crate::texture::Unpack;
 
 /// An array draw of buffer objects: its arguments and pointer state, and the buffers it reads.
@@ -107,6 +107,15 @@ pub(crate) struct Client {
     pub(crate) array_buffer: u32,
     pub(crate) element_buffer: u32,
     pub(crate) unpack: Unpack,
+}
+
+/// How an array draw's quads are cut: as Mesa cuts them, along the other diagonal when they come
+/// through indices (`QuadSplit`).
+pub(crate) fn quad_split(op: Op) -> QuadSplit {
+    match op {
+        Op::DrawElements | Op::DrawRangeElements | Op::MultiDrawElements => QuadSplit::Indexed,
+        _ => QuadSplit::Direct,
+    }
 }
 
 /// Element `i` of each array (vertex, normal, colour, texture coordinates).
@@ -385,7 +394,7 @@ impl Context {
     }
 
     /// Runs fetched vertices through the vertex stage as one draw.
-    pub(crate) fn draw_fetched(&mut self, mode: u32, verts: &[Fetched]) {
+    pub(crate) fn draw_fetched(&mut self, mode: u32, verts: &[Fetched], quads: QuadSplit) {
         let saved = self.imm.current;
         let mut outs = Vec::with_capacity(verts.len());
         for v in verts {
@@ -408,7 +417,7 @@ impl Context {
             self.imm.current = saved;
         }
         self.arrays.clear();
-        self.draw(mode, &outs);
+        self.draw(mode, &outs, quads);
     }
 }
 

@@ -11,7 +11,7 @@ use glam::{DMat3, DMat4, DVec3, DVec4, Vec4};
 use glray_core::trace::{ArrayData, Value};
 
 use crate::args::{self, GL_DOUBLE, GL_FLOAT, GL_INT, GL_UNSIGNED_INT};
-use crate::arrays::{BufferDraw, Client};
+use crate::arrays::{quad_split, BufferDraw, Client};
 use crate::camera::Viewport;
 use crate::error::{ErrorFlag, GlError, GlResult};
 use crate::frame::{Frame, ScissoredClear};
@@ -21,7 +21,7 @@ use crate::lists::{DisplayLists, MAX_NESTING};
 use crate::matrix::{from_gl, Matrices};
 use crate::mesh::{Mesh, MeshBuilder};
 use crate::ops::{Attr, AttrForm, Op};
-use crate::primitive::{GL_POLYGON, GL_TRIANGLES};
+use crate::primitive::{QuadSplit, GL_POLYGON, GL_TRIANGLES};
 use crate::state::State;
 use crate::texture::{self, Level, Texture, Unpack};
 use crate::vertex::{decode_attribute, Given};
@@ -53,9 +53,9 @@ pub(crate) struct Fetched {
 /// frame must not grow it without end).
 const MAX_BUFFER_DRAWS: usize = 256;
 
-/// An array draw's fetched vertices as a mesh.
-fn fetched_mesh(mode: u32, verts: &[Fetched]) -> Mesh {
-    let mut b = MeshBuilder::new(true);
+/// An array draw's fetched vertices as a mesh, its quads cut as `quads` says.
+fn fetched_mesh(mode: u32, verts: &[Fetched], quads: QuadSplit) -> Mesh {
+    let mut b = MeshBuilder::new(true, quads);
     b.begin(mode);
     for v in verts {
         b.give(v);
@@ -358,11 +358,13 @@ impl Context {
                 return items;
             }
             let runs = self.fetch_draw(op, a).unwrap_or_default();
-            items.extend(runs.into_iter().map(|(mode, verts)| Item::Mesh(Arc::new(fetched_mesh(mode, &verts)))));
+            // Mesa compiles every list into indexed draws, glDrawArrays' quads too.
+            let mesh = |(mode, verts): (u32, Vec<Fetched>)| fetched_mesh(mode, &verts, QuadSplit::Indexed);
+            items.extend(runs.into_iter().map(|run| Item::Mesh(Arc::new(mesh(run)))));
             return items;
         }
         if op == Op::Begin && args::uint(a, 0) <= GL_POLYGON {
-            let mut b = MeshBuilder::new(false);
+            let mut b = MeshBuilder::new(false, QuadSplit::Indexed);
             b.begin(args::uint(a, 0));
             self.building = Some(b);
             return items;
@@ -446,10 +448,10 @@ impl Context {
             if mesh.runs.is_empty() {
                 // An indexed mesh: its triangles.
                 let corners: Vec<Out> = mesh.triangles.iter().flatten().map(|&i| outs[i as usize]).collect();
-                self.draw(GL_TRIANGLES, &corners);
+                self.draw(GL_TRIANGLES, &corners, mesh.quads);
             }
             for r in &mesh.runs {
-                self.draw(r.mode, &outs[r.start as usize..(r.start + r.count) as usize]);
+                self.draw(r.mode, &outs[r.start as usize..(r.start + r.count) as usize], mesh.quads);
             }
         }
         // GL leaves the current values of enabled arrays undefined after a draw; Mesa keeps
@@ -535,7 +537,7 @@ impl Context {
             Op::End => {
                 let batch = self.imm.end()?;
                 let verts = std::mem::take(&mut self.open);
-                self.draw(batch.mode, &verts);
+                self.draw(batch.mode, &verts, QuadSplit::Direct);
             }
             Op::Rect => {
                 let v = if a.len() == 2 {
@@ -548,7 +550,7 @@ impl Context {
                 let corners = [(v[0], v[1]), (v[2], v[1]), (v[2], v[3]), (v[0], v[3])];
                 let verts: Vec<Out> =
                     corners.iter().map(|&(x, y)| self.vertex_stage(DVec4::new(x, y, 0.0, 1.0))).collect();
-                self.draw(GL_POLYGON, &verts);
+                self.draw(GL_POLYGON, &verts, QuadSplit::Direct);
             }
             Op::MatrixMode => self.matrices.matrix_mode(args::uint(a, 0))?,
             Op::LoadIdentity => self.matrices.load_identity(),
@@ -770,7 +772,7 @@ impl Context {
                                 None => {
                                     let runs = self.fetch_draw(op, a)?;
                                     let Some((mode, verts)) = runs.first() else { return Ok(()) };
-                                    Arc::new(fetched_mesh(*mode, verts))
+                                    Arc::new(fetched_mesh(*mode, verts, quad_split(op)))
                                 }
                             };
                             if self.shared.buffer_draws.len() >= MAX_BUFFER_DRAWS {
@@ -783,7 +785,7 @@ impl Context {
                     return self.run_mesh(&mesh);
                 }
                 for (mode, verts) in self.fetch_draw(op, a)? {
-                    self.draw_fetched(mode, &verts);
+                    self.draw_fetched(mode, &verts, quad_split(op));
                 }
             }
             Op::ArrayElement => self.array_element(args::int(a, 0)),

@@ -12,7 +12,7 @@ use crate::frame::{Coverage, Solid, Surface, Texturing, Triangle, View, NO_LIGHT
 use crate::gl::*;
 use crate::instance::{facing_flip, Instance};
 use crate::mesh::Mesh;
-use crate::primitive::{assemble, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
+use crate::primitive::{assemble, QuadSplit, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
 
 /// What `draw_setup` decided for a draw.
 struct Setup {
@@ -219,14 +219,14 @@ impl Context {
         });
     }
 
-    /// Assembles one draw's vertices into the frame's triangles.
-    pub(crate) fn draw(&mut self, mode: u32, verts: &[Out]) {
+    /// Assembles one draw's vertices into the frame's triangles, its quads cut as `quads` says.
+    pub(crate) fn draw(&mut self, mode: u32, verts: &[Out], quads: QuadSplit) {
         self.revision += 1;
         if self.programmable {
             self.frame.unsupported_draws += 1;
             return;
         }
-        let Ok(asm) = assemble(mode, verts.len()) else { return };
+        let Ok(asm) = assemble(mode, verts.len(), quads) else { return };
         if verts.is_empty() || (asm.triangles.is_empty() && asm.lines.is_empty() && asm.points.is_empty()) {
             return;
         }

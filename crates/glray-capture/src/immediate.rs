@@ -9,7 +9,7 @@
 use glam::{DVec3, DVec4};
 
 use crate::error::{GlError, GlResult};
-use crate::primitive::{assemble, Assembly, GL_POLYGON};
+use crate::primitive::{assemble, Assembly, QuadSplit, GL_POLYGON};
 
 /// Texture units with their own current texture coordinate.
 pub const TEXCOORD_UNITS: usize = 8;
@@ -83,7 +83,7 @@ pub struct Batch {
 impl Batch {
     /// Its points, lines and triangles.
     pub fn assemble(&self) -> Assembly {
-        assemble(self.mode, self.vertices.len()).expect("glBegin checked the mode")
+        assemble(self.mode, self.vertices.len(), QuadSplit::Direct).expect("glBegin checked the mode")
     }
 }
 

@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::{DVec3, DVec4, Vec3, Vec4};
 
-use crate::primitive::assemble;
+use crate::primitive::{assemble, QuadSplit};
 use crate::vertex::Given;
 
 /// One per-vertex attribute of a mesh.
@@ -98,6 +98,9 @@ pub struct Mesh {
     /// An array draw (GL leaves current values as Mesa does: only a colour array changes
     /// them) rather than glBegin/glEnd (the last values given stay current).
     pub from_arrays: bool,
+    /// How its runs' quads are cut: as Mesa cuts a display list's or an indexed draw's, or a
+    /// glDrawArrays'.
+    pub quads: QuadSplit,
     /// The attribute values current after the draw, exactly as given.
     pub end_normal: Option<DVec3>,
     pub end_color: Option<DVec4>,
@@ -252,10 +255,11 @@ pub struct MeshBuilder {
 }
 
 impl MeshBuilder {
-    /// A mesh of glBegin/glEnd runs (`from_arrays`: of array draws).
-    pub fn new(from_arrays: bool) -> MeshBuilder {
+    /// A mesh of glBegin/glEnd runs (`from_arrays`: of array draws), its quads cut as `quads`
+    /// says.
+    pub fn new(from_arrays: bool, quads: QuadSplit) -> MeshBuilder {
         MeshBuilder {
-            mesh: Mesh { from_arrays, ..Mesh::default() },
+            mesh: Mesh { from_arrays, quads, ..Mesh::default() },
             normal: None,
             color: None,
             texcoord: None,
@@ -274,7 +278,7 @@ impl MeshBuilder {
         let Some((mode, start)) = self.open.take() else { return };
         let m = &mut self.mesh;
         let count = m.positions.len() as u32 - start;
-        if let Ok(asm) = assemble(mode, count as usize) {
+        if let Ok(asm) = assemble(mode, count as usize, m.quads) {
             m.lines_or_points |= !asm.lines.is_empty() || !asm.points.is_empty();
             m.triangles.extend(asm.triangles.iter().map(|(t, _)| t.map(|i| i + start)));
             m.provoking.extend(asm.triangles.iter().map(|(_, p)| p + start));
@@ -408,7 +412,7 @@ mod tests {
 
     #[test]
     fn attributes_start_where_the_list_gives_them() {
-        let mut b = MeshBuilder::new(false);
+        let mut b = MeshBuilder::new(false, QuadSplit::Indexed);
         b.begin(GL_TRIANGLES);
         b.vertex(DVec4::new(0.0, 0.0, 0.0, 1.0));
         b.normal(DVec3::X);
@@ -439,7 +443,7 @@ mod tests {
             }
             b.end();
         };
-        let mut b = MeshBuilder::new(false);
+        let mut b = MeshBuilder::new(false, QuadSplit::Indexed);
         quad(&mut b, GL_QUADS, 0.0);
         b.vertex(DVec4::ONE); // outside glBegin: nothing
         quad(&mut b, GL_TRIANGLE_STRIP, 2.0);
@@ -451,12 +455,12 @@ mod tests {
         assert_eq!(a.triangles.len(), 4);
         assert_eq!(a.triangles[2], [4, 5, 6], "the second run's indices follow the first's");
         assert_eq!(a.provoking[..2], [3, 3]);
-        let mut l = MeshBuilder::new(false);
+        let mut l = MeshBuilder::new(false, QuadSplit::Indexed);
         quad(&mut l, GL_LINES, 0.0);
         let l = l.finish();
         assert!(l.lines_or_points && l.triangles.is_empty());
         assert_ne!(a.id, l.id);
-        let mut h = MeshBuilder::new(false);
+        let mut h = MeshBuilder::new(false, QuadSplit::Indexed);
         h.begin(GL_TRIANGLES);
         h.vertex(DVec4::new(0.0, 0.0, 0.0, 2.0));
         assert_eq!(h.finish().position(0).w, 2.0);
@@ -465,7 +469,7 @@ mod tests {
     #[test]
     fn corners_are_worked_out_only_for_lists_of_separate_triangles() {
         let mesh = |modes: &[u32]| {
-            let mut b = MeshBuilder::new(false);
+            let mut b = MeshBuilder::new(false, QuadSplit::Indexed);
             for &mode in modes {
                 b.begin(mode);
                 for k in 0..6 {
@@ -495,7 +499,7 @@ mod tests {
 
     #[test]
     fn an_open_glbegin_splits_off_with_what_was_given_in_it() {
-        let mut b = MeshBuilder::new(false);
+        let mut b = MeshBuilder::new(false, QuadSplit::Indexed);
         b.begin(GL_TRIANGLES);
         for x in [0.0, 1.0, 2.0] {
             b.vertex(DVec4::new(x, 0.0, 0.0, 1.0));

@@ -3,7 +3,11 @@
 //! "provoking vertex", GL's table for the last-vertex convention: the last vertex of each line
 //! and triangle, the last of each quad, the first of a polygon, and the first vertex for the
 //! segment that closes a line loop). Incomplete trailing primitives are dropped, as GL does.
-//! Quads, quad strips and polygons become triangle fans, keeping their winding.
+//! Quads, quad strips and polygons become triangles, keeping their winding.
+//!
+//! Which diagonal cuts a quad is the implementation's choice, and where a quad's corners differ
+//! (colours, generated texture coordinates) the picture shows it. glray cuts as Mesa does
+//! (`QuadSplit`), so that the GL look matches what programs were written against.
 
 use crate::error::{GlError, GlResult};
 
@@ -18,6 +22,19 @@ pub const GL_QUADS: u32 = 0x0007;
 pub const GL_QUAD_STRIP: u32 = 0x0008;
 pub const GL_POLYGON: u32 = 0x0009;
 
+/// The diagonal a GL_QUADS quad (corners 0, 1, 2, 3) is cut along. Mesa (llvmpipe, 22.3) cuts
+/// quads drawn directly (glBegin/glEnd, glDrawArrays) from corner 0 to 2, and quads drawn
+/// through indices (glDrawElements, and every display list, which Mesa compiles into indexed
+/// draws) from 1 to 3. Quad strips and polygons are cut the same way either way.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub enum QuadSplit {
+    /// Triangles (0, 1, 2) and (0, 2, 3).
+    #[default]
+    Direct,
+    /// Triangles (0, 1, 3) and (1, 2, 3).
+    Indexed,
+}
+
 /// Primitives over vertex indices 0..n of the stream.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]
 pub struct Assembly {
@@ -28,9 +45,9 @@ pub struct Assembly {
     pub triangles: Vec<([u32; 3], u32)>,
 }
 
-/// Assembles `n` vertices drawn with `mode`; GL_INVALID_ENUM for a mode that is not one of the
-/// ten fixed-function primitives.
-pub fn assemble(mode: u32, n: usize) -> GlResult<Assembly> {
+/// Assembles `n` vertices drawn with `mode`, quads cut as `quads` says; GL_INVALID_ENUM for a
+/// mode that is not one of the ten fixed-function primitives.
+pub fn assemble(mode: u32, n: usize, quads: QuadSplit) -> GlResult<Assembly> {
     let mut a = Assembly::default();
     let n32 = u32::try_from(n).map_err(|_| GlError::InvalidValue)?;
     match mode {
@@ -56,8 +73,11 @@ pub fn assemble(mode: u32, n: usize) -> GlResult<Assembly> {
         GL_QUADS => {
             for q in 0..n32 / 4 {
                 let (v, p) = (4 * q, 4 * q + 3);
-                a.triangles.push(([v, v + 1, v + 2], p));
-                a.triangles.push(([v, v + 2, v + 3], p));
+                let halves = match quads {
+                    QuadSplit::Direct => [[v, v + 1, v + 2], [v, v + 2, v + 3]],
+                    QuadSplit::Indexed => [[v, v + 1, v + 3], [v + 1, v + 2, v + 3]],
+                };
+                a.triangles.extend(halves.map(|t| (t, p)));
             }
         }
         GL_QUAD_STRIP => {
@@ -85,15 +105,34 @@ mod tests {
 
     #[test]
     fn small_cases_match_the_gl_spec() {
-        assert_eq!(tri(&assemble(GL_TRIANGLE_STRIP, 5).unwrap()), vec![[0, 1, 2], [2, 1, 3], [2, 3, 4]]);
-        assert_eq!(tri(&assemble(GL_QUADS, 4).unwrap()), vec![[0, 1, 2], [0, 2, 3]]);
-        assert_eq!(tri(&assemble(GL_QUAD_STRIP, 6).unwrap()), vec![[0, 1, 3], [0, 3, 2], [2, 3, 5], [2, 5, 4]]);
-        assert_eq!(assemble(GL_LINE_LOOP, 3).unwrap().lines, vec![([0, 1], 1), ([1, 2], 2), ([2, 0], 0)]);
-        assert_eq!(assemble(GL_POLYGON, 4).unwrap().triangles, vec![([0, 1, 2], 0), ([0, 2, 3], 0)]);
-        assert_eq!(assemble(GL_QUADS, 4).unwrap().triangles[0].1, 3);
-        assert_eq!(assemble(GL_QUAD_STRIP, 4).unwrap().triangles[1].1, 3);
-        assert_eq!(assemble(10, 3), Err(GlError::InvalidEnum));
-        assert_eq!(assemble(GL_TRIANGLES, 2).unwrap(), Assembly::default());
+        assert_eq!(
+            tri(&assemble(GL_TRIANGLE_STRIP, 5, QuadSplit::Direct).unwrap()),
+            vec![[0, 1, 2], [2, 1, 3], [2, 3, 4]]
+        );
+        assert_eq!(tri(&assemble(GL_QUADS, 4, QuadSplit::Direct).unwrap()), vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(
+            tri(&assemble(GL_QUAD_STRIP, 6, QuadSplit::Direct).unwrap()),
+            vec![[0, 1, 3], [0, 3, 2], [2, 3, 5], [2, 5, 4]]
+        );
+        assert_eq!(
+            assemble(GL_LINE_LOOP, 3, QuadSplit::Direct).unwrap().lines,
+            vec![([0, 1], 1), ([1, 2], 2), ([2, 0], 0)]
+        );
+        assert_eq!(assemble(GL_POLYGON, 4, QuadSplit::Direct).unwrap().triangles, vec![([0, 1, 2], 0), ([0, 2, 3], 0)]);
+        assert_eq!(assemble(GL_QUADS, 4, QuadSplit::Direct).unwrap().triangles[0].1, 3);
+        // Through indices, Mesa cuts a quad along its other diagonal, keeping the winding.
+        assert_eq!(
+            tri(&assemble(GL_QUADS, 8, QuadSplit::Indexed).unwrap()),
+            vec![[0, 1, 3], [1, 2, 3], [4, 5, 7], [5, 6, 7]]
+        );
+        assert_eq!(assemble(GL_QUADS, 4, QuadSplit::Indexed).unwrap().triangles[0].1, 3);
+        // Nothing else depends on it.
+        for mode in [GL_TRIANGLE_STRIP, GL_TRIANGLE_FAN, GL_QUAD_STRIP, GL_POLYGON, GL_LINE_LOOP] {
+            assert_eq!(assemble(mode, 7, QuadSplit::Indexed), assemble(mode, 7, QuadSplit::Direct));
+        }
+        assert_eq!(assemble(GL_QUAD_STRIP, 4, QuadSplit::Direct).unwrap().triangles[1].1, 3);
+        assert_eq!(assemble(10, 3, QuadSplit::Direct), Err(GlError::InvalidEnum));
+        assert_eq!(assemble(GL_TRIANGLES, 2, QuadSplit::Direct).unwrap(), Assembly::default());
     }
 
     /// How many primitives GL draws for n vertices.
@@ -114,8 +153,9 @@ mod tests {
 
     proptest! {
         #[test]
-        fn counts_indices_and_provoking_vertices_hold(mode in 0u32..10, n in 0u32..300) {
-            let a = assemble(mode, n as usize).unwrap();
+        fn counts_indices_and_provoking_vertices_hold(mode in 0u32..10, n in 0u32..300, indexed: bool) {
+            let quads = if indexed { QuadSplit::Indexed } else { QuadSplit::Direct };
+            let a = assemble(mode, n as usize, quads).unwrap();
             prop_assert_eq!((a.points.len() as u32, a.lines.len() as u32, a.triangles.len() as u32), expected(mode, n));
             for p in &a.points { prop_assert!(*p < n); }
             for (l, pv) in &a.lines {
@@ -127,7 +167,7 @@ mod tests {
                 prop_assert!(t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
                 if mode == GL_QUADS {
                     // Both halves of a quad take the quad's last vertex.
-                    prop_assert_eq!(*pv, t[0] + 3);
+                    prop_assert_eq!(*pv, t[0] / 4 * 4 + 3);
                 } else {
                     prop_assert!(t.contains(pv));
                 }
@@ -140,8 +180,10 @@ mod tests {
         fn connected_primitives_keep_one_winding(
             mode in prop::sample::select(vec![GL_TRIANGLE_STRIP, GL_TRIANGLE_FAN, GL_QUAD_STRIP, GL_POLYGON, GL_QUADS]),
             n in 3u32..200,
+            indexed: bool,
         ) {
-            let t = tri(&assemble(mode, n as usize).unwrap());
+            let quads = if indexed { QuadSplit::Indexed } else { QuadSplit::Direct };
+            let t = tri(&assemble(mode, n as usize, quads).unwrap());
             let edges = |t: &[u32; 3]| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])];
             for w in t.windows(2) {
                 let shared: Vec<_> = edges(&w[0]).into_iter().filter(|(a, b)| edges(&w[1]).contains(&(*b, *a))).collect();

@@ -202,7 +202,10 @@ impl Context {
                     GL_OBJECT_LINEAR => g.object_plane.dot(object),
                     GL_EYE_LINEAR => g.eye_plane.dot(eye),
                     GL_SPHERE_MAP => {
-                        let n = (sphere_nm * cur.normal).normalize_or_zero();
+                        // The eye normal as lighting takes it: GL normalizes it only when
+                        // asked to (GL_NORMALIZE, GL_RESCALE_NORMAL), and a normal shorter than
+                        // 1 reflects less (xscreensaver's blocktube gives 0.7).
+                        let n = eye_normal(&sphere_nm, cur.normal, s.normalize, s.rescale_normal);
                         let u = (eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 }).normalize_or_zero();
                         let r = u - 2.0 * n.dot(u) * n;
                         let m = 2.0 * (r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0)).sqrt();
