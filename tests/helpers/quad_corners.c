@@ -2,7 +2,8 @@
  * and prints the colour at its centre: which diagonal cuts a quad is the implementation's
  * choice, and the centre lies on one diagonal or the other. Mesa cuts quads from glBegin/glEnd
  * and glDrawArrays along corners 0-2, and quads from glDrawElements and display lists (which it
- * compiles into indexed draws) along 1-3.
+ * compiles into indexed draws) along 1-3; and along 1-3 too a glBegin/glEnd whose quad reaches
+ * outside the view volume (its clipping path cuts them so).
  * Then a quad whose texture coordinates come from GL_SPHERE_MAP with a normal shorter than 1
  * (xscreensaver's blocktube gives 0.7): GL reflects the eye vector about the normal as given,
  * not normalized. Prints a row of its colours. Built by tests/raytrace.rs with cc. */
@@ -12,20 +13,23 @@ static const float P[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
 static const float C[4][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 0}};
 static const unsigned I[4] = {0, 1, 2, 3};
 
-static void quad(void) {
+static void quad_scaled(float scale) {
   glBegin(GL_QUADS);
   for (int i = 0; i < 4; i++) {
     glColor3fv(C[i]);
-    glVertex2fv(P[i]);
+    glVertex2f(P[i][0] * scale, P[i][1] * scale);
   }
   glEnd();
 }
+
+static void quad(void) { quad_scaled(1); }
 
 int main(void) {
   int w = 64, h = 64;
   unsigned char *buf;
   OSMesaContext c = osmesa_context(w, h, &buf);
-  const char *ways[] = {"glBegin", "glDrawArrays", "glDrawElements", "list of glBegin", "list of glDrawArrays"};
+  const char *ways[] = {"glBegin", "glDrawArrays", "glDrawElements", "list of glBegin", "list of glDrawArrays",
+                        "glBegin reaching outside the view"};
   glVertexPointer(2, GL_FLOAT, 0, P);
   glColorPointer(3, GL_FLOAT, 0, C);
   glNewList(1, GL_COMPILE);
@@ -36,13 +40,14 @@ int main(void) {
   glNewList(2, GL_COMPILE);
   glDrawArrays(GL_QUADS, 0, 4);
   glEndList();
-  for (int k = 0; k < 5; k++) {
+  for (int k = 0; k < 6; k++) {
     glClear(GL_COLOR_BUFFER_BIT);
     if (k == 0) quad();
     if (k == 1) glDrawArrays(GL_QUADS, 0, 4);
     if (k == 2) glDrawElements(GL_QUADS, 4, GL_UNSIGNED_INT, I);
     if (k == 3) glCallList(1);
     if (k == 4) glCallList(2);
+    if (k == 5) quad_scaled(1.5f);
     glFinish();
     const unsigned char *p = buf + 4 * (w * (h / 2) + w / 2);
     printf("%s: centre %d %d %d\n", ways[k], p[0], p[1], p[2]);

@@ -235,6 +235,19 @@ impl Context {
         let polygons = asm.lines.is_empty() && asm.points.is_empty() && self.s.polygon_mode == [GL_FILL; 2];
         let Setup { projection, viewport, camera, surface, lighting, sequence } = self.draw_setup(polygons);
         let clip: Vec<DVec4> = verts.iter().map(|v| projection * v.eye).collect();
+        // Mesa's clipping path cuts quads along 1-3 too: a glBegin/glEnd or glDrawArrays of
+        // quads with any vertex outside the view volume (or a clip plane) is cut as an
+        // indexed draw is. (Mesa decides by everything it draws at once, which may be several
+        // glBegin/glEnd with the same state; glray looks at one.)
+        let outside = |(c, v): (&DVec4, &Out)| {
+            [c.x, -c.x, c.y, -c.y, c.z, -c.z].iter().any(|&d| d > c.w)
+                || self.s.clip_planes.iter().any(|(on, plane)| *on && plane.dot(v.eye) < 0.0)
+        };
+        let asm = if mode == GL_QUADS && quads == QuadSplit::Direct && clip.iter().zip(verts).any(outside) {
+            assemble(mode, verts.len(), QuadSplit::Indexed).unwrap_or(asm)
+        } else {
+            asm
+        };
         let flat = self.s.flat;
         let color = |v: &Out, face: usize| vec4(v.colors[face]);
         let secondary = |v: &Out, face: usize| v.secondary[face].truncate().as_vec3();
