@@ -658,3 +658,32 @@ fn quads_are_cut_along_the_diagonal_mesa_cuts_them_and_sphere_maps_reflect_short
     }
     assert!(traced.contains("error 0x0"), "{traced}");
 }
+
+#[test]
+fn aliased_points_light_the_pixels_gl_lights() {
+    // tests/helpers/aliased_points.c: a grid of points of sizes 1 to 3.5 at positions stepping
+    // through a pixel by tenths; it prints the pixels each size lights. glray's points were
+    // squares of the size given around the exact position: a point at a half pixel lit the
+    // pixel beside Mesa's, and sizes 1.5 and 2.5 lit a pixel more each way (cubicgrid's points
+    // of size 2: 2.6% of pixels off).
+    let (plain, traced) = plain_and_traced("aliased_points");
+    let lit = |out: &str| -> Vec<(String, std::collections::BTreeSet<u32>)> {
+        out.lines()
+            .filter_map(|l| l.split_once(':'))
+            .filter(|(size, _)| size.starts_with("size"))
+            .map(|(size, pixels)| {
+                (size.to_string(), pixels.split_whitespace().filter_map(|w| w.parse().ok()).collect())
+            })
+            .collect()
+    };
+    let (plain, traced) = (lit(&plain), lit(&traced));
+    assert_eq!(plain.len(), 6, "{plain:?}");
+    // Mesa: size 1 and 1.5 one pixel a point, 2 and 2.5 four, 2.7 and 3.5 nine.
+    let counts: Vec<usize> = plain.iter().map(|(_, p)| p.len()).collect();
+    assert_eq!(counts, [100, 100, 400, 400, 900, 900], "Mesa");
+    assert_eq!(traced.len(), plain.len());
+    for ((size, p), (_, t)) in plain.iter().zip(&traced) {
+        let apart: Vec<&u32> = p.symmetric_difference(t).collect();
+        assert!(apart.is_empty(), "{size}: {} pixels apart from Mesa's: {apart:?}", apart.len());
+    }
+}

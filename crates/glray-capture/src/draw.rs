@@ -408,11 +408,28 @@ impl Context {
                 });
             }
         }
-        let point_half = self.s.point_size / 2.0 + if point_smooth { 0.5 } else { 0.0 };
+        // An aliased point is GL's square of its size rounded to a whole number of pixels (as
+        // Mesa rounds: halves down, at least 1), its centre moved to a pixel's centre (odd
+        // sizes) or corner (even ones), so that its edges fall between pixel centres, never on
+        // one; an antialiased point is a disc of its own size, half a pixel wider all round for
+        // its coverage.
+        let point_size = if point_smooth { self.s.point_size } else { (self.s.point_size - 0.5).ceil().max(1.0) };
+        let point_half = point_size / 2.0 + if point_smooth { 0.5 } else { 0.0 };
+        let snap = |at: f64| {
+            if point_smooth {
+                0.0
+            } else if point_size % 2.0 == 1.0 {
+                at.floor() + 0.5 - at
+            } else {
+                (at + 0.5).floor() - at
+            }
+        };
         for &i in &points {
             let c = clip[i as usize];
             let h = point_half;
-            let corners = [(-h, -h), (h, -h), (h, h), (-h, h)].map(|(x, y)| (c, DVec2::new(x, y)));
+            // Window position within the viewport (its origin is a whole pixel).
+            let (dx, dy) = (snap((c.x / c.w + 1.0) * hw), snap((c.y / c.w + 1.0) * hh));
+            let corners = [(-h, -h), (h, -h), (h, h), (-h, h)].map(|(x, y)| (c, DVec2::new(x + dx, y + dy)));
             let Some(q) = quad(corners) else { continue };
             let v = &verts[i as usize];
             let center = eye3(v);
