@@ -687,3 +687,18 @@ fn aliased_points_light_the_pixels_gl_lights() {
         assert!(apart.is_empty(), "{size}: {} pixels apart from Mesa's: {apart:?}", apart.len());
     }
 }
+
+#[test]
+fn a_depth_clear_between_draws_lets_the_later_ones_land_over_the_earlier() {
+    // tests/helpers/depth_clear.c: a red square, glClear(GL_DEPTH_BUFFER_BIT), a green square
+    // behind it. GL draws the green one over the red, and leaves the cleared depth where no
+    // draw came after the clear. glray took the closest hit (red at the centre, and the red
+    // square's depth everywhere): skytentacles, which clears the depth before each tentacle,
+    // was 4.6% off.
+    let (plain, traced) = plain_and_traced("depth_clear");
+    assert!(
+        plain.contains("centre 0 255 0 depth 0.8333") && plain.contains("edge 255 0 0 depth 1.0000"),
+        "Mesa: {plain}"
+    );
+    assert_eq!(traced, plain, "glray against Mesa");
+}

@@ -676,6 +676,11 @@ impl Context {
                 }
                 if depth {
                     self.frame.depth_cleared = true;
+                    let drawn = !self.frame.triangles.is_empty() || !self.frame.instances.is_empty();
+                    if !color && drawn && self.frame.depth_clears.last() != Some(&self.sequence) {
+                        // Between draws: the ones after it land over the ones before.
+                        self.frame.depth_clears.push(self.sequence);
+                    }
                 }
                 if color {
                     // What was drawn before is covered: the frame starts again.
@@ -689,6 +694,7 @@ impl Context {
                     self.frame.viewport = None;
                     self.frame.cameras.clear();
                     self.frame.scissored_clears.clear();
+                    self.frame.depth_clears.clear();
                     self.frame.clear_color = self.s.clear_color;
                     self.frame.cleared = true;
                 }

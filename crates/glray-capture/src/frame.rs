@@ -282,6 +282,11 @@ pub struct Frame {
     pub cleared: bool,
     /// Whether the depth buffer was cleared this frame.
     pub depth_cleared: bool,
+    /// Where a glClear of the depth buffer alone came between the frame's draws: the sequence
+    /// number of the draw after each (`Triangle::sequence`). Draws from there on are depth
+    /// tested against the cleared depth only, so they land over all that came before
+    /// (skytentacles draws each tentacle so).
+    pub depth_clears: Vec<u32>,
     /// Clears within a scissor box smaller than the drawable since the last full one (each view
     /// of several clearing its own part of the window), in order.
     pub scissored_clears: Vec<ScissoredClear>,
@@ -452,6 +457,7 @@ impl Frame {
             clear_color,
             cleared,
             depth_cleared,
+            depth_clears,
             scissored_clears,
             lightings,
             cameras,
@@ -470,6 +476,7 @@ impl Frame {
             clear_color: *clear_color,
             cleared: *cleared,
             depth_cleared: *depth_cleared,
+            depth_clears: depth_clears.clone(),
             scissored_clears: scissored_clears.clone(),
             lightings: lightings.clone(),
             cameras: cameras.clone(),

@@ -21,16 +21,17 @@ const GL_GEQUAL: u32 = 0x0206;
 
 /// Whether the closest hit decides every pixel of the frame.
 pub fn closest_hit_suffices(frame: &Frame) -> bool {
-    frame.surfaces.iter().all(|s| {
-        s.depth_test
-            && s.depth_mask
-            && matches!(s.depth_func, GL_LESS | GL_LEQUAL)
-            && s.blend.is_none()
-            && s.alpha_test.is_none()
-            && s.clip_planes.is_empty()
-            && s.polygon_offset.is_none()
-            && s.color_mask == [true; 4]
-    })
+    frame.depth_clears.is_empty()
+        && frame.surfaces.iter().all(|s| {
+            s.depth_test
+                && s.depth_mask
+                && matches!(s.depth_func, GL_LESS | GL_LEQUAL)
+                && s.blend.is_none()
+                && s.alpha_test.is_none()
+                && s.clip_planes.is_empty()
+                && s.polygon_offset.is_none()
+                && s.color_mask == [true; 4]
+        })
 }
 
 /// The smallest difference of window depth that the depth buffer (24 bits) tells apart.
@@ -94,11 +95,16 @@ fn blend(surface: &Surface, src: Vec4, dst: Vec4) -> Vec4 {
 }
 
 /// A pixel's colour and depth after all its fragments, in drawing order. `hits` come with
-/// their fragments; `color` and `depth` are what the pixel held before the frame's draws.
+/// their fragments; `color` and `depth` are what the pixel held before the frame's draws. A
+/// glClear of the depth buffer between draws (`Frame::depth_clears`) sets the depth back to 1.
 pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4, depth: f64) -> (Vec4, f64) {
     hits.sort_by_key(|(h, _)| (h.sequence, h.id));
     let (mut color, mut depth) = (color, depth);
-    for (_, f) in hits.iter() {
+    let mut clears = frame.depth_clears.iter().peekable();
+    for (h, f) in hits.iter() {
+        while clears.next_if(|&&c| c <= h.sequence).is_some() {
+            depth = 1.0;
+        }
         let s = &frame.surfaces[f.surface as usize];
         if s.clip_planes.iter().any(|p| p.dot(f.eye.extend(1.0)) < 0.0) {
             continue;
@@ -118,6 +124,10 @@ pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4
         }
         let blended = blend(s, f.color, color);
         color = Vec4::select(BVec4A::from(s.color_mask), blended, color);
+    }
+    if clears.next().is_some() {
+        // A clear after the pixel's last fragment.
+        depth = 1.0;
     }
     (color, depth)
 }
@@ -173,5 +183,28 @@ mod tests {
         let mut hits = [(hit(0), fragment(Vec4::ONE, 0.5, 0))];
         let (color, _) = in_drawing_order(&frame, &mut hits, Vec4::new(0.0, 0.25, 0.0, 1.0), 1.0);
         assert_eq!(color, Vec4::new(1.0, 0.25, 1.0, 1.0));
+    }
+
+    #[test]
+    fn a_depth_clear_between_draws_starts_the_depth_test_again() {
+        // A near red fragment, a depth clear, then a farther green one: green lands over red,
+        // with its own depth; with the clear after both, the pixel keeps green at depth 1.
+        let hit = |sequence: u32, t: f32| Hit {
+            id: TriangleId { instance: 0, index: 0 },
+            t,
+            sequence,
+            normal: Vec3::Z,
+            uv: Default::default(),
+        };
+        let fragment = |color: Vec4, depth: f64| Fragment { color, depth, eye: DVec3::ZERO, surface: 0 };
+        let (red, green) = (Vec4::new(1.0, 0.0, 0.0, 1.0), Vec4::new(0.0, 1.0, 0.0, 1.0));
+        let mut frame = Frame { surfaces: vec![Surface::depth_tested()], ..Frame::default() };
+        let hits = || vec![(hit(0, 1.0), fragment(red, 0.3)), (hit(1, 2.0), fragment(green, 0.6))];
+        assert_eq!(in_drawing_order(&frame, &mut hits(), Vec4::ZERO, 1.0), (red, 0.3));
+        frame.depth_clears = vec![1];
+        assert!(!closest_hit_suffices(&frame));
+        assert_eq!(in_drawing_order(&frame, &mut hits(), Vec4::ZERO, 1.0), (green, 0.6));
+        frame.depth_clears = vec![1, 2];
+        assert_eq!(in_drawing_order(&frame, &mut hits(), Vec4::ZERO, 1.0), (green, 1.0));
     }
 }

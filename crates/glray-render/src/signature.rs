@@ -110,6 +110,7 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
         format!("{l:?}").hash(&mut h);
     }
     format!("{:?}", frame.scissored_clears).hash(&mut h);
+    frame.depth_clears.hash(&mut h);
     for s in &frame.surfaces {
         // Textures by identity: a changed texture is a new object in capture.
         if let Some(t) = &s.texturing {
@@ -209,7 +210,7 @@ mod tests {
             Frame { triangles: vec![triangle(0)], solids: vec![line], surfaces: vec![surface], ..Frame::default() };
         let options = Options::default();
         let base = signature(&frame, 64, 64, &options);
-        let changes: [(&str, Change<Frame>); 11] = [
+        let changes: [(&str, Change<Frame>); 12] = [
             ("a line moved", |f| f.solids[0].b.y = 1.0),
             ("a line thicker", |f| f.solids[0].radius = 0.2),
             ("a line more", |f| f.solids.push(f.solids[0])),
@@ -224,6 +225,7 @@ mod tests {
                 let rect = glray_capture::camera::Viewport { x: 0, y: 0, width: 8, height: 8 };
                 f.scissored_clears.push(glray_capture::frame::ScissoredClear { rect, color: None, depth: true })
             }),
+            ("a depth clear between draws", |f| f.depth_clears.push(1)),
         ];
         for (what, change) in changes {
             let mut changed = frame.clone();
