@@ -702,3 +702,29 @@ fn a_depth_clear_between_draws_lets_the_later_ones_land_over_the_earlier() {
     );
     assert_eq!(traced, plain, "glray against Mesa");
 }
+
+#[test]
+fn one_dimensional_textures_colour_as_gl_colours() {
+    // tests/helpers/texture_1d.c: a colour map as a 1D texture (glTexImage1D, GL_TEXTURE_1D)
+    // across a square, sampled nearest, then linear with mipmaps on a slanted square whose t
+    // varies (GL ignores it), then with a 2D texture enabled too, which takes precedence.
+    // glray captured 2D textures only and drew the squares untextured (white).
+    let (plain, traced) = plain_and_traced("texture_1d");
+    let rows = |out: &str| -> Vec<(String, Vec<i32>)> {
+        out.lines()
+            .filter_map(|l| l.split_once(':'))
+            .filter(|(name, _)| ["nearest", "linear", "both"].contains(name))
+            .map(|(name, v)| (name.to_string(), v.split([' ', ',']).filter_map(|w| w.parse().ok()).collect()))
+            .collect()
+    };
+    let (p, t) = (rows(&plain), rows(&traced));
+    assert_eq!(p.len(), 3, "Mesa: {plain}");
+    // The map's first entry where s starts.
+    assert_eq!(&p[0].1[..3], &[0, 255, 40], "Mesa: {plain}");
+    assert_eq!(t.len(), 3, "glray: {traced}");
+    for ((name, p), (_, t)) in p.iter().zip(&t) {
+        assert_eq!(p.len(), t.len(), "{name}");
+        assert!(p.iter().zip(t).all(|(a, b)| (a - b).abs() <= 3), "{name}: glray {t:?}, Mesa {p:?}");
+    }
+    assert!(traced.contains("error 0x0"), "{traced}");
+}

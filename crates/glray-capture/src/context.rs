@@ -509,6 +509,7 @@ impl Context {
             GL_POINT_SMOOTH => s.point_smooth = on,
             GL_DEPTH_TEST => s.depth_test = on,
             GL_TEXTURE_2D => s.texture_2d = on,
+            GL_TEXTURE_1D => s.texture_1d = on,
             GL_FOG => s.fog_enabled = on,
             GL_BLEND => s.blend = on,
             GL_ALPHA_TEST => s.alpha_test = on,
@@ -826,11 +827,11 @@ impl Context {
                     self.buffer_changed(name as u32);
                 }
             }
-            Op::BindTexture => {
-                if args::uint(a, 0) == GL_TEXTURE_2D {
-                    self.s.bound_texture = args::uint(a, 1);
-                }
-            }
+            Op::BindTexture => match args::uint(a, 0) {
+                GL_TEXTURE_2D => self.s.bound_texture = args::uint(a, 1),
+                GL_TEXTURE_1D => self.s.bound_texture_1d = args::uint(a, 1),
+                _ => {}
+            },
             Op::DeleteTextures => {
                 for name in args::array(args::bytes(a, 1), GL_UNSIGNED_INT, args::int(a, 0).max(0) as usize) {
                     let name = name as u32;
@@ -838,14 +839,32 @@ impl Context {
                     if self.s.bound_texture == name {
                         self.s.bound_texture = 0;
                     }
+                    if self.s.bound_texture_1d == name {
+                        self.s.bound_texture_1d = 0;
+                    }
                 }
             }
             Op::TexImage2D => self.tex_image(a, false)?,
             Op::TexSubImage2D => self.tex_image(a, true)?,
+            Op::TexImage1D | Op::TexSubImage1D => {
+                // A 1D texture is a 2D one of one row: the arguments a 2D call would have.
+                let (i, u) = (|k: usize| Value::Int(args::int(a, k)), |k: usize| Value::Int(args::uint(a, k) as i64));
+                let (target, level) = (Value::Int(GL_TEXTURE_1D as i64), i(1));
+                let data = a.get(if op == Op::TexImage1D { 7 } else { 6 }).cloned().unwrap_or(Value::Null);
+                let a2 = if op == Op::TexImage1D {
+                    // (internal format, width, height 1, border, format, type, pixels)
+                    vec![target, level, u(2), i(3), Value::Int(1), i(4), u(5), u(6), data]
+                } else {
+                    // (x, y 0, width, height 1, format, type, pixels)
+                    vec![target, level, i(2), Value::Int(0), i(3), Value::Int(1), u(4), u(5), data]
+                };
+                self.tex_image(&a2, op == Op::TexSubImage1D)?
+            }
             Op::TexParameter => {
-                if args::uint(a, 0) == GL_TEXTURE_2D {
+                let target = args::uint(a, 0);
+                if target == GL_TEXTURE_2D || target == GL_TEXTURE_1D {
                     let v = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0) as u32;
-                    let t = self.texture_mut();
+                    let t = self.texture_mut(target);
                     match args::uint(a, 1) {
                         GL_TEXTURE_MIN_FILTER => t.min_filter = v,
                         GL_TEXTURE_MAG_FILTER => t.mag_filter = v,
@@ -976,13 +995,16 @@ impl Context {
         Ok(())
     }
 
-    fn texture_mut(&mut self) -> &mut Texture {
-        let t = self.shared.textures.entry(self.s.bound_texture).or_default();
+    /// The texture bound to `target` (GL_TEXTURE_2D or GL_TEXTURE_1D).
+    fn texture_mut(&mut self, target: u32) -> &mut Texture {
+        let name = if target == GL_TEXTURE_1D { self.s.bound_texture_1d } else { self.s.bound_texture };
+        let t = self.shared.textures.entry(name).or_default();
         Arc::make_mut(t)
     }
 
     fn tex_image(&mut self, a: &[Value], sub: bool) -> GlResult {
-        if args::uint(a, 0) != GL_TEXTURE_2D {
+        let target = args::uint(a, 0);
+        if target != GL_TEXTURE_2D && target != GL_TEXTURE_1D {
             return Ok(()); // proxies, cube maps: not captured
         }
         let level = args::int(a, 1);
@@ -997,7 +1019,7 @@ impl Context {
             let Some(texels) = texture::decode(w.max(0) as usize, h.max(0) as usize, format, ty, &unpack, data) else {
                 return Ok(());
             };
-            let t = self.texture_mut();
+            let t = self.texture_mut(target);
             let base = t.base_format;
             let Some(l) = t.levels.get_mut(level) else { return Err(GlError::InvalidOperation) };
             for row in 0..h.max(0) {
@@ -1021,10 +1043,11 @@ impl Context {
         let texels = texture::decode(w, h, format, ty, &unpack, data)
             .map(|t| t.into_iter().map(|c| texture::to_base(c, base)).collect())
             .unwrap_or_else(|| vec![Vec4::ONE; w * h]);
-        let t = self.texture_mut();
+        let t = self.texture_mut(target);
         if level == 0 {
             t.base_format = base;
         }
+        t.one_d = target == GL_TEXTURE_1D;
         if t.levels.len() <= level {
             t.levels.resize(level + 1, Level::default());
         }
@@ -1042,7 +1065,7 @@ impl Context {
         }
         let base = texture::base_format(internal);
         let texels = texels.into_iter().map(|c| texture::to_base(c, base)).collect();
-        let t = self.texture_mut();
+        let t = self.texture_mut(GL_TEXTURE_2D);
         if level == 0 {
             t.base_format = base;
         }

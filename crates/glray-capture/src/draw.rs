@@ -76,15 +76,15 @@ impl Context {
     /// applies to them only).
     pub(crate) fn surface(&mut self, polygons: bool) -> u32 {
         let s = &self.s;
-        let texturing = if s.texture_2d {
-            self.shared.textures.get(&s.bound_texture).filter(|t| t.complete()).map(|t| Texturing {
+        // GL_TEXTURE_2D, enabled, takes precedence over GL_TEXTURE_1D.
+        let bound = if s.texture_2d { Some(s.bound_texture) } else { s.texture_1d.then_some(s.bound_texture_1d) };
+        let texturing = bound.and_then(|name| {
+            self.shared.textures.get(&name).filter(|t| t.complete()).map(|t| Texturing {
                 texture: t.clone(),
                 env_mode: s.env_mode,
                 env_color: s.env_color,
             })
-        } else {
-            None
-        };
+        });
         let surface = Surface {
             texturing,
             fog: s.fog_enabled.then_some(s.fog),

@@ -12,6 +12,7 @@ pub const GL_POLYGON_OFFSET_FILL: u32 = 0x8037;
 pub const GL_POINT_SMOOTH: u32 = 0x0B10;
 pub const GL_LINE_SMOOTH: u32 = 0x0B20;
 pub const GL_DEPTH_TEST: u32 = 0x0B71;
+pub const GL_TEXTURE_1D: u32 = 0x0DE0;
 pub const GL_TEXTURE_2D: u32 = 0x0DE1;
 pub const GL_FOG: u32 = 0x0B60;
 pub const GL_BLEND: u32 = 0x0BE2;

@@ -120,7 +120,9 @@ ops! {
     DeleteBuffers = "glDeleteBuffers" | "glDeleteBuffersARB";
     BindTexture = "glBindTexture" | "glBindTextureEXT";
     DeleteTextures = "glDeleteTextures" | "glDeleteTexturesEXT";
+    TexImage1D = "glTexImage1D";
     TexImage2D = "glTexImage2D";
+    TexSubImage1D = "glTexSubImage1D";
     TexSubImage2D = "glTexSubImage2D";
     TexParameter = "glTexParameteri" | "glTexParameterf" | "glTexParameteriv" | "glTexParameterfv";
     TexEnv = "glTexEnvi" | "glTexEnvf" | "glTexEnviv" | "glTexEnvfv";

@@ -63,6 +63,9 @@ pub(crate) struct State {
     // GL_TEXTURE_BIT
     pub(crate) texture_2d: bool,
     pub(crate) bound_texture: u32,
+    /// GL_TEXTURE_1D's enable and binding (a 2D texture, enabled, takes precedence).
+    pub(crate) texture_1d: bool,
+    pub(crate) bound_texture_1d: u32,
     pub(crate) env_mode: u32,
     pub(crate) env_color: Vec4,
     pub(crate) texgen: [TexGen; 2],
@@ -113,6 +116,8 @@ impl Default for State {
             color_mask: [true; 4],
             texture_2d: false,
             bound_texture: 0,
+            texture_1d: false,
+            bound_texture_1d: 0,
             env_mode: GL_MODULATE,
             env_color: Vec4::ZERO,
             texgen: [texgen, TexGen { object_plane: DVec4::Y, eye_plane: DVec4::Y, ..texgen }],
@@ -194,11 +199,13 @@ impl State {
         }
         if mask & (GL_TEXTURE_BIT | GL_ENABLE_BIT) != 0 {
             self.texture_2d = s.texture_2d;
+            self.texture_1d = s.texture_1d;
             self.texgen[0].enabled = s.texgen[0].enabled;
             self.texgen[1].enabled = s.texgen[1].enabled;
         }
         if mask & GL_TEXTURE_BIT != 0 {
             self.bound_texture = s.bound_texture;
+            self.bound_texture_1d = s.bound_texture_1d;
             self.env_mode = s.env_mode;
             self.env_color = s.env_color;
             self.texgen = s.texgen;

@@ -58,6 +58,8 @@ pub struct Texture {
     pub mag_filter: u32,
     pub wrap_s: u32,
     pub wrap_t: u32,
+    /// Made by glTexImage1D: one row, sampled by s alone (its level of detail ignores t).
+    pub one_d: bool,
 }
 
 impl Default for Texture {
@@ -69,6 +71,7 @@ impl Default for Texture {
             mag_filter: GL_LINEAR,
             wrap_s: GL_REPEAT,
             wrap_t: GL_REPEAT,
+            one_d: false,
         }
     }
 }
