@@ -728,3 +728,14 @@ fn one_dimensional_textures_colour_as_gl_colours() {
     }
     assert!(traced.contains("error 0x0"), "{traced}");
 }
+
+#[test]
+fn logic_ops_combine_colours_bit_by_bit_as_gl_does() {
+    // tests/helpers/logic_op.c: squares drawn with GL_COLOR_LOGIC_OP (XOR, AND_REVERSE, OR,
+    // INVERT) over a square and over the clear colour, blending left on (ignored while the
+    // logic op is on). glray ignored the logic op and blended (one, one): quasicrystal's last
+    // pass, an AND_REVERSE square, came out as a flat grey over the whole picture.
+    let (plain, traced) = plain_and_traced("logic_op");
+    assert!(plain.contains("xor over 170 255 150 beside 105 165 150"), "Mesa: {plain}");
+    assert_eq!(traced, plain, "glray against Mesa");
+}

@@ -512,6 +512,7 @@ impl Context {
             GL_TEXTURE_1D => s.texture_1d = on,
             GL_FOG => s.fog_enabled = on,
             GL_BLEND => s.blend = on,
+            GL_COLOR_LOGIC_OP => s.logic_op_enabled = on,
             GL_ALPHA_TEST => s.alpha_test = on,
             GL_TEXTURE_GEN_S => s.texgen[0].enabled = on,
             GL_TEXTURE_GEN_T => s.texgen[1].enabled = on,
@@ -935,6 +936,10 @@ impl Context {
             Op::DepthFunc => self.s.depth_func = args::uint(a, 0),
             Op::DepthMask => self.s.depth_mask = args::int(a, 0) != 0,
             Op::ColorMask => self.s.color_mask = std::array::from_fn(|k| args::int(a, k) != 0),
+            Op::LogicOp => match args::uint(a, 0) {
+                op @ 0x1500..=0x150F => self.s.logic_op = op,
+                _ => return Err(GlError::InvalidEnum),
+            },
             Op::Scissor => {
                 let (width, height) = (args::int(a, 2), args::int(a, 3));
                 if width < 0 || height < 0 {

@@ -92,6 +92,7 @@ impl Context {
             depth_func: s.depth_func,
             depth_mask: s.depth_mask,
             blend: s.blend.then_some(s.blend_func),
+            logic_op: s.logic_op_enabled.then_some(s.logic_op),
             alpha_test: s.alpha_test.then_some(s.alpha_func),
             clip_planes: s.clip_planes.iter().filter(|p| p.0).map(|p| p.1).collect(),
             polygon_offset: (polygons && s.polygon_offset_fill).then_some(s.polygon_offset),
@@ -111,17 +112,33 @@ impl Context {
     /// `surface`'s index among the frame's surfaces: the last one again when they are the same.
     fn add_surface(&mut self, surface: Surface) -> u32 {
         let same = |a: &Surface, b: &Surface| {
-            a.fog == b.fog
-                && a.depth_test == b.depth_test
-                && a.depth_func == b.depth_func
-                && a.depth_mask == b.depth_mask
-                && a.blend == b.blend
-                && a.alpha_test == b.alpha_test
-                && a.clip_planes == b.clip_planes
-                && a.polygon_offset == b.polygon_offset
-                && a.color_mask == b.color_mask
-                && a.coverage == b.coverage
-                && match (&a.texturing, &b.texturing) {
+            // Every field named, so that a new one is not forgotten here.
+            let Surface {
+                texturing,
+                fog,
+                depth_test,
+                depth_func,
+                depth_mask,
+                blend,
+                logic_op,
+                alpha_test,
+                clip_planes,
+                polygon_offset,
+                color_mask,
+                coverage,
+            } = a;
+            *fog == b.fog
+                && *depth_test == b.depth_test
+                && *depth_func == b.depth_func
+                && *depth_mask == b.depth_mask
+                && *blend == b.blend
+                && *logic_op == b.logic_op
+                && *alpha_test == b.alpha_test
+                && *clip_planes == b.clip_planes
+                && *polygon_offset == b.polygon_offset
+                && *color_mask == b.color_mask
+                && *coverage == b.coverage
+                && match (texturing, &b.texturing) {
                     (None, None) => true,
                     (Some(x), Some(y)) => {
                         Arc::ptr_eq(&x.texture, &y.texture) && x.env_mode == y.env_mode && x.env_color == y.env_color

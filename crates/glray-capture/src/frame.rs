@@ -190,6 +190,8 @@ pub struct Surface {
     pub depth_mask: bool,
     /// (src, dst) factors when GL_BLEND is on.
     pub blend: Option<(u32, u32)>,
+    /// glLogicOp's operation when GL_COLOR_LOGIC_OP is on (GL then does not blend).
+    pub logic_op: Option<u32>,
     /// (func, reference) when GL_ALPHA_TEST is on.
     pub alpha_test: Option<(u32, f32)>,
     /// Enabled user clip planes (glClipPlane), in eye coordinates: a point is kept where
@@ -251,6 +253,7 @@ impl Surface {
             depth_func: 0x0201,
             depth_mask: true,
             blend: None,
+            logic_op: None,
             alpha_test: None,
             clip_planes: Vec::new(),
             polygon_offset: None,

@@ -130,6 +130,7 @@ ops! {
     PixelStore = "glPixelStorei" | "glPixelStoref";
     Fog = "glFogf" | "glFogi" | "glFogfv" | "glFogiv";
     BlendFunc = "glBlendFunc";
+    LogicOp = "glLogicOp";
     AlphaFunc = "glAlphaFunc";
     DepthFunc = "glDepthFunc";
     DepthMask = "glDepthMask";

@@ -60,6 +60,9 @@ pub(crate) struct State {
     pub(crate) alpha_func: (u32, f32),
     /// glColorMask: which of red, green, blue and alpha draws write.
     pub(crate) color_mask: [bool; 4],
+    /// GL_COLOR_LOGIC_OP's enable and glLogicOp's operation.
+    pub(crate) logic_op_enabled: bool,
+    pub(crate) logic_op: u32,
     // GL_TEXTURE_BIT
     pub(crate) texture_2d: bool,
     pub(crate) bound_texture: u32,
@@ -114,6 +117,8 @@ impl Default for State {
             alpha_test: false,
             alpha_func: (GL_ALWAYS, 0.0),
             color_mask: [true; 4],
+            logic_op_enabled: false,
+            logic_op: GL_COPY,
             texture_2d: false,
             bound_texture: 0,
             texture_1d: false,
@@ -190,12 +195,14 @@ impl State {
         if mask & (GL_COLOR_BUFFER_BIT | GL_ENABLE_BIT) != 0 {
             self.blend = s.blend;
             self.alpha_test = s.alpha_test;
+            self.logic_op_enabled = s.logic_op_enabled;
         }
         if mask & GL_COLOR_BUFFER_BIT != 0 {
             self.clear_color = s.clear_color;
             self.blend_func = s.blend_func;
             self.alpha_func = s.alpha_func;
             self.color_mask = s.color_mask;
+            self.logic_op = s.logic_op;
         }
         if mask & (GL_TEXTURE_BIT | GL_ENABLE_BIT) != 0 {
             self.texture_2d = s.texture_2d;

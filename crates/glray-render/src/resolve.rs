@@ -27,6 +27,7 @@ pub fn closest_hit_suffices(frame: &Frame) -> bool {
                 && s.depth_mask
                 && matches!(s.depth_func, GL_LESS | GL_LEQUAL)
                 && s.blend.is_none()
+                && s.logic_op.is_none()
                 && s.alpha_test.is_none()
                 && s.clip_planes.is_empty()
                 && s.polygon_offset.is_none()
@@ -94,6 +95,36 @@ fn blend(surface: &Surface, src: Vec4, dst: Vec4) -> Vec4 {
     }
 }
 
+/// Colour of the framebuffer after glLogicOp's `op` combines `src` with `dst`, bit by bit on
+/// the 8-bit values the framebuffer holds.
+fn logic(op: u32, src: Vec4, dst: Vec4) -> Vec4 {
+    let bits = |c: Vec4| c.to_array().map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8);
+    let (s, d) = (bits(src), bits(dst));
+    let out: [f32; 4] = std::array::from_fn(|k| {
+        let (s, d) = (s[k], d[k]);
+        let v = match op {
+            0x1500 => 0,
+            0x1501 => s & d,
+            0x1502 => s & !d,
+            0x1504 => !s & d,
+            0x1505 => d,
+            0x1506 => s ^ d,
+            0x1507 => s | d,
+            0x1508 => !(s | d),
+            0x1509 => !(s ^ d),
+            0x150A => !d,
+            0x150B => s | !d,
+            0x150C => !s,
+            0x150D => !s | d,
+            0x150E => !(s & d),
+            0x150F => 0xFF,
+            _ => s, // GL_COPY
+        };
+        v as f32 / 255.0
+    });
+    Vec4::from_array(out)
+}
+
 /// A pixel's colour and depth after all its fragments, in drawing order. `hits` come with
 /// their fragments; `color` and `depth` are what the pixel held before the frame's draws. A
 /// glClear of the depth buffer between draws (`Frame::depth_clears`) sets the depth back to 1.
@@ -122,7 +153,10 @@ pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4
                 depth = f.depth;
             }
         }
-        let blended = blend(s, f.color, color);
+        let blended = match s.logic_op {
+            Some(op) => logic(op, f.color, color),
+            None => blend(s, f.color, color),
+        };
         color = Vec4::select(BVec4A::from(s.color_mask), blended, color);
     }
     if clears.next().is_some() {

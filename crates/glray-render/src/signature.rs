@@ -119,9 +119,10 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
         }
         s.texturing.is_some().hash(&mut h);
         format!(
-            "{:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
+            "{:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
             s.fog,
             s.blend,
+            s.logic_op,
             s.alpha_test,
             s.clip_planes,
             (s.depth_test, s.depth_func, s.depth_mask),
@@ -210,7 +211,7 @@ mod tests {
             Frame { triangles: vec![triangle(0)], solids: vec![line], surfaces: vec![surface], ..Frame::default() };
         let options = Options::default();
         let base = signature(&frame, 64, 64, &options);
-        let changes: [(&str, Change<Frame>); 12] = [
+        let changes: [(&str, Change<Frame>); 13] = [
             ("a line moved", |f| f.solids[0].b.y = 1.0),
             ("a line thicker", |f| f.solids[0].radius = 0.2),
             ("a line more", |f| f.solids.push(f.solids[0])),
@@ -226,6 +227,7 @@ mod tests {
                 f.scissored_clears.push(glray_capture::frame::ScissoredClear { rect, color: None, depth: true })
             }),
             ("a depth clear between draws", |f| f.depth_clears.push(1)),
+            ("a logic op", |f| f.surfaces[0].logic_op = Some(0x1506)),
         ];
         for (what, change) in changes {
             let mut changed = frame.clone();
