@@ -9,9 +9,7 @@ int main(void) {
   int w = 64, h = 64;
   unsigned char *buf;
   OSMesaContext c = osmesa_context(w, h, &buf);
-  glMatrixMode(GL_PROJECTION);
-  glOrtho(0, w, 0, h, -1, 1);
-  glMatrixMode(GL_MODELVIEW);
+  window_projection(w, h);
   const float sizes[] = {1, 1.5f, 2, 2.5f, 2.7f, 3.5f};
   for (int k = 0; k < 6; k++) {
     glClear(GL_COLOR_BUFFER_BIT);

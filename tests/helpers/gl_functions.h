@@ -1,8 +1,8 @@
 /* What the OSMesa test helpers share: a compatibility context current on a w x h RGBA buffer,
- * the GL 2.0-3.3 functions they call, looked up with OSMesaGetProcAddress (libOSMesa need not
- * export them), and a GLSL program made from two sources. Included by readback.c,
- * core_profile.c, first_frame.c, copy_texture.c and polygon_offset.c; call load_gl_functions()
- * once a context is current. */
+ * a projection in window coordinates, a square, the GL 2.0-3.3 functions they call, looked up
+ * with OSMesaGetProcAddress (libOSMesa need not export them), and a GLSL program made from two
+ * sources. Included by every OSMesa helper here; those calling GL 2.0-3.3 functions call
+ * load_gl_functions() once a context is current. */
 #ifndef GLRAY_TEST_GL_FUNCTIONS_H
 #define GLRAY_TEST_GL_FUNCTIONS_H
 #define GL_GLEXT_PROTOTYPES
@@ -63,6 +63,14 @@ static OSMesaContext osmesa_context(int w, int h, unsigned char **buf) {
     exit(1);
   }
   return c;
+}
+
+/* A projection that makes vertex (x, y) the window position (x, y) of a w x h window: one unit
+ * a pixel, the origin at the bottom left corner. */
+static inline void window_projection(int w, int h) {
+  glMatrixMode(GL_PROJECTION);
+  glOrtho(0, w, 0, h, -1, 1);
+  glMatrixMode(GL_MODELVIEW);
 }
 
 /* A square 2 * half across in the plane z, facing +z (immediate mode). */

@@ -18,9 +18,7 @@ int main(void) {
   int w = 64, h = 64;
   unsigned char *buf;
   OSMesaContext c = osmesa_context(w, h, &buf);
-  glMatrixMode(GL_PROJECTION);
-  glOrtho(0, w, 0, h, -1, 1);
-  glMatrixMode(GL_MODELVIEW);
+  window_projection(w, h);
   glClearColor(0.2f, 0.4f, 0.6f, 1);
   glClear(GL_COLOR_BUFFER_BIT);
   glColor3ub(0xF0, 0x3C, 0x99);

@@ -11,9 +11,7 @@ int main(void) {
   int w = 64, h = 64;
   unsigned char *buf;
   OSMesaContext c = osmesa_context(w, h, &buf);
-  glMatrixMode(GL_PROJECTION);
-  glOrtho(0, w, 0, h, -1, 1);
-  glMatrixMode(GL_MODELVIEW);
+  window_projection(w, h);
   glClear(GL_COLOR_BUFFER_BIT);
   glColor3f(1, 1, 1);
   glLineWidth(3);
