@@ -270,7 +270,7 @@ fn osmesa_helper(dir: &Path, name: &str) -> PathBuf {
     let program = dir.join(name);
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/helpers/{name}.c"));
     run_ok(
-        Command::new("cc").arg("-O1").arg("-o").arg(&program).arg(&src).args(["-lOSMesa", "-lGL"]),
+        Command::new("cc").arg("-O1").arg("-o").arg(&program).arg(&src).args(["-lOSMesa", "-lGL", "-lm"]),
         &format!("cc {name}.c"),
     );
     program
@@ -701,6 +701,34 @@ fn a_depth_clear_between_draws_lets_the_later_ones_land_over_the_earlier() {
         "Mesa: {plain}"
     );
     assert_eq!(traced, plain, "glray against Mesa");
+}
+
+#[test]
+fn big_client_array_draws_follow_the_bytes_they_read_from_frame_to_frame() {
+    // tests/helpers/client_arrays.c: a lit grid of 12,482 triangles from client arrays, drawn
+    // again unchanged, then changed in place (same pointers, new colours and heights), then as
+    // glDrawArrays from new memory. glray keeps such a draw's mesh by a hash of the bytes it
+    // reads: a mesh kept by pointer, or kept past a change, would show frame 0 in frame 2.
+    let (plain, traced) = plain_and_traced("client_arrays");
+    let frames = |out: &str| -> Vec<Vec<i32>> {
+        out.lines()
+            .filter(|l| l.starts_with("frame"))
+            .map(|l| l.split([' ', ',', ':']).skip(2).filter_map(|w| w.parse().ok()).collect())
+            .collect()
+    };
+    let (p, t) = (frames(&plain), frames(&traced));
+    assert_eq!(p.len(), 4, "Mesa: {plain}");
+    assert!(p.iter().all(|f| f.len() == 3 * 64), "Mesa: {plain}");
+    assert_eq!(p[0], p[1], "Mesa: the same bytes, the same picture");
+    assert_ne!(p[1], p[2], "Mesa: the change shows");
+    assert!(plain.contains("error 0x0"), "Mesa: {plain}");
+    assert_eq!(t.len(), 4, "glray: {traced}");
+    for (k, (p, t)) in p.iter().zip(&t).enumerate() {
+        assert_eq!(p.len(), t.len(), "frame {k}");
+        let off: Vec<_> = p.iter().zip(t).filter(|(a, b)| (*a - *b).abs() > 3).collect();
+        assert!(off.is_empty(), "frame {k}: glray {t:?}, Mesa {p:?}");
+    }
+    assert!(traced.contains("error 0x0"), "glray: {traced}");
 }
 
 #[test]

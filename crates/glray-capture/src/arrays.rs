@@ -5,7 +5,10 @@
 use glam::DVec4;
 use glray_core::trace::{array_kind, Value};
 
+use xxhash_rust::xxh3::xxh3_128;
+
 use crate::args::{self, GL_INT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT};
+use crate::client_draws::KEEP_FROM_ELEMENTS;
 use crate::context::{Context, Fetched};
 use crate::error::{GlError, GlResult};
 use crate::gl::*;
@@ -277,6 +280,70 @@ impl Context {
         }
         let buffers = [c.vertex.buffer, c.normal.buffer, c.color.buffer, c.texcoord[0].buffer, c.element_buffer];
         Some(BufferDraw { words, buffers: buffers.map(|b| if b == 0 { None } else { Some(b) }) })
+    }
+
+    /// What identifies a big array draw that reads client memory only (`client_draws`): its
+    /// arguments, each array's layout, and a 128-bit hash of every byte it reads (the arrays'
+    /// elements and its indices), so that a draw of the same bytes makes the same mesh. None
+    /// for a draw of fewer than `KEEP_FROM_ELEMENTS` elements, one that reads a buffer object,
+    /// and an invalid one (the uncached path raises its error).
+    pub(crate) fn client_draw_key(&self, op: Op, a: &[Value]) -> Option<BufferDraw> {
+        if self.arrays.is_empty() || args::uint(a, 0) > GL_POLYGON {
+            return None;
+        }
+        let c = &self.client;
+        let pointers = [&c.vertex, &c.normal, &c.color, &c.texcoord[0]];
+        if pointers.iter().any(|p| p.enabled && p.buffer != 0) {
+            return None;
+        }
+        let hash = |bytes: &[u8]| {
+            let h = xxh3_128(bytes);
+            [h as i64, (h >> 64) as i64]
+        };
+        let (mut words, elements) = match op {
+            Op::DrawArrays => {
+                let (first, count) = (args::int(a, 1), args::int(a, 2));
+                if first < 0 {
+                    return None;
+                }
+                (vec![0, args::int(a, 0), first, count], count)
+            }
+            Op::DrawElements | Op::DrawRangeElements => {
+                let (count, ty, idx) = if op == Op::DrawElements { (1, 2, 3) } else { (3, 4, 5) };
+                let size = match args::uint(a, ty) {
+                    GL_UNSIGNED_BYTE => 1,
+                    GL_UNSIGNED_SHORT => 2,
+                    GL_UNSIGNED_INT => 4,
+                    _ => return None,
+                };
+                // Client indices (with an element buffer bound they are an offset into it).
+                let Some(Value::Blob(indices)) = a.get(idx) else { return None };
+                let count = args::int(a, count);
+                let bytes = usize::try_from(count).ok()?.checked_mul(size)?;
+                let mut words = vec![1, args::int(a, 0), count, size as i64];
+                words.extend(hash(indices.get(..bytes).unwrap_or(indices)));
+                (words, count)
+            }
+            _ => return None,
+        };
+        if elements < KEEP_FROM_ELEMENTS {
+            return None;
+        }
+        for (d, bytes) in self.arrays.iter().zip(&self.array_bytes) {
+            words.extend([
+                i64::from(d.kind),
+                i64::from(d.index),
+                i64::from(d.size),
+                i64::from(d.gl_type),
+                i64::from(d.stride),
+                i64::from(d.normalized),
+                d.first as i64,
+            ]);
+            words.extend(hash(bytes));
+        }
+        // Which arrays are enabled decides what the draw reads, beside the memory given.
+        words.extend(pointers.map(|p| i64::from(p.enabled)));
+        Some(BufferDraw { words, buffers: [None; 5] })
     }
 
     /// A buffer's contents changed (or it is gone): meshes made from it are stale.

@@ -13,6 +13,7 @@ use glray_core::trace::{ArrayData, Value};
 use crate::args::{self, GL_DOUBLE, GL_FLOAT, GL_INT, GL_UNSIGNED_INT};
 use crate::arrays::{quad_split, BufferDraw, Client};
 use crate::camera::Viewport;
+use crate::client_draws::ClientDraws;
 use crate::error::{ErrorFlag, GlError, GlResult};
 use crate::frame::{Frame, ScissoredClear};
 use crate::gl::*;
@@ -112,6 +113,8 @@ pub struct Context {
     /// Client arrays of the next draw (the trace's arrays event that precedes it).
     pub(crate) arrays: Vec<ArrayData<'static>>,
     pub(crate) array_bytes: Vec<Vec<u8>>,
+    /// Meshes of big draws from client memory, kept by what they read.
+    pub(crate) client_draws: ClientDraws,
     pub(crate) frame: Frame,
     pub(crate) sequence: u32,
     pub(crate) normal_matrix: Option<(DMat4, DMat3)>,
@@ -145,6 +148,7 @@ impl Default for Context {
             client: Client { unpack: Unpack::default(), ..Client::default() },
             arrays: Vec::new(),
             array_bytes: Vec::new(),
+            client_draws: ClientDraws::default(),
             frame: Frame { depth_range: (0.0, 1.0), ..Frame::default() },
             sequence: 0,
             normal_matrix: None,
@@ -206,7 +210,16 @@ impl Context {
 
     /// Client arrays the next draw reads (a trace's arrays event).
     pub fn set_arrays(&mut self, arrays: &[ArrayData]) {
-        self.array_bytes = arrays.iter().map(|a| a.bytes.to_vec()).collect();
+        // Into the last draw's allocations: fresh ones were a page fault every 4 KiB of a big
+        // draw's arrays, every frame. One much bigger than needed is let go.
+        self.array_bytes.resize_with(arrays.len(), Vec::new);
+        for (kept, a) in self.array_bytes.iter_mut().zip(arrays) {
+            if kept.capacity() > (16 << 20).max(4 * a.bytes.len()) {
+                *kept = Vec::new();
+            }
+            kept.clear();
+            kept.extend_from_slice(a.bytes);
+        }
         self.arrays = arrays.iter().map(|a| ArrayData { bytes: &[], ..a.clone() }).collect();
     }
 
@@ -220,6 +233,7 @@ impl Context {
             ..Frame::default()
         };
         self.sequence = 0;
+        self.client_draws.frame_ended();
         std::mem::replace(&mut self.frame, next)
     }
 
@@ -393,6 +407,16 @@ impl Context {
             Given::SecondaryColor | Given::EdgeFlag(_) => unreachable!("a builder keeps neither"),
         }));
         items
+    }
+
+    /// The mesh of an array draw (one run: glDrawArrays, glDrawElements, glDrawRangeElements),
+    /// for keeping; None when it draws nothing.
+    fn array_mesh(&mut self, op: Op, a: &[Value]) -> GlResult<Option<Arc<Mesh>>> {
+        if let Some(mesh) = self.indexed_triangles(op, a) {
+            return Ok(Some(Arc::new(mesh)));
+        }
+        let runs = self.fetch_draw(op, a)?;
+        Ok(runs.first().map(|(mode, verts)| Arc::new(fetched_mesh(*mode, verts, quad_split(op)))))
     }
 
     fn run_list(&mut self, list: u32) -> GlResult {
@@ -775,14 +799,7 @@ impl Context {
                     let mesh = match self.shared.buffer_draws.get(&key) {
                         Some(m) => m.clone(),
                         None => {
-                            let mesh = match self.indexed_triangles(op, a) {
-                                Some(mesh) => Arc::new(mesh),
-                                None => {
-                                    let runs = self.fetch_draw(op, a)?;
-                                    let Some((mode, verts)) = runs.first() else { return Ok(()) };
-                                    Arc::new(fetched_mesh(*mode, verts, quad_split(op)))
-                                }
-                            };
+                            let Some(mesh) = self.array_mesh(op, a)? else { return Ok(()) };
                             if self.shared.buffer_draws.len() >= MAX_BUFFER_DRAWS {
                                 self.shared.buffer_draws.clear();
                             }
@@ -790,6 +807,19 @@ impl Context {
                             mesh
                         }
                     };
+                    return self.run_mesh(&mesh);
+                }
+                if let Some(key) = self.client_draw_key(op, a) {
+                    // Client memory only, and big: the mesh is kept while the program draws
+                    // the same bytes, frame after frame.
+                    let mesh = match self.client_draws.get(&key) {
+                        Some(mesh) => Ok(Some(mesh)),
+                        None => self.array_mesh(op, a),
+                    };
+                    // The draw's client memory is read.
+                    self.arrays.clear();
+                    let Some(mesh) = mesh? else { return Ok(()) };
+                    self.client_draws.insert(key, mesh.clone());
                     return self.run_mesh(&mesh);
                 }
                 for (mode, verts) in self.fetch_draw(op, a)? {
@@ -1624,6 +1654,50 @@ mod tests {
         // draw here: the last index read, whole triangle or not).
         let last = indices[indices.len() - 1] as usize;
         assert_eq!(c.imm.current.color, Vec4::from_slice(&colors[4 * last..4 * last + 4]).as_dvec4());
+    }
+
+    #[test]
+    fn big_client_draws_are_kept_by_the_bytes_they_read() {
+        use crate::client_draws::KEEP_FROM_ELEMENTS;
+        // A unit square's corners, and enough indices over them for the draw to be kept.
+        let mut c = context();
+        let corners = f32s(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0]);
+        let n = KEEP_FROM_ELEMENTS as usize;
+        let indices: Vec<u8> = [0u16, 1, 2, 2, 1, 3].iter().cycle().take(n).flat_map(|v| v.to_ne_bytes()).collect();
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        let draw = |c: &mut Context, positions: &[u8], count: usize| {
+            c.set_arrays(&[positions_2d(positions)]);
+            let indices = Value::Blob(&indices[..2 * count]);
+            call(c, "glDrawElements", &[i(4), i(count as i64), i(0x1403), indices]);
+        };
+        // The same bytes twice in a frame: one mesh, drawn twice.
+        draw(&mut c, &corners, n);
+        draw(&mut c, &corners, n);
+        let first = c.take_frame();
+        assert!(first.triangles.is_empty(), "drawn as instances");
+        assert_eq!(first.instances.len(), 2);
+        let kept = first.instances[0].mesh.clone();
+        assert!(Arc::ptr_eq(&kept, &first.instances[1].mesh));
+        assert_eq!(kept.triangles.len(), n / 3);
+        // The next frame, the same bytes from other memory: the same mesh.
+        draw(&mut c, &corners.clone(), n);
+        assert!(Arc::ptr_eq(&kept, &c.take_frame().instances[0].mesh), "kept from frame to frame");
+        // One corner moved: a new mesh, with the corner where it is now.
+        let mut moved = corners.clone();
+        moved[..4].copy_from_slice(&0.5f32.to_ne_bytes());
+        draw(&mut c, &moved, n);
+        let frame = c.take_frame();
+        assert!(!Arc::ptr_eq(&kept, &frame.instances[0].mesh), "a changed byte makes a new mesh");
+        let tri = frame.triangle(TriangleId { instance: 0, index: 0 }).expect("drawn");
+        assert_eq!(tri.positions[0], Vec3::new(0.5, 0.0, 0.0));
+        assert_eq!(c.client_draws.len(), 1, "only what the last frame drew is kept");
+        c.take_frame();
+        assert_eq!(c.client_draws.len(), 0, "a frame without the draw lets its mesh go");
+        // Fewer elements than kept draws have: the frame's own triangles.
+        draw(&mut c, &corners, n - 4);
+        let frame = c.take_frame();
+        assert!(frame.instances.is_empty() && frame.triangles.len() == (n - 4) / 3, "{}", frame.triangles.len());
+        assert_eq!(c.errors.take(), 0);
     }
 
     #[test]

@@ -9,6 +9,7 @@
 //! - `state`: the state glPushAttrib saves, by attribute bit;
 //! - `vertex`: the vertex stage (transform, lighting of both faces, texture coordinates);
 //! - `arrays`: client arrays and buffer objects, array draws resolved to vertices;
+//! - `client_draws`: meshes of big draws from client memory, kept by a hash of what they read;
 //! - `draw`: a draw's vertices into the frame's triangles (facing, culling, polygon modes, flat
 //!   shading, lines and points as quads);
 //! - `frame`: what a frame hands the tracer, and bringing every draw into one camera;
@@ -29,6 +30,7 @@
 pub mod args;
 mod arrays;
 pub mod camera;
+mod client_draws;
 pub mod context;
 mod draw;
 pub mod error;

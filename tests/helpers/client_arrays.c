@@ -1,0 +1,101 @@
+/* An OSMesa program that draws a big lit surface from client arrays (its own memory: no buffer
+ * object), as older VTK and VisIt do, over four frames:
+ *   0: a wavy 80 x 80 grid through glDrawElements (12,482 triangles);
+ *   1: the same bytes again;
+ *   2: the same arrays changed in place (colours of one half, heights of a band), same pointers;
+ *   3: the grid as separate triangles through glDrawArrays, from memory allocated anew.
+ * glray keeps a big client draw's mesh by the bytes it reads: frame 1 reuses it, frame 2 must
+ * not. Prints an 8 x 8 grid of pixels per frame. Built by tests/raytrace.rs with cc. */
+#include <math.h>
+#include <string.h>
+
+#include "gl_functions.h"
+
+#define N 80
+
+static float pos[N * N * 3], nrm[N * N * 3];
+static unsigned char col[N * N * 4];
+static unsigned int idx[(N - 1) * (N - 1) * 6 - 2];
+
+static float height(float x, float y) { return 0.15f * sinf(5 * x) * cosf(4 * y); }
+
+static void make_grid(float raise) {
+  for (int j = 0; j < N; j++)
+    for (int i = 0; i < N; i++) {
+      int k = j * N + i;
+      float x = -1 + 2.0f * i / (N - 1), y = -1 + 2.0f * j / (N - 1);
+      float band = (j > N / 3 && j < N / 2) ? raise : 0;
+      pos[3 * k] = x, pos[3 * k + 1] = y, pos[3 * k + 2] = height(x, y) + band;
+      /* the normal of the height field, not normalized (GL_NORMALIZE is on) */
+      nrm[3 * k] = -0.75f * cosf(5 * x) * cosf(4 * y), nrm[3 * k + 1] = 0.6f * sinf(5 * x) * sinf(4 * y);
+      nrm[3 * k + 2] = 1;
+      col[4 * k] = (unsigned char)(255 * i / (N - 1)), col[4 * k + 1] = (unsigned char)(255 * j / (N - 1));
+      col[4 * k + 2] = 128, col[4 * k + 3] = 255;
+    }
+}
+
+static void print_frame(int f, const unsigned char *buf, int w, int h) {
+  printf("frame %d:", f);
+  for (int y = 0; y < 8; y++)
+    for (int x = 0; x < 8; x++) {
+      const unsigned char *p = buf + 4 * (w * (h * (2 * y + 1) / 16) + w * (2 * x + 1) / 16);
+      printf(" %d,%d,%d", p[0], p[1], p[2]);
+    }
+  printf("\n");
+}
+
+int main(void) {
+  int w = 96, h = 96;
+  unsigned char *buf;
+  OSMesaContext c = osmesa_context(w, h, &buf);
+  glMatrixMode(GL_PROJECTION);
+  glFrustum(-0.5, 0.5, -0.5, 0.5, 1, 10);
+  glMatrixMode(GL_MODELVIEW);
+  glTranslatef(0, 0, -2.2f);
+  glRotatef(-25, 1, 0, 0);
+  GLfloat dir[4] = {0.3f, 0.5f, 1, 0};
+  glLightfv(GL_LIGHT0, GL_POSITION, dir);
+  glEnable(GL_LIGHTING), glEnable(GL_LIGHT0), glEnable(GL_NORMALIZE), glEnable(GL_DEPTH_TEST);
+  glEnable(GL_COLOR_MATERIAL);
+  glClearColor(0.1f, 0.1f, 0.2f, 1);
+
+  make_grid(0);
+  int n = 0;
+  for (int j = 0; j + 1 < N; j++)
+    for (int i = 0; i + 1 < N; i++) {
+      unsigned int k = j * N + i;
+      unsigned int t[6] = {k, k + 1, k + N + 1, k, k + N + 1, k + N};
+      for (int e = 0; e < 6 && n < (int)(sizeof idx / sizeof idx[0]); e++) idx[n++] = t[e];
+    }
+  glEnableClientState(GL_VERTEX_ARRAY), glEnableClientState(GL_NORMAL_ARRAY), glEnableClientState(GL_COLOR_ARRAY);
+  glVertexPointer(3, GL_FLOAT, 0, pos), glNormalPointer(GL_FLOAT, 0, nrm), glColorPointer(4, GL_UNSIGNED_BYTE, 0, col);
+
+  for (int f = 0; f < 3; f++) {
+    if (f == 2) {
+      make_grid(0.2f);
+      for (int k = 0; k < N * N / 2; k++) col[4 * k + 2] = 20;
+    }
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    glDrawElements(GL_TRIANGLES, n, GL_UNSIGNED_INT, idx);
+    glFinish();
+    print_frame(f, buf, w, h);
+  }
+
+  /* The same triangles, each corner its own element, in memory allocated anew. */
+  float *p = malloc(sizeof(float) * 3 * n), *q = malloc(sizeof(float) * 3 * n);
+  unsigned char *r = malloc(4 * (size_t)n);
+  for (int e = 0; e < n; e++) {
+    memcpy(p + 3 * e, pos + 3 * idx[e], 3 * sizeof(float));
+    memcpy(q + 3 * e, nrm + 3 * idx[e], 3 * sizeof(float));
+    memcpy(r + 4 * e, col + 4 * idx[e], 4);
+  }
+  glVertexPointer(3, GL_FLOAT, 0, p), glNormalPointer(GL_FLOAT, 0, q), glColorPointer(4, GL_UNSIGNED_BYTE, 0, r);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glDrawArrays(GL_TRIANGLES, 0, n);
+  glFinish();
+  print_frame(3, buf, w, h);
+  printf("error 0x%x\n", glGetError());
+  OSMesaDestroyContext(c);
+  free(buf), free(p), free(q), free(r);
+  return 0;
+}
