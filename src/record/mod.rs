@@ -507,7 +507,9 @@ impl Recorder {
         }
         if let Some(range) = arrays::draw_range(cmd, args) {
             let thread = self.thread;
-            let captured = self.state().arrays.capture(range);
+            // SAFETY: the draw is being recorded: its arrays are valid and unchanged until
+            // it returns, and `captured` goes before that, after the arrays event.
+            let captured = unsafe { self.state().arrays.capture(range) };
             if !captured.is_empty() {
                 let list: Vec<_> = captured.iter().map(|c| c.as_data()).collect();
                 self.e.arrays(thread, &list);
