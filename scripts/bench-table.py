@@ -73,12 +73,12 @@ def main():
             ("GL-look frame, ms (shaded; no anchor)", g["frame_ms_min"], float("nan")),
             ("GL look x AO frame, ms (shaded; no anchor)", g["ao_frame_ms_min"], float("nan")),
         ]
-        for m in ("dl", "vbo"):
+        for m in ("dl", "vbo", "va"):
             ll = pick(results(f"{d}/mesh_{n}.osmesa-{m}.txt"), "osmesa")
             gr = pick(results(f"{d}/mesh_{n}.glray-osmesa-{m}.txt"), "osmesa")
             rows.append((f"osmesa_bench {m} frame, ms (llvmpipe; glray: same program, every frame ray traced)",
                          num(gr, "frame_ms_median"), num(ll, "frame_ms_median")))
-        for m in ("dl", "vbo"):
+        for m in ("dl", "vbo", "va"):
             # osmesa_bench draws one scene over and over: under glray's defaults each frame
             # after the first shows the traced picture again (capture, compare, present).
             ll = pick(results(f"{d}/mesh_{n}.osmesa-{m}.txt"), "osmesa")
