@@ -300,16 +300,17 @@ impl Context {
             let h = xxh3_128(bytes);
             [h as i64, (h >> 64) as i64]
         };
-        let (mut words, elements) = match op {
+        let mut words = match op {
             Op::DrawArrays => {
                 let (first, count) = (args::int(a, 1), args::int(a, 2));
-                if first < 0 {
+                if first < 0 || count < KEEP_FROM_ELEMENTS {
                     return None;
                 }
-                (vec![0, args::int(a, 0), first, count], count)
+                vec![0, args::int(a, 0), first, count]
             }
             Op::DrawElements | Op::DrawRangeElements => {
                 let (count, ty, idx) = if op == Op::DrawElements { (1, 2, 3) } else { (3, 4, 5) };
+                let count = args::int(a, count);
                 let size = match args::uint(a, ty) {
                     GL_UNSIGNED_BYTE => 1,
                     GL_UNSIGNED_SHORT => 2,
@@ -318,17 +319,16 @@ impl Context {
                 };
                 // Client indices (with an element buffer bound they are an offset into it).
                 let Some(Value::Blob(indices)) = a.get(idx) else { return None };
-                let count = args::int(a, count);
+                if count < KEEP_FROM_ELEMENTS {
+                    return None;
+                }
                 let bytes = usize::try_from(count).ok()?.checked_mul(size)?;
                 let mut words = vec![1, args::int(a, 0), count, size as i64];
                 words.extend(hash(indices.get(..bytes).unwrap_or(indices)));
-                (words, count)
+                words
             }
             _ => return None,
         };
-        if elements < KEEP_FROM_ELEMENTS {
-            return None;
-        }
         for (d, bytes) in self.arrays.iter().zip(&self.array_bytes) {
             words.extend([
                 i64::from(d.kind),
