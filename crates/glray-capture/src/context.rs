@@ -230,6 +230,9 @@ impl Context {
             height: self.frame.height,
             clear_color: self.frame.clear_color,
             depth_range: self.s.depth_range,
+            // Room for as many triangles as this frame drew: grown by doubling, a program's
+            // million immediate-mode triangles were copied over and over every frame.
+            triangles: Vec::with_capacity(self.frame.triangles.len()),
             ..Frame::default()
         };
         self.sequence = 0;
@@ -561,9 +564,8 @@ impl Context {
             Op::Attr(form) => self.attribute(form, a)?,
             Op::Begin => self.imm.begin(args::uint(a, 0))?,
             Op::End => {
-                let batch = self.imm.end()?;
-                let verts = std::mem::take(&mut self.open);
-                self.draw(batch.mode, &verts, QuadSplit::Direct);
+                let mode = self.imm.end()?;
+                self.draw_open(mode);
             }
             Op::Rect => {
                 let v = if a.len() == 2 {
@@ -1654,6 +1656,36 @@ mod tests {
         // draw here: the last index read, whole triangle or not).
         let last = indices[indices.len() - 1] as usize;
         assert_eq!(c.imm.current.color, Vec4::from_slice(&colors[4 * last..4 * last + 4]).as_dvec4());
+    }
+
+    #[test]
+    fn a_long_glbegin_is_drawn_whole_in_the_order_given_and_its_vertices_are_not_all_held() {
+        // 39,999 vertices of separate triangles (more than three chunks) and of a strip: every
+        // triangle, in order; for the first, fewer vertices held at once than given.
+        let mut c = context();
+        let n = 39_999;
+        let give = |c: &mut Context, mode: i64| {
+            call(c, "glBegin", &[i(mode)]);
+            for k in 0..n {
+                call(c, "glColor3f", &[f(k as f64 / n as f64), f(0.0), f(0.0)]);
+                let (x, y) = ((k % 3 == 1) as i32 as f64 * 0.5, (k % 3 == 2) as i32 as f64 * 0.5);
+                call(c, "glVertex2f", &[f(x - 0.5 + k as f64 / n as f64 * 0.1), f(y - 0.5)]);
+            }
+            call(c, "glEnd", &[]);
+        };
+        give(&mut c, 4); // GL_TRIANGLES
+        assert!(c.open.capacity() < n, "{}", c.open.capacity());
+        let frame = c.take_frame();
+        assert_eq!(frame.triangles.len(), n / 3);
+        for (t, tri) in frame.triangles.iter().enumerate() {
+            let first = (3 * t) as f32 / n as f32;
+            let reds: Vec<f32> = tri.colors.iter().map(|c| c.x).collect();
+            assert!(reds.iter().all(|r| (r - first).abs() < 3.0 / n as f32), "triangle {t}: {reds:?}");
+        }
+        assert!(frame.triangles.windows(2).all(|w| w[0].sequence <= w[1].sequence), "in drawing order");
+        give(&mut c, 5); // GL_TRIANGLE_STRIP
+        assert_eq!(c.take_frame().triangles.len(), n - 2);
+        assert_eq!(c.errors.take(), 0);
     }
 
     #[test]

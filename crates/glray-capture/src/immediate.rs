@@ -1,5 +1,6 @@
-//! Immediate mode: the current vertex attributes, and glBegin/glEnd collecting vertices that
-//! each take the attributes current at their glVertex. GL's rules: glBegin inside glBegin,
+//! Immediate mode: the current vertex attributes, and whether a glBegin is open (each glVertex
+//! goes through the vertex stage with the attributes current at the call: `Context::vertex`).
+//! GL's rules: glBegin inside glBegin,
 //! glEnd outside, and any command that is not per-vertex between them are INVALID_OPERATION; a
 //! bad mode is INVALID_ENUM; glVertex outside glBegin/glEnd does nothing (Mesa ignores it).
 //!
@@ -9,7 +10,7 @@
 use glam::{DVec3, DVec4};
 
 use crate::error::{GlError, GlResult};
-use crate::primitive::{assemble, Assembly, QuadSplit, GL_POLYGON};
+use crate::primitive::GL_POLYGON;
 
 /// Texture units with their own current texture coordinate.
 pub const TEXCOORD_UNITS: usize = 8;
@@ -42,16 +43,6 @@ pub mod convert {
     }
 }
 
-/// A vertex with the attributes that were current when it was given.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Vertex {
-    pub position: DVec4,
-    pub normal: DVec3,
-    pub color: DVec4,
-    pub texcoords: [DVec4; TEXCOORD_UNITS],
-    pub edge: bool,
-}
-
 /// The current attributes: what glNormal, glColor, glTexCoord and glEdgeFlag set.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Current {
@@ -73,26 +64,12 @@ impl Default for Current {
     }
 }
 
-/// The vertices of one glBegin/glEnd.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Batch {
-    pub mode: u32,
-    pub vertices: Vec<Vertex>,
-}
-
-impl Batch {
-    /// Its points, lines and triangles.
-    pub fn assemble(&self) -> Assembly {
-        assemble(self.mode, self.vertices.len(), QuadSplit::Direct).expect("glBegin checked the mode")
-    }
-}
-
 /// Immediate-mode state of a context.
 #[derive(Debug, Default, Clone)]
 pub struct Immediate {
     pub current: Current,
+    /// The mode of the open glBegin.
     open: Option<u32>,
-    vertices: Vec<Vertex>,
 }
 
 impl Immediate {
@@ -116,27 +93,17 @@ impl Immediate {
             return Err(GlError::InvalidEnum);
         }
         self.open = Some(mode);
-        self.vertices.clear();
         Ok(())
     }
 
-    pub fn end(&mut self) -> GlResult<Batch> {
-        let mode = self.open.take().ok_or(GlError::InvalidOperation)?;
-        Ok(Batch { mode, vertices: std::mem::take(&mut self.vertices) })
+    /// The mode of the open glBegin.
+    pub fn mode(&self) -> Option<u32> {
+        self.open
     }
 
-    /// glVertex: (x, y, z, w); the 2- and 3-component forms pass z = 0 and w = 1.
-    pub fn vertex(&mut self, position: DVec4) {
-        if self.open.is_some() {
-            let c = &self.current;
-            self.vertices.push(Vertex {
-                position,
-                normal: c.normal,
-                color: c.color,
-                texcoords: c.texcoords,
-                edge: c.edge,
-            });
-        }
+    /// glEnd: the mode of the glBegin it closes.
+    pub fn end(&mut self) -> GlResult<u32> {
+        self.open.take().ok_or(GlError::InvalidOperation)
     }
 
     pub fn normal(&mut self, n: DVec3) {
@@ -165,24 +132,17 @@ mod tests {
     use crate::primitive::{GL_QUADS, GL_TRIANGLES};
 
     #[test]
-    fn vertices_take_the_current_attributes() {
+    fn the_current_attributes_outlive_glend() {
         let mut im = Immediate::default();
+        assert_eq!(im.current.normal, DVec3::Z, "the initial normal");
         im.begin(GL_TRIANGLES).unwrap();
         im.color(DVec4::new(1.0, 0.0, 0.0, 1.0));
-        im.vertex(DVec4::new(0.0, 0.0, 0.0, 1.0));
         im.normal(DVec3::X);
         im.tex_coord(1, DVec4::new(0.5, 0.5, 0.0, 1.0)).unwrap();
-        im.vertex(DVec4::new(1.0, 0.0, 0.0, 1.0));
-        im.vertex(DVec4::new(0.0, 1.0, 0.0, 1.0));
-        let b = im.end().unwrap();
-        assert_eq!(b.vertices.len(), 3);
-        assert_eq!(b.vertices[0].normal, DVec3::Z, "the initial normal");
-        assert_eq!(b.vertices[0].color, DVec4::new(1.0, 0.0, 0.0, 1.0));
-        assert_eq!(b.vertices[1].normal, DVec3::X);
-        assert_eq!(b.vertices[2].texcoords[1], DVec4::new(0.5, 0.5, 0.0, 1.0));
-        assert_eq!(b.assemble().triangles.len(), 1);
-        // The current state outlives glEnd.
+        assert_eq!(im.end(), Ok(GL_TRIANGLES));
         assert_eq!(im.current.normal, DVec3::X);
+        assert_eq!(im.current.color, DVec4::new(1.0, 0.0, 0.0, 1.0));
+        assert_eq!(im.current.texcoords[1], DVec4::new(0.5, 0.5, 0.0, 1.0));
     }
 
     #[test]
@@ -195,11 +155,8 @@ mod tests {
         assert_eq!(im.begin(GL_QUADS), Err(GlError::InvalidOperation));
         assert_eq!(im.outside(), Err(GlError::InvalidOperation));
         assert_eq!(im.tex_coord(TEXCOORD_UNITS, DVec4::ZERO), Err(GlError::InvalidEnum));
-        assert_eq!(im.end().unwrap().mode, GL_QUADS);
-        // glVertex outside glBegin/glEnd is ignored.
-        im.vertex(DVec4::ONE);
-        im.begin(GL_QUADS).unwrap();
-        assert!(im.end().unwrap().vertices.is_empty());
+        assert_eq!(im.end(), Ok(GL_QUADS));
+        assert!(!im.inside());
     }
 
     #[test]

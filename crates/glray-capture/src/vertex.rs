@@ -13,6 +13,11 @@ use crate::gl::*;
 use crate::immediate::TEXCOORD_UNITS;
 use crate::lighting::light_face;
 use crate::ops::{Attr, AttrForm};
+use crate::primitive::{QuadSplit, GL_LINES, GL_POINTS, GL_QUADS, GL_TRIANGLES};
+
+/// How many vertices of a glBegin of separate primitives are drawn at once (a multiple of 1,
+/// 2, 3 and 4, so that no primitive is cut; 3 MB of vertices).
+const IMMEDIATE_CHUNK: usize = 12 * 1024;
 
 /// What an attribute command gives, decoded from its arguments.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -113,12 +118,27 @@ impl Context {
         Ok(())
     }
 
-    /// glVertex: a vertex of the open glBegin (outside one it does nothing).
+    /// glVertex: a vertex of the open glBegin (outside one it does nothing). A glBegin of
+    /// separate points, lines, triangles or quads is drawn every `IMMEDIATE_CHUNK` vertices, as
+    /// Mesa flushes its immediate-mode buffer when it fills: held to its glEnd, a glBegin of a
+    /// million triangles was 750 MB of vertices, grown and copied anew every frame.
     pub(crate) fn vertex(&mut self, p: DVec4) {
-        if self.imm.inside() {
-            let out = self.vertex_stage(p);
-            self.open.push(out);
-            self.imm.vertex(p);
+        let Some(mode) = self.imm.mode() else { return };
+        let out = self.vertex_stage(p);
+        self.open.push(out);
+        if self.open.len() >= IMMEDIATE_CHUNK && matches!(mode, GL_POINTS | GL_LINES | GL_TRIANGLES | GL_QUADS) {
+            self.draw_open(mode);
+        }
+    }
+
+    /// Draws the open glBegin's vertices so far, and keeps their room for the next ones.
+    pub(crate) fn draw_open(&mut self, mode: u32) {
+        let mut verts = std::mem::take(&mut self.open);
+        self.draw(mode, &verts, QuadSplit::Direct);
+        verts.clear();
+        // A long strip, fan or polygon's room is not kept.
+        if verts.capacity() <= 4 * IMMEDIATE_CHUNK {
+            self.open = verts;
         }
     }
 
