@@ -704,6 +704,19 @@ fn a_depth_clear_between_draws_lets_the_later_ones_land_over_the_earlier() {
 }
 
 #[test]
+fn what_a_list_changes_reaches_the_real_gl_when_glray_takes_the_call() {
+    // tests/helpers/list_state.c: a list sets the front face, culling, shading, polygon mode,
+    // depth, blending, alpha test, line width and point size, and leaves a colour and normal
+    // current; the program asks the GL for each after glCallList, and for the raster colour
+    // glRasterPos takes (glBitmap text's). glray takes the glCallList from the real GL, which
+    // answered with the state from before the list (GL_CCW, a white raster colour...).
+    let (plain, traced) = plain_and_traced("list_state");
+    assert!(plain.contains("front face 0x900 cull 0x404 1 shade 0x1d00"), "Mesa: {plain}");
+    assert!(plain.contains("raster colour 1.00 0.50 0.25") && plain.contains("error 0x0"), "Mesa: {plain}");
+    assert_eq!(traced, plain, "glray against Mesa");
+}
+
+#[test]
 fn big_client_array_draws_follow_the_bytes_they_read_from_frame_to_frame() {
     // tests/helpers/client_arrays.c: a lit grid of 12,482 triangles from client arrays, drawn
     // again unchanged, then changed in place (same pointers, new colours and heights), then as

@@ -22,6 +22,7 @@
 //! - `matrix`: the matrix stacks and every operation on them, as Mesa implements them;
 //! - `immediate`: the current vertex attributes and glBegin/glEnd;
 //! - `lighting`: the fixed-function lighting equation, per vertex, as a rasterizer evaluates it;
+//! - `list_effects`: the state (beside the matrices) a list leaves changed, for the real GL;
 //! - `lists`: display lists with Mesa's rules (generic over what a list holds);
 //! - `primitive`: assembling vertex streams into points, lines and triangles, with the provoking
 //!   vertex flat shading uses;
@@ -40,6 +41,7 @@ mod gl;
 pub mod immediate;
 pub mod instance;
 pub mod lighting;
+pub mod list_effects;
 pub mod lists;
 pub mod matrix;
 pub mod mesh;
