@@ -9,7 +9,7 @@
 //! (`list_effects::StateSeen`: enables, face, shading, depth, blending, current colour...).
 
 use glray_capture::events::Capture;
-use glray_capture::list_effects::{StateSeen, CAPS};
+use glray_capture::list_effects::StateSeen;
 use glray_capture::matrix::Seen;
 
 use crate::real;
@@ -64,7 +64,7 @@ pub fn after(capture: &mut Capture, thread: u32, before: Option<(Seen, StateSeen
 fn put_state(was: &StateSeen, now: &StateSeen) {
     // SAFETY: as in `after`: the calling thread's context is current; the calls take values.
     unsafe {
-        for ((&cap, &on), &was_on) in CAPS.iter().zip(&now.enables).zip(&was.enables) {
+        for (&(cap, on), &(_, was_on)) in now.enables.iter().zip(&was.enables) {
             if on != was_on {
                 if on {
                     real::glEnable(cap)

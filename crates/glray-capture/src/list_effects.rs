@@ -13,45 +13,11 @@ use glam::{DVec3, DVec4};
 use crate::context::Context;
 use crate::gl::*;
 
-/// GL's capabilities capture follows, in the order `StateSeen::enables` holds them.
-pub const CAPS: [u32; 30] = [
-    GL_LIGHTING,
-    GL_LIGHT0,
-    GL_LIGHT0 + 1,
-    GL_LIGHT0 + 2,
-    GL_LIGHT0 + 3,
-    GL_LIGHT0 + 4,
-    GL_LIGHT0 + 5,
-    GL_LIGHT0 + 6,
-    GL_LIGHT0 + 7,
-    GL_COLOR_MATERIAL,
-    GL_NORMALIZE,
-    GL_RESCALE_NORMAL,
-    GL_CULL_FACE,
-    GL_POLYGON_OFFSET_FILL,
-    GL_DEPTH_TEST,
-    GL_SCISSOR_TEST,
-    GL_BLEND,
-    GL_ALPHA_TEST,
-    GL_COLOR_LOGIC_OP,
-    GL_TEXTURE_2D,
-    GL_TEXTURE_1D,
-    GL_FOG,
-    GL_LINE_SMOOTH,
-    GL_POINT_SMOOTH,
-    GL_CLIP_PLANE0,
-    GL_CLIP_PLANE0 + 1,
-    GL_CLIP_PLANE0 + 2,
-    GL_CLIP_PLANE0 + 3,
-    GL_CLIP_PLANE0 + 4,
-    GL_CLIP_PLANE0 + 5,
-];
-
 /// The state a list can leave changed that the real GL answers queries with and draws with.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StateSeen {
-    /// Whether each of `CAPS` is enabled.
-    pub enables: [bool; 30],
+    /// Each capability capture follows, and whether it is enabled.
+    pub enables: [(u32, bool); 30],
     /// GL_CW or GL_CCW.
     pub front_face: u32,
     pub cull_face: u32,
@@ -74,32 +40,40 @@ impl Context {
     /// The state `StateSeen` describes, as capture has it now.
     pub fn state_seen(&self) -> StateSeen {
         let s = &self.s;
-        let lights: [bool; 8] = std::array::from_fn(|i| s.lights[i].enabled);
-        let planes: [bool; 6] = std::array::from_fn(|i| s.clip_planes[i].0);
-        let mut enables = [false; 30];
-        let listed = [
-            s.lighting,
-            s.color_material,
-            s.normalize,
-            s.rescale_normal,
-            s.cull,
-            s.polygon_offset_fill,
-            s.depth_test,
-            s.scissor_test,
-            s.blend,
-            s.alpha_test,
-            s.logic_op_enabled,
-            s.texture_2d,
-            s.texture_1d,
-            s.fog_enabled,
-            s.line_smooth,
-            s.point_smooth,
+        let light = |i: usize| (GL_LIGHT0 + i as u32, s.lights[i].enabled);
+        let plane = |i: usize| (GL_CLIP_PLANE0 + i as u32, s.clip_planes[i].0);
+        let enables = [
+            (GL_LIGHTING, s.lighting),
+            light(0),
+            light(1),
+            light(2),
+            light(3),
+            light(4),
+            light(5),
+            light(6),
+            light(7),
+            (GL_COLOR_MATERIAL, s.color_material),
+            (GL_NORMALIZE, s.normalize),
+            (GL_RESCALE_NORMAL, s.rescale_normal),
+            (GL_CULL_FACE, s.cull),
+            (GL_POLYGON_OFFSET_FILL, s.polygon_offset_fill),
+            (GL_DEPTH_TEST, s.depth_test),
+            (GL_SCISSOR_TEST, s.scissor_test),
+            (GL_BLEND, s.blend),
+            (GL_ALPHA_TEST, s.alpha_test),
+            (GL_COLOR_LOGIC_OP, s.logic_op_enabled),
+            (GL_TEXTURE_2D, s.texture_2d),
+            (GL_TEXTURE_1D, s.texture_1d),
+            (GL_FOG, s.fog_enabled),
+            (GL_LINE_SMOOTH, s.line_smooth),
+            (GL_POINT_SMOOTH, s.point_smooth),
+            plane(0),
+            plane(1),
+            plane(2),
+            plane(3),
+            plane(4),
+            plane(5),
         ];
-        // In `CAPS`' order: lighting, the eight lights, the rest, the six clip planes.
-        enables[0] = listed[0];
-        enables[1..9].copy_from_slice(&lights);
-        enables[9..24].copy_from_slice(&listed[1..]);
-        enables[24..].copy_from_slice(&planes);
         StateSeen {
             enables,
             front_face: if s.front_ccw { GL_CCW } else { GL_CW },
