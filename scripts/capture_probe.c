@@ -1,7 +1,8 @@
 /* Capture's cost in three shapes of frame, each drawn 5 times (the time of each printed):
  *   tri N    N glBegin/glEnd of one lit triangle each, every frame;
  *   lists N  N small display lists, each called under its own glTranslatef, every frame;
- *   tex 0    a 2048x2048 RGBA texture uploaded with glTexImage2D every frame, on one quad.
+ *   tex 0    a 2048x2048 RGBA texture uploaded with glTexImage2D every frame, on one quad;
+ *   ftex 0   the same with a 1024x1024 texture of floats (GL_FLOAT, as scientific data comes).
  *   gcc -O2 -o capture_probe scripts/capture_probe.c -lOSMesa -lm
  *   ./capture_probe tex 0; glray run --set preset=gl --set progressive=false -- ./capture_probe tex 0 */
 #include <GL/osmesa.h>
@@ -30,6 +31,9 @@ int main(int argc, char **argv) {
       glEnd(); glEndList();
     }
   }
+  int floats = !strcmp(mode, "ftex");
+  float *ftex = NULL;
+  if (floats) { mode = "tex"; ts = 1024; ftex = malloc(sizeof(float) * ts * ts * 4); }
   if (!strcmp(mode, "tex")) { tex = malloc(ts * ts * 4); glEnable(GL_TEXTURE_2D); glDisable(GL_LIGHTING);
     GLuint t; glGenTextures(1, &t); glBindTexture(GL_TEXTURE_2D, t);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR); }
@@ -48,7 +52,12 @@ int main(int argc, char **argv) {
       }
     } else if (!strcmp(mode, "tex")) {
       for (int i = 0; i < ts * ts * 4; i += 4) { tex[i] = (i / 4 + f * 7) & 255; tex[i + 1] = (i / 4096) & 255; tex[i + 2] = 128; tex[i + 3] = 255; }
-      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, ts, ts, 0, GL_RGBA, GL_UNSIGNED_BYTE, tex);
+      if (floats) {
+        for (int i = 0; i < ts * ts * 4; i++) ftex[i] = tex[i] / 255.0f;
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, ts, ts, 0, GL_RGBA, GL_FLOAT, ftex);
+      } else {
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, ts, ts, 0, GL_RGBA, GL_UNSIGNED_BYTE, tex);
+      }
       glBegin(GL_QUADS); glTexCoord2f(0, 0); glVertex2f(-1, -0.75f); glTexCoord2f(1, 0); glVertex2f(1, -0.75f);
       glTexCoord2f(1, 1); glVertex2f(1, 0.75f); glTexCoord2f(0, 1); glVertex2f(-1, 0.75f); glEnd();
     }

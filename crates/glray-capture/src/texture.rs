@@ -174,8 +174,21 @@ pub fn decode(width: usize, height: usize, format: u32, ty: u32, unpack: &Unpack
         }
         table
     });
+    // Floats (scientific data) likewise, each clamped as it is read.
+    let floats = packed.is_none() && ty == args::GL_FLOAT;
     for y in 0..height {
         let row = (y + unpack.skip_rows) * row_bytes + unpack.skip_pixels * pixel_bytes;
+        if floats {
+            let pixels = data.get(row..row.checked_add(width * pixel_bytes)?)?;
+            out.extend(pixels.chunks_exact(pixel_bytes).map(|p| {
+                let mut c = [0.0f32; 4];
+                for (v, b) in c.iter_mut().zip(p.chunks_exact(4)) {
+                    *v = f32::from_ne_bytes([b[0], b[1], b[2], b[3]]).clamp(0.0, 1.0);
+                }
+                texel(format, c)
+            }));
+            continue;
+        }
         if let Some(table) = &bytes {
             let pixels = data.get(row..row.checked_add(width * n)?)?;
             out.extend(pixels.chunks_exact(n).map(|p| {
@@ -378,6 +391,25 @@ mod tests {
                 assert!(decode(3, 2, format, UBYTE, &un, &data[..2 * row_bytes + 2 * n + 3 * n - 1]).is_none());
             }
         }
+    }
+
+    #[test]
+    fn float_pixels_decode_clamped_to_0_1_wherever_the_unpack_state_puts_them() {
+        // 2 x 2 RGB floats, one pixel in and one row down of rows 3 pixels long; values under
+        // 0 and over 1 (and an infinity) clamp as GL clamps a fixed-point texture's.
+        let values = [-1.0f32, 0.25, 1.5, 0.5, f32::INFINITY, 0.125, 0.75, 0.0, 1.0, 0.3, 0.6, 0.9];
+        let un = Unpack { alignment: 4, row_length: 3, skip_rows: 1, skip_pixels: 1 };
+        let mut data = vec![0u8; 3 * 3 * 12];
+        for (k, v) in values.iter().enumerate() {
+            let (y, i) = (k / 6, k % 6);
+            let at = ((1 + y) * 9 + 3 + i) * 4;
+            data[at..at + 4].copy_from_slice(&v.to_ne_bytes());
+        }
+        let t = decode(2, 2, GL_RGB, 0x1406, &un, &data).unwrap();
+        let want: Vec<Vec4> =
+            values.chunks(3).map(|c| Vec4::new(c[0], c[1], c[2], 1.0).clamp(Vec4::ZERO, Vec4::ONE)).collect();
+        assert_eq!(t, want);
+        assert!(decode(2, 2, GL_RGB, 0x1406, &un, &data[..data.len() - 13]).is_none(), "too little memory");
     }
 
     #[test]
