@@ -121,6 +121,16 @@ pub(crate) fn quad_split(op: Op) -> QuadSplit {
     }
 }
 
+/// Where glDrawElements (and glDrawRangeElements, after its start and end) keeps its count,
+/// index type and indices among its arguments.
+fn index_args(op: Op) -> (usize, usize, usize) {
+    if op == Op::DrawRangeElements {
+        (3, 4, 5)
+    } else {
+        (1, 2, 3)
+    }
+}
+
 /// Element `i` of each array (vertex, normal, colour, texture coordinates).
 fn fetch(sources: &[Option<Source<'_>>; 4], i: u64) -> Fetched {
     Fetched {
@@ -184,7 +194,7 @@ impl Context {
                 firsts.iter().zip(&counts).map(|(f, c)| (*f as u32..(*f + c.max(0.0)) as u32).collect()).collect()
             }
             Op::DrawElements | Op::DrawRangeElements => {
-                let (count, ty, idx) = if op == Op::DrawElements { (1, 2, 3) } else { (3, 4, 5) };
+                let (count, ty, idx) = index_args(op);
                 let count = args::int(a, count);
                 if count < 0 {
                     return Err(GlError::InvalidValue);
@@ -257,7 +267,7 @@ impl Context {
         match op {
             Op::DrawArrays => words.extend([0, 1, 2].map(|i| args::int(a, i))),
             Op::DrawElements | Op::DrawRangeElements => {
-                let (count, ty, idx) = if op == Op::DrawElements { (1, 2, 3) } else { (3, 4, 5) };
+                let (count, ty, idx) = index_args(op);
                 if c.element_buffer == 0
                     || !matches!(args::uint(a, ty), GL_UNSIGNED_BYTE | GL_UNSIGNED_SHORT | GL_UNSIGNED_INT)
                 {
@@ -309,7 +319,7 @@ impl Context {
                 vec![0, args::int(a, 0), first, count]
             }
             Op::DrawElements | Op::DrawRangeElements => {
-                let (count, ty, idx) = if op == Op::DrawElements { (1, 2, 3) } else { (3, 4, 5) };
+                let (count, ty, idx) = index_args(op);
                 let count = args::int(a, count);
                 let size = match args::uint(a, ty) {
                     GL_UNSIGNED_BYTE => 1,
@@ -389,11 +399,10 @@ impl Context {
     /// spread far wider than their number, or a vertex the arrays cannot give: the general path
     /// takes those (errors included).
     pub(crate) fn indexed_triangles(&self, op: Op, a: &[Value]) -> Option<Mesh> {
-        let (count, ty, idx) = match op {
-            Op::DrawElements => (1, 2, 3),
-            Op::DrawRangeElements => (3, 4, 5),
-            _ => return None,
-        };
+        if !matches!(op, Op::DrawElements | Op::DrawRangeElements) {
+            return None;
+        }
+        let (count, ty, idx) = index_args(op);
         let count = usize::try_from(args::int(a, count)).ok()?;
         if args::uint(a, 0) != GL_TRIANGLES || count < 3 {
             return None;

@@ -8,8 +8,9 @@
 //! buffer object's, and its BVH is built once.
 //!
 //! Only draws that read client memory alone (no buffer object) are kept: what they read is all
-//! in the key, so nothing else can make a kept mesh stale. Only what the last frame drew is kept: a program whose arrays change every frame makes a new
-//! mesh each frame, and the old one goes at the frame's end instead of filling memory.
+//! in the key, so nothing else can make a kept mesh stale. Only what the last frame drew is
+//! kept: a program whose arrays change every frame makes a new mesh each frame, and the old one
+//! goes at the frame's end instead of filling memory.
 
 use std::collections::HashMap;
 use std::sync::Arc;
