@@ -178,26 +178,14 @@ pub fn decode(width: usize, height: usize, format: u32, ty: u32, unpack: &Unpack
     let floats = packed.is_none() && ty == args::GL_FLOAT;
     for y in 0..height {
         let row = (y + unpack.skip_rows) * row_bytes + unpack.skip_pixels * pixel_bytes;
-        if floats {
+        if floats || bytes.is_some() {
             let pixels = data.get(row..row.checked_add(width * pixel_bytes)?)?;
-            out.extend(pixels.chunks_exact(pixel_bytes).map(|p| {
-                let mut c = [0.0f32; 4];
-                for (v, b) in c.iter_mut().zip(p.chunks_exact(4)) {
-                    *v = f32::from_ne_bytes([b[0], b[1], b[2], b[3]]).clamp(0.0, 1.0);
-                }
-                texel(format, c)
-            }));
-            continue;
-        }
-        if let Some(table) = &bytes {
-            let pixels = data.get(row..row.checked_add(width * n)?)?;
-            out.extend(pixels.chunks_exact(n).map(|p| {
-                let mut c = [0.0f32; 4];
-                for (v, b) in c.iter_mut().zip(p) {
-                    *v = table[*b as usize];
-                }
-                texel(format, c)
-            }));
+            match &bytes {
+                Some(table) => out.extend(row_texels(pixels, n, 1, format, |b| table[b[0] as usize])),
+                None => out.extend(row_texels(pixels, n, 4, format, |b| {
+                    f32::from_ne_bytes([b[0], b[1], b[2], b[3]]).clamp(0.0, 1.0)
+                })),
+            }
             continue;
         }
         for x in 0..width {
@@ -222,6 +210,24 @@ pub fn decode(width: usize, height: usize, format: u32, ty: u32, unpack: &Unpack
         }
     }
     Some(out)
+}
+
+/// The texels of a row of pixels of `n` components, `size` bytes each, each component read
+/// with `read`.
+fn row_texels<'a>(
+    pixels: &'a [u8],
+    n: usize,
+    size: usize,
+    format: u32,
+    read: impl Fn(&[u8]) -> f32 + 'a,
+) -> impl Iterator<Item = Vec4> + 'a {
+    pixels.chunks_exact(n * size).map(move |p| {
+        let mut c = [0.0f32; 4];
+        for (v, b) in c.iter_mut().zip(p.chunks_exact(size)) {
+            *v = read(b);
+        }
+        texel(format, c)
+    })
 }
 
 /// An RGBA texel from the components a pixel of `format` gives, in their order.
