@@ -720,8 +720,11 @@ fn what_a_list_changes_reaches_the_real_gl_when_glray_takes_the_call() {
 fn big_client_array_draws_follow_the_bytes_they_read_from_frame_to_frame() {
     // tests/helpers/client_arrays.c: a lit grid of 12,482 triangles from client arrays, drawn
     // again unchanged, then changed in place (same pointers, new colours and heights), then as
-    // glDrawArrays from new memory. glray keeps such a draw's mesh by a hash of the bytes it
-    // reads: a mesh kept by pointer, or kept past a change, would show frame 0 in frame 2.
+    // glDrawArrays from new memory, then after the client attribute stack turned the arrays off
+    // and on, then from one interleaved array. glray keeps such a draw's mesh by a hash of the
+    // bytes it reads: a mesh kept by pointer, or kept past a change, would show frame 0 in
+    // frame 2; arrays not followed through glPopClientAttrib or glInterleavedArrays (which
+    // set them all at once) would leave frames 4 and 5 empty.
     let (plain, traced) = plain_and_traced("client_arrays");
     let frames = |out: &str| -> Vec<Vec<i32>> {
         out.lines()
@@ -730,12 +733,13 @@ fn big_client_array_draws_follow_the_bytes_they_read_from_frame_to_frame() {
             .collect()
     };
     let (p, t) = (frames(&plain), frames(&traced));
-    assert_eq!(p.len(), 4, "Mesa: {plain}");
+    assert_eq!(p.len(), 6, "Mesa: {plain}");
     assert!(p.iter().all(|f| f.len() == 3 * 64), "Mesa: {plain}");
     assert_eq!(p[0], p[1], "Mesa: the same bytes, the same picture");
     assert_ne!(p[1], p[2], "Mesa: the change shows");
     assert!(plain.contains("error 0x0"), "Mesa: {plain}");
-    assert_eq!(t.len(), 4, "glray: {traced}");
+    assert_eq!(p[3], p[4], "Mesa: the arrays back from the attribute stack");
+    assert_eq!(t.len(), 6, "glray: {traced}");
     for (k, (p, t)) in p.iter().zip(&t).enumerate() {
         assert_eq!(p.len(), t.len(), "frame {k}");
         let off: Vec<_> = p.iter().zip(t).filter(|(a, b)| (*a - *b).abs() > 3).collect();

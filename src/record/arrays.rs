@@ -34,6 +34,11 @@ impl Array {
         Array { enabled: false, size, ty, stride: 0, normalized: false, ptr: 0, buffer: 0 }
     }
 
+    /// Enabled, and read from the program's memory rather than a buffer object.
+    fn reads_client(&self) -> bool {
+        self.enabled && self.buffer == 0 && self.ptr != 0
+    }
+
     fn element_bytes(&self) -> u64 {
         array_element_bytes(self.size, self.ty)
     }
@@ -46,6 +51,9 @@ pub struct ClientArrays {
     texcoords: [Array; MAX_UNITS],
     attribs: [Array; MAX_UNITS],
     client_active: usize,
+    /// Whether any enabled array reads client memory: asked before every geometry call
+    /// (glBegin and glEnd among them), set by `track`, the only way the arrays change.
+    client: bool,
 }
 
 impl Default for ClientArrays {
@@ -65,6 +73,7 @@ impl Default for ClientArrays {
             texcoords: [Array::new(4, GL_FLOAT); MAX_UNITS],
             attribs: [Array::new(4, GL_FLOAT); MAX_UNITS],
             client_active: 0,
+            client: false,
         }
     }
 }
@@ -168,13 +177,14 @@ impl ClientArrays {
             }
             // Calls that set many arrays at once: read the state back from GL.
             cmd::glInterleavedArrays | cmd::glPopClientAttrib | cmd::glBindVertexArray => self.sync_from_gl(),
-            _ => {}
+            _ => return,
         }
+        self.client = self.fixed.iter().chain(&self.texcoords).chain(&self.attribs).any(Array::reads_client);
     }
 
     /// Whether any enabled array reads client memory (so a draw needs capturing).
     pub fn any_client(&self) -> bool {
-        self.fixed.iter().chain(&self.texcoords).chain(&self.attribs).any(|a| a.enabled && a.buffer == 0 && a.ptr != 0)
+        self.client
     }
 
     /// The memory of every enabled client array for elements `lo..=hi`.
@@ -184,7 +194,7 @@ impl ClientArrays {
     pub unsafe fn capture<'m>(&self, (lo, hi): (u64, u64)) -> Vec<Captured<'m>> {
         let mut out = Vec::new();
         let mut add = |kind: u8, index: u32, a: &Array| {
-            if !a.enabled || a.buffer != 0 || a.ptr == 0 {
+            if !a.reads_client() {
                 return;
             }
             let elem = a.element_bytes();

@@ -1,9 +1,11 @@
 /* An OSMesa program that draws a big lit surface from client arrays (its own memory: no buffer
- * object), as older VTK and VisIt do, over four frames:
+ * object), as older VTK and VisIt do, over six frames:
  *   0: a wavy 80 x 80 grid through glDrawElements (12,482 triangles);
  *   1: the same bytes again;
  *   2: the same arrays changed in place (colours of one half, heights of a band), same pointers;
- *   3: the grid as separate triangles through glDrawArrays, from memory allocated anew.
+ *   3: the grid as separate triangles through glDrawArrays, from memory allocated anew;
+ *   4: the same, its arrays turned off and back on by glPushClientAttrib/glPopClientAttrib;
+ *   5: the same triangles from one glInterleavedArrays array of floats.
  * glray keeps a big client draw's mesh by the bytes it reads: frame 1 reuses it, frame 2 must
  * not. Prints an 8 x 8 grid of pixels per frame. Built by tests/raytrace.rs with cc. */
 #include <math.h>
@@ -94,8 +96,30 @@ int main(void) {
   glDrawArrays(GL_TRIANGLES, 0, n);
   glFinish();
   print_frame(3, buf, w, h);
+
+  /* 4: the arrays turned off and back on by the client attribute stack (glray reads them back
+   * from GL after glPopClientAttrib); 5: the same triangles from one interleaved array. */
+  glPushClientAttrib(GL_CLIENT_VERTEX_ARRAY_BIT);
+  glDisableClientState(GL_VERTEX_ARRAY), glDisableClientState(GL_NORMAL_ARRAY), glDisableClientState(GL_COLOR_ARRAY);
+  glPopClientAttrib();
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glDrawArrays(GL_TRIANGLES, 0, n);
+  glFinish();
+  print_frame(4, buf, w, h);
+  float *v = malloc(sizeof(float) * 10 * n);
+  for (int e = 0; e < n; e++) {
+    for (int k = 0; k < 4; k++) v[10 * e + k] = r[4 * e + k] / 255.0f;
+    memcpy(v + 10 * e + 4, q + 3 * e, 3 * sizeof(float));
+    memcpy(v + 10 * e + 7, p + 3 * e, 3 * sizeof(float));
+  }
+  glDisableClientState(GL_VERTEX_ARRAY), glDisableClientState(GL_NORMAL_ARRAY), glDisableClientState(GL_COLOR_ARRAY);
+  glInterleavedArrays(GL_C4F_N3F_V3F, 0, v);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glDrawArrays(GL_TRIANGLES, 0, n);
+  glFinish();
+  print_frame(5, buf, w, h);
   printf("error 0x%x\n", glGetError());
   OSMesaDestroyContext(c);
-  free(buf), free(p), free(q), free(r);
+  free(buf), free(p), free(q), free(r), free(v);
   return 0;
 }
