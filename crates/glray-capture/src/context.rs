@@ -1868,6 +1868,40 @@ mod tests {
     }
 
     #[test]
+    fn draws_share_a_lighting_while_its_state_is_unchanged() {
+        let mut c = context();
+        call(&mut c, "glEnable", &[i(GL_LIGHTING as i64)]);
+        call(&mut c, "glEnable", &[i(GL_LIGHT0 as i64)]);
+        triangle(&mut c, true);
+        triangle(&mut c, true);
+        // Each change below makes the next draw's lighting a new one.
+        call(&mut c, "glLightf", &[i(GL_LIGHT0 as i64), i(0x1207), f(2.0)]); // GL_CONSTANT_ATTENUATION
+        triangle(&mut c, true);
+        call(&mut c, "glMaterialf", &[i(0x0408), i(0x1601), f(50.0)]); // GL_FRONT_AND_BACK, GL_SHININESS
+        triangle(&mut c, true);
+        call(&mut c, "glEnable", &[i(GL_LIGHT0 as i64 + 1)]);
+        triangle(&mut c, true);
+        call(&mut c, "glDisable", &[i(GL_LIGHT0 as i64 + 1)]);
+        triangle(&mut c, true);
+        call(&mut c, "glEnable", &[i(GL_COLOR_MATERIAL as i64)]);
+        triangle(&mut c, true);
+        call(&mut c, "glLightModeli", &[i(GL_LIGHT_MODEL_TWO_SIDE as i64), i(1)]);
+        triangle(&mut c, true);
+        let frame = c.frame();
+        let used: Vec<u32> = frame.triangles.iter().map(|t| t.lighting).collect();
+        assert_eq!(used, [0, 0, 1, 2, 3, 4, 5, 6]);
+        let l = &frame.lightings;
+        assert_eq!(l.len(), 7);
+        assert_eq!(l[1].lights()[0].constant_attenuation, 2.0);
+        assert_eq!(l[0].lights()[0].constant_attenuation, 1.0);
+        assert_eq!((l[3].lights().len(), l[4].lights().len()), (2, 1));
+        assert_eq!(l[4], l[2], "the same state again, after another");
+        assert!(l[6].model().two_side && !l[5].model().two_side);
+        // Each is what the state of its draw makes.
+        assert_eq!(l[6], c.lighting_state());
+    }
+
+    #[test]
     pub(crate) fn a_color_clear_starts_the_frame_again() {
         let mut c = context();
         triangle(&mut c, true);

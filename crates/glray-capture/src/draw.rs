@@ -175,8 +175,19 @@ impl Context {
         };
         let surface = self.surface(polygons);
         let lighting = if self.s.lighting {
-            let l = self.lighting_state();
-            if self.frame.lightings.last() != Some(&l) {
+            // The last draw's lighting again when made of the same state (most draws): compared
+            // before a new one is made, whose lights are copied and prepared (~1,400
+            // instructions, most of a small draw's set-up).
+            let s = &self.s;
+            let color_material = s.color_material.then_some((s.color_material_face, s.color_material_mode));
+            let enabled = s.lights.iter().filter(|l| l.enabled);
+            let same = self
+                .frame
+                .lightings
+                .last()
+                .is_some_and(|l| l.is_made_of(enabled, &s.model, &s.materials, color_material));
+            if !same {
+                let l = self.lighting_state();
                 self.frame.lightings.push(l);
             }
             (self.frame.lightings.len() - 1) as u32
@@ -336,7 +347,8 @@ impl Context {
                 back: !front,
             });
         }
-        let inverse = projection.inverse();
+        // Only lines and points need it: most draws are triangles alone.
+        let inverse = std::cell::OnceCell::new();
         let (hw, hh) = (viewport.width.max(1) as f64 / 2.0, viewport.height.max(1) as f64 / 2.0);
         // A quad around window-space offsets of clip positions, back in eye space.
         let quad = |corners: [(DVec4, DVec2); 4]| -> Option<[Vec3; 4]> {
@@ -346,7 +358,7 @@ impl Context {
                     return None;
                 }
                 let moved = DVec4::new(c.x + off.x / hw * c.w, c.y + off.y / hh * c.w, c.z, c.w);
-                let e = inverse * moved;
+                let e = *inverse.get_or_init(|| projection.inverse()) * moved;
                 *o = (e.truncate() / e.w).as_vec3();
             }
             Some(out)

@@ -5,6 +5,7 @@
 //! screen-aligned quads a rasterizer fills for them, so that the GL look needs no other
 //! primitive.
 
+use std::borrow::Cow;
 use std::sync::Arc;
 
 use glam::{DMat4, DVec4, Vec2, Vec3, Vec4};
@@ -99,6 +100,22 @@ impl Lighting {
         Lighting { lights, model, materials, color_material, prepared, positional, sunlit }
     }
 
+    /// Whether `new` would make this lighting of these inputs (`lights`, the enabled ones):
+    /// the same inputs make the same derived parts.
+    pub fn is_made_of<'a>(
+        &self,
+        mut lights: impl Iterator<Item = &'a Light>,
+        model: &LightModel,
+        materials: &[Material; 2],
+        color_material: Option<(u32, u32)>,
+    ) -> bool {
+        self.model == *model
+            && self.materials == *materials
+            && self.color_material == color_material
+            && self.lights.iter().all(|l| lights.next() == Some(l))
+            && lights.next().is_none()
+    }
+
     /// The lighting made ready for many vertices in single precision, when every enabled light
     /// is at infinity and not a spotlight and the viewer is at infinity (`sunlit::Sunlit`).
     pub fn sunlit(&self) -> Option<&Sunlit> {
@@ -126,32 +143,32 @@ impl Lighting {
         &self.prepared
     }
 
-    /// The materials with `color` put in by glColorMaterial, as GL does at each vertex (the
-    /// state's own, not a copy, without glColorMaterial: this runs for every corner of every
-    /// hit, and the two materials are 336 bytes).
-    pub fn materials(&self, color: DVec4) -> std::borrow::Cow<'_, [Material; 2]> {
-        match self.color_material {
-            None => std::borrow::Cow::Borrowed(&self.materials),
-            Some(_) => std::borrow::Cow::Owned(color_materials(self.materials, self.color_material, color)),
-        }
+    /// The materials with `color` put in by glColorMaterial, as GL does at each vertex.
+    pub fn materials(&self, color: DVec4) -> Cow<'_, [Material; 2]> {
+        color_materials(&self.materials, self.color_material, color)
     }
 }
 
-/// Front and back `materials` with `color` put in by glColorMaterial's (face, mode), if on.
-pub fn color_materials(materials: [Material; 2], color_material: Option<(u32, u32)>, color: DVec4) -> [Material; 2] {
-    let mut mats = materials;
-    if let Some((face, mode)) = color_material {
-        let t = color_target(mode);
-        for (m, on) in mats.iter_mut().zip(color_faces(face)) {
-            if on {
-                m.ambient = if t.ambient { color } else { m.ambient };
-                m.diffuse = if t.diffuse { color } else { m.diffuse };
-                m.specular = if t.specular { color } else { m.specular };
-                m.emission = if t.emission { color } else { m.emission };
-            }
+/// Front and back `materials` with `color` put in by glColorMaterial's (face, mode), if on:
+/// without glColorMaterial, `materials` themselves, not a copy (this runs for every vertex and
+/// every corner of every hit, and the two materials are 336 bytes).
+pub fn color_materials(
+    materials: &[Material; 2],
+    color_material: Option<(u32, u32)>,
+    color: DVec4,
+) -> Cow<'_, [Material; 2]> {
+    let Some((face, mode)) = color_material else { return Cow::Borrowed(materials) };
+    let mut mats = *materials;
+    let t = color_target(mode);
+    for (m, on) in mats.iter_mut().zip(color_faces(face)) {
+        if on {
+            m.ambient = if t.ambient { color } else { m.ambient };
+            m.diffuse = if t.diffuse { color } else { m.diffuse };
+            m.specular = if t.specular { color } else { m.specular };
+            m.emission = if t.emission { color } else { m.emission };
         }
     }
-    mats
+    Cow::Owned(mats)
 }
 
 /// A projection and viewport draws were made with.

@@ -229,7 +229,7 @@ mod tests {
             for _ in 0..8 {
                 let normal = s.unit();
                 let color = s.color();
-                let mats = crate::frame::color_materials(materials, color_material, color);
+                let mats = crate::frame::color_materials(&materials, color_material, color);
                 for face in 0..2 {
                     let (p, q) = light_face(DVec3::ZERO, normal, &mats, &lights, &prepared, &model, face);
                     let (a, b) = sunlit.light(normal.as_vec3a(), color.as_vec4(), face);

@@ -192,16 +192,19 @@ impl Context {
     pub(crate) fn vertex_stage(&mut self, object: DVec4) -> Out {
         let mv = *self.matrices.modelview.top();
         let eye = mv * object;
-        let cur = self.imm.current;
+        // The three current values a vertex reads (the whole of `current`, with every unit's
+        // texture coordinates, was a 320-byte copy per vertex).
+        let cur = &self.imm.current;
+        let (cur_normal, cur_color, cur_tex) = (cur.normal, cur.color, cur.texcoords[0]);
         let s = &self.s;
         let mut normal = DVec3::Z;
         let (colors, secondary) = if s.lighting {
             let nm = self.normal_matrix(&mv);
             let s = &self.s;
-            normal = eye_normal(&nm, cur.normal, s.normalize, s.rescale_normal);
+            normal = eye_normal(&nm, cur_normal, s.normalize, s.rescale_normal);
             // (Not `lighting_state()`: that copies the lights, at every vertex.)
             let color_material = s.color_material.then_some((s.color_material_face, s.color_material_mode));
-            let mats = color_materials(s.materials, color_material, cur.color);
+            let mats = color_materials(&s.materials, color_material, cur_color);
             let s = &self.s;
             let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
             let (f0, f1) = light_face(p, normal, &mats, &s.lights, &[], &s.model, 0);
@@ -209,13 +212,13 @@ impl Context {
                 if s.model.two_side { light_face(p, normal, &mats, &s.lights, &[], &s.model, 1) } else { (f0, f1) };
             ([f0, b0], [f1, b1])
         } else {
-            let c = cur.color.clamp(DVec4::ZERO, DVec4::ONE);
+            let c = cur_color.clamp(DVec4::ZERO, DVec4::ONE);
             ([c, c], [DVec4::ZERO; 2])
         };
         let sphere_map = self.s.texgen.iter().any(|g| g.enabled && g.mode == GL_SPHERE_MAP);
         let sphere_nm = if sphere_map { self.normal_matrix(&mv) } else { DMat3::IDENTITY };
         let s = &self.s;
-        let mut tex = cur.texcoords[0];
+        let mut tex = cur_tex;
         for (k, g) in s.texgen.iter().enumerate() {
             if g.enabled {
                 tex[k] = match g.mode {
@@ -225,7 +228,7 @@ impl Context {
                         // The eye normal as lighting takes it: GL normalizes it only when
                         // asked to (GL_NORMALIZE, GL_RESCALE_NORMAL), and a normal shorter than
                         // 1 reflects less (xscreensaver's blocktube gives 0.7).
-                        let n = eye_normal(&sphere_nm, cur.normal, s.normalize, s.rescale_normal);
+                        let n = eye_normal(&sphere_nm, cur_normal, s.normalize, s.rescale_normal);
                         let u = (eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 }).normalize_or_zero();
                         let r = u - 2.0 * n.dot(u) * n;
                         let m = 2.0 * (r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0)).sqrt();
@@ -240,7 +243,7 @@ impl Context {
             }
         }
         let tex = *self.matrices.texture[0].top() * tex;
-        Out { eye, colors, secondary, tex, normal, base: cur.color }
+        Out { eye, colors, secondary, tex, normal, base: cur_color }
     }
 }
 
