@@ -1039,6 +1039,29 @@ impl Context {
         Arc::make_mut(t)
     }
 
+    /// The bound texture, its level `level` about to be replaced whole (a new image), with room
+    /// for that level. A texture a frame or the renderer still holds is copied, as
+    /// `Arc::make_mut` would, but without the texels of the level being replaced: a program
+    /// uploading a 2048x2048 image every frame had the old 64 MB copied only to be thrown away.
+    fn texture_to_replace(&mut self, target: u32, level: usize) -> &mut Texture {
+        let name = if target == GL_TEXTURE_1D { self.s.bound_texture_1d } else { self.s.bound_texture };
+        let t = self.shared.textures.entry(name).or_default();
+        if Arc::get_mut(t).is_none() {
+            // Every field named, so that a new one is not forgotten here.
+            let Texture { levels, base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d } = &**t;
+            let levels =
+                levels.iter().enumerate().map(|(i, l)| if i == level { Level::default() } else { l.clone() }).collect();
+            let (base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d) =
+                (*base_format, *min_filter, *mag_filter, *wrap_s, *wrap_t, *one_d);
+            *t = Arc::new(Texture { levels, base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d });
+        }
+        let t = Arc::get_mut(t).expect("a texture held here alone");
+        if t.levels.len() <= level {
+            t.levels.resize(level + 1, Level::default());
+        }
+        t
+    }
+
     fn tex_image(&mut self, a: &[Value], sub: bool) -> GlResult {
         let target = args::uint(a, 0);
         if target != GL_TEXTURE_2D && target != GL_TEXTURE_1D {
@@ -1080,14 +1103,11 @@ impl Context {
         let texels = texture::decode(w, h, format, ty, &unpack, data)
             .map(|t| t.into_iter().map(|c| texture::to_base(c, base)).collect())
             .unwrap_or_else(|| vec![Vec4::ONE; w * h]);
-        let t = self.texture_mut(target);
+        let t = self.texture_to_replace(target, level);
         if level == 0 {
             t.base_format = base;
         }
         t.one_d = target == GL_TEXTURE_1D;
-        if t.levels.len() <= level {
-            t.levels.resize(level + 1, Level::default());
-        }
         t.levels[level] = Level { width: w, height: h, texels };
         Ok(())
     }
@@ -1102,12 +1122,9 @@ impl Context {
         }
         let base = texture::base_format(internal);
         let texels = texels.into_iter().map(|c| texture::to_base(c, base)).collect();
-        let t = self.texture_mut(GL_TEXTURE_2D);
+        let t = self.texture_to_replace(GL_TEXTURE_2D, level);
         if level == 0 {
             t.base_format = base;
-        }
-        if t.levels.len() <= level {
-            t.levels.resize(level + 1, Level::default());
         }
         t.levels[level] = Level { width, height, texels };
     }
@@ -1865,6 +1882,40 @@ mod tests {
         assert!((t[0].colors[0] - Vec4::new(1.0, 0.0, 0.0, 1.0)).length() < 1e-6, "{:?}", t[0].colors[0]);
         // Back face: the normal is flipped, the light does not reach it; only ambient is left.
         assert!((t[1].colors[0] - Vec4::new(0.2, 0.0, 0.0, 1.0)).length() < 1e-6, "{:?}", t[1].colors[0]);
+    }
+
+    #[test]
+    fn a_new_image_leaves_a_held_texture_alone_and_keeps_the_other_levels() {
+        let mut c = context();
+        call(&mut c, "glBindTexture", &[i(GL_TEXTURE_2D as i64), i(7)]);
+        call(&mut c, "glTexParameteri", &[i(GL_TEXTURE_2D as i64), i(0x2801), i(0x2600)]); // MIN_FILTER NEAREST
+        let image = |level: i64, size: i64, rgba: [u8; 4]| {
+            let texels: Vec<u8> = (0..size * size).flat_map(|_| rgba).collect();
+            let args = [i(0x0DE1), i(level), i(0x1908), i(size), i(size), i(0), i(0x1908), i(0x1401)];
+            (args, texels)
+        };
+        for (level, size, rgba) in [(0, 2, [255, 0, 0, 255]), (1, 1, [0, 255, 0, 255])] {
+            let (args, texels) = image(level, size, rgba);
+            let mut a = args.to_vec();
+            a.push(Value::Blob(&texels));
+            call(&mut c, "glTexImage2D", &a);
+        }
+        // A frame (or the renderer) still holds the texture when the program uploads level 0
+        // again.
+        let held = c.shared.textures[&7].clone();
+        let (args, texels) = image(0, 2, [0, 0, 255, 255]);
+        let mut a = args.to_vec();
+        a.push(Value::Blob(&texels));
+        call(&mut c, "glTexImage2D", &a);
+        let now = &c.shared.textures[&7];
+        let texel = |t: &Texture, level: usize| t.levels[level].texels[0];
+        assert_eq!(texel(&held, 0), Vec4::new(1.0, 0.0, 0.0, 1.0), "the held texture keeps its image");
+        assert_eq!(texel(now, 0), Vec4::new(0.0, 0.0, 1.0, 1.0));
+        assert_eq!(texel(now, 1), texel(&held, 1), "the other level is kept");
+        assert_eq!(now.levels.len(), 2);
+        assert_eq!(now.min_filter, held.min_filter);
+        assert_eq!(now.min_filter, 0x2600);
+        assert_eq!(c.errors.take(), 0);
     }
 
     #[test]
