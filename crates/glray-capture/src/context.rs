@@ -897,13 +897,20 @@ impl Context {
                 let target = args::uint(a, 0);
                 if target == GL_TEXTURE_2D || target == GL_TEXTURE_1D {
                     let v = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0) as u32;
-                    let t = self.texture_mut(target);
-                    match args::uint(a, 1) {
-                        GL_TEXTURE_MIN_FILTER => t.min_filter = v,
-                        GL_TEXTURE_MAG_FILTER => t.mag_filter = v,
-                        GL_TEXTURE_WRAP_S => t.wrap_s = v,
-                        GL_TEXTURE_WRAP_T => t.wrap_t = v,
-                        _ => {}
+                    let pname = args::uint(a, 1);
+                    // Only a value that changes touches the texture. One a frame or the renderer
+                    // still holds is copied to be changed, every level of it, and the copy is a
+                    // new texture to the renderer (no unchanged frame shown again): programs set
+                    // the same parameters before every draw (VTK does).
+                    let name = self.bound_texture_name(target);
+                    let now = match self.shared.textures.get(&name) {
+                        Some(t) => t.parameter(pname),
+                        None => Texture::default().parameter(pname),
+                    };
+                    if now.is_some_and(|p| p != v) {
+                        if let Some(p) = self.texture_mut(target).parameter_mut(pname) {
+                            *p = v;
+                        }
                     }
                 }
             }
@@ -1033,8 +1040,17 @@ impl Context {
     }
 
     /// The texture bound to `target` (GL_TEXTURE_2D or GL_TEXTURE_1D).
+    /// The texture bound to `target` (GL_TEXTURE_1D, or GL_TEXTURE_2D).
+    fn bound_texture_name(&self, target: u32) -> u32 {
+        if target == GL_TEXTURE_1D {
+            self.s.bound_texture_1d
+        } else {
+            self.s.bound_texture
+        }
+    }
+
     fn texture_mut(&mut self, target: u32) -> &mut Texture {
-        let name = if target == GL_TEXTURE_1D { self.s.bound_texture_1d } else { self.s.bound_texture };
+        let name = self.bound_texture_name(target);
         let t = self.shared.textures.entry(name).or_default();
         Arc::make_mut(t)
     }
@@ -1044,7 +1060,7 @@ impl Context {
     /// `Arc::make_mut` would, but without the texels of the level being replaced: a program
     /// uploading a 2048x2048 image every frame had the old 64 MB copied only to be thrown away.
     fn texture_to_replace(&mut self, target: u32, level: usize) -> &mut Texture {
-        let name = if target == GL_TEXTURE_1D { self.s.bound_texture_1d } else { self.s.bound_texture };
+        let name = self.bound_texture_name(target);
         let t = self.shared.textures.entry(name).or_default();
         if Arc::get_mut(t).is_none() {
             // Every field named, so that a new one is not forgotten here.
@@ -1916,6 +1932,31 @@ mod tests {
         assert_eq!(now.min_filter, held.min_filter);
         assert_eq!(now.min_filter, 0x2600);
         assert_eq!(c.errors.take(), 0);
+    }
+
+    #[test]
+    fn setting_a_texture_parameter_to_its_value_leaves_the_texture_as_it_is() {
+        let mut c = context();
+        let tex = i(GL_TEXTURE_2D as i64);
+        call(&mut c, "glBindTexture", &[tex.clone(), i(3)]);
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2801), i(0x2601)]); // MIN_FILTER LINEAR
+        let held = c.shared.textures[&3].clone();
+        // The same value again, and a parameter glray does not follow: the same texture (no
+        // copy; the renderer sees the frame unchanged).
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2801), i(0x2601)]);
+        call(&mut c, "glTexParameterf", &[tex.clone(), i(0x2801), f(f64::from(0x2601))]);
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x813D), i(4)]); // GL_TEXTURE_MAX_LEVEL
+        assert!(Arc::ptr_eq(&held, &c.shared.textures[&3]));
+        // A new value: a new texture with it, the held one as it was.
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2803), i(0x812F)]); // WRAP_T CLAMP_TO_EDGE
+        let now = &c.shared.textures[&3];
+        assert!(!Arc::ptr_eq(&held, now));
+        assert_eq!((now.wrap_t, held.wrap_t), (0x812F, 0x2901)); // GL_REPEAT held
+        assert_eq!((now.min_filter, now.parameter(0x2801)), (0x2601, Some(0x2601)));
+        // A texture not made yet takes a value that is not its default.
+        call(&mut c, "glBindTexture", &[tex.clone(), i(4)]);
+        call(&mut c, "glTexParameteri", &[tex, i(0x2800), i(0x2600)]); // MAG_FILTER NEAREST
+        assert_eq!(c.shared.textures[&4].mag_filter, 0x2600);
     }
 
     #[test]

@@ -6,6 +6,7 @@
 use glam::{Vec2, Vec4};
 
 use crate::args::{self, GL_UNSIGNED_BYTE};
+use crate::gl::{GL_TEXTURE_MAG_FILTER, GL_TEXTURE_MIN_FILTER, GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T};
 
 pub const GL_NEAREST: u32 = 0x2600;
 pub const GL_LINEAR: u32 = 0x2601;
@@ -60,6 +61,25 @@ pub struct Texture {
     pub wrap_t: u32,
     /// Made by glTexImage1D: one row, sampled by s alone (its level of detail ignores t).
     pub one_d: bool,
+}
+
+impl Texture {
+    /// The parameter glTexParameter's `pname` sets, of those glray follows.
+    pub fn parameter_mut(&mut self, pname: u32) -> Option<&mut u32> {
+        Some(match pname {
+            GL_TEXTURE_MIN_FILTER => &mut self.min_filter,
+            GL_TEXTURE_MAG_FILTER => &mut self.mag_filter,
+            GL_TEXTURE_WRAP_S => &mut self.wrap_s,
+            GL_TEXTURE_WRAP_T => &mut self.wrap_t,
+            _ => return None,
+        })
+    }
+
+    /// The value of that parameter (read through `parameter_mut` on a copy of the
+    /// parameters alone, so that the two never disagree on which field a `pname` is).
+    pub fn parameter(&self, pname: u32) -> Option<u32> {
+        Texture { levels: Vec::new(), ..*self }.parameter_mut(pname).map(|p| *p)
+    }
 }
 
 impl Default for Texture {
