@@ -4,7 +4,9 @@
  *   tex 0    a 2048x2048 RGBA texture uploaded with glTexImage2D every frame, on one quad;
  *   ftex 0   the same with a 1024x1024 texture of floats (GL_FLOAT, as scientific data comes);
  *   param 0  the 2048x2048 texture uploaded once, its filters set again (to the same values)
- *            before the quad every frame, as VTK sets a texture's parameters at every render.
+ *            before the quad every frame, as VTK sets a texture's parameters at every render;
+ *   sub 0    the 2048x2048 texture uploaded once, a 256x256 part of it replaced with
+ *            glTexSubImage2D every frame (a cursor, a moving image).
  *   gcc -O2 -o capture_probe scripts/capture_probe.c -lOSMesa -lm
  *   ./capture_probe tex 0; glray run --set preset=gl --set progressive=false -- ./capture_probe tex 0 */
 #include <GL/osmesa.h>
@@ -33,8 +35,8 @@ int main(int argc, char **argv) {
       glEnd(); glEndList();
     }
   }
-  int floats = !strcmp(mode, "ftex"), params = !strcmp(mode, "param");
-  if (params) mode = "tex";
+  int floats = !strcmp(mode, "ftex"), params = !strcmp(mode, "param"), sub = !strcmp(mode, "sub");
+  if (params || sub) mode = "tex";
   float *ftex = NULL;
   if (floats) { mode = "tex"; ts = 1024; ftex = malloc(sizeof(float) * ts * ts * 4); }
   if (!strcmp(mode, "tex")) { tex = malloc(ts * ts * 4); glEnable(GL_TEXTURE_2D); glDisable(GL_LIGHTING);
@@ -55,7 +57,10 @@ int main(int argc, char **argv) {
       }
     } else if (!strcmp(mode, "tex")) {
       for (int i = 0; i < ts * ts * 4; i += 4) { tex[i] = (i / 4 + f * 7) & 255; tex[i + 1] = (i / 4096) & 255; tex[i + 2] = 128; tex[i + 3] = 255; }
-      if (params) {
+      if (sub) {
+        if (f == 0) glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, ts, ts, 0, GL_RGBA, GL_UNSIGNED_BYTE, tex);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 64 * f, 64 * f, 256, 256, GL_RGBA, GL_UNSIGNED_BYTE, tex);
+      } else if (params) {
         if (f == 0) glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, ts, ts, 0, GL_RGBA, GL_UNSIGNED_BYTE, tex);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);

@@ -1049,10 +1049,13 @@ impl Context {
         }
     }
 
+    /// The bound texture, to be changed: in place when nothing else holds it (a frame drawn
+    /// with it, until the frame is taken or cleared), else a copy.
     fn texture_mut(&mut self, target: u32) -> &mut Texture {
         let name = self.bound_texture_name(target);
-        let t = self.shared.textures.entry(name).or_default();
-        Arc::make_mut(t)
+        let t = Arc::make_mut(self.shared.textures.entry(name).or_default());
+        t.changed();
+        t
     }
 
     /// The bound texture, its level `level` about to be replaced whole (a new image), with room
@@ -1064,14 +1067,16 @@ impl Context {
         let t = self.shared.textures.entry(name).or_default();
         if Arc::get_mut(t).is_none() {
             // Every field named, so that a new one is not forgotten here.
-            let Texture { levels, base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d } = &**t;
+            let Texture { levels, base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d, version } = &**t;
             let levels =
                 levels.iter().enumerate().map(|(i, l)| if i == level { Level::default() } else { l.clone() }).collect();
             let (base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d) =
                 (*base_format, *min_filter, *mag_filter, *wrap_s, *wrap_t, *one_d);
-            *t = Arc::new(Texture { levels, base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d });
+            let version = *version;
+            *t = Arc::new(Texture { levels, base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d, version });
         }
         let t = Arc::get_mut(t).expect("a texture held here alone");
+        t.changed();
         if t.levels.len() <= level {
             t.levels.resize(level + 1, Level::default());
         }
@@ -1931,6 +1936,43 @@ mod tests {
         assert_eq!(now.levels.len(), 2);
         assert_eq!(now.min_filter, held.min_filter);
         assert_eq!(now.min_filter, 0x2600);
+        assert_eq!(c.errors.take(), 0);
+    }
+
+    #[test]
+    fn a_sub_image_changes_a_texture_in_place_unless_a_frame_holds_it() {
+        let mut c = context();
+        let tex = i(GL_TEXTURE_2D as i64);
+        call(&mut c, "glBindTexture", &[tex.clone(), i(5)]);
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2801), i(0x2600)]); // MIN_FILTER NEAREST
+        let red: Vec<u8> = [255u8, 0, 0, 255].repeat(4);
+        let rgba = [i(0x1908), i(0x1401)]; // GL_RGBA, GL_UNSIGNED_BYTE
+        let image = [tex.clone(), i(0), i(0x1908), i(2), i(2), i(0), rgba[0].clone(), rgba[1].clone()];
+        call(&mut c, "glTexImage2D", &[&image[..], &[Value::Blob(&red)]].concat());
+        call(&mut c, "glEnable", std::slice::from_ref(&tex));
+        let sub = |c: &mut Context, texel: [u8; 4]| {
+            let part = [tex.clone(), i(0), i(0), i(0), i(1), i(1), rgba[0].clone(), rgba[1].clone()];
+            call(c, "glTexSubImage2D", &[&part[..], &[Value::Blob(&texel)]].concat());
+        };
+        let first = c.shared.textures[&5].clone();
+        let (address, version) = (Arc::as_ptr(&first), first.version);
+        drop(first);
+        // Nothing else holds it: changed in place, a new version.
+        sub(&mut c, [0, 0, 255, 255]);
+        let now = &c.shared.textures[&5];
+        assert_eq!(Arc::as_ptr(now), address, "in place");
+        assert_ne!(now.version, version);
+        assert_eq!(now.levels[0].texels[0], Vec4::new(0.0, 0.0, 1.0, 1.0));
+        // A draw of this frame holds it: the frame keeps what it drew with.
+        triangle(&mut c, true);
+        sub(&mut c, [0, 255, 0, 255]);
+        let frame = c.frame();
+        let drawn = frame.surfaces[frame.triangles[0].surface as usize].texturing.as_ref().unwrap();
+        let now = &c.shared.textures[&5];
+        assert!(!Arc::ptr_eq(&drawn.texture, now));
+        assert_eq!(drawn.texture.levels[0].texels[0], Vec4::new(0.0, 0.0, 1.0, 1.0));
+        assert_eq!(now.levels[0].texels[0], Vec4::new(0.0, 1.0, 0.0, 1.0));
+        assert_ne!(drawn.texture.version, now.version);
         assert_eq!(c.errors.take(), 0);
     }
 

@@ -61,9 +61,25 @@ pub struct Texture {
     pub wrap_t: u32,
     /// Made by glTexImage1D: one row, sampled by s alone (its level of detail ignores t).
     pub one_d: bool,
+    /// Which state of the texture this is: a number no state of any texture in the process
+    /// has had before, renewed at every change (`changed`). The renderer knows a frame's
+    /// textures by it (an address would be taken again by a texture made after one is freed,
+    /// and a texture no frame holds is changed in place).
+    pub version: u64,
+}
+
+/// A version no texture has had (`Texture::version`).
+fn next_version() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 impl Texture {
+    /// Marks a change: the texture is a new state to the renderer.
+    pub fn changed(&mut self) {
+        self.version = next_version();
+    }
+
     /// The parameter glTexParameter's `pname` sets, of those glray follows.
     pub fn parameter_mut(&mut self, pname: u32) -> Option<&mut u32> {
         Some(match pname {
@@ -92,6 +108,7 @@ impl Default for Texture {
             wrap_s: GL_REPEAT,
             wrap_t: GL_REPEAT,
             one_d: false,
+            version: next_version(),
         }
     }
 }

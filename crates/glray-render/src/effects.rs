@@ -458,7 +458,7 @@ mod tests {
         renderer.render(&over, SIZE, SIZE, None);
         renderer.render(&over, SIZE, SIZE, None);
         assert!(!renderer.stats().reused, "a frame drawn over the last depends on it");
-        // A texture changed in place (capture makes it a new object): traced again.
+        // Textures: the signature knows one by its version, which every change renews.
         let texture = |c: f32| {
             let texels = vec![Vec4::new(c, c, c, 1.0)];
             Arc::new(Texture { levels: vec![Level { width: 1, height: 1, texels }], ..Texture::default() })
@@ -468,10 +468,16 @@ mod tests {
         textured.surfaces[0].texturing = texturing(texture(1.0));
         renderer.render(&textured, SIZE, SIZE, None);
         assert!(!renderer.stats().reused);
-        // The signature knows a texture by its address: the renderer keeps the texture alive,
-        // so that no new one can take that address while the picture may be shown again.
-        let kept = textured.surfaces[0].texturing.as_ref().map(|t| Arc::strong_count(&t.texture));
-        assert_eq!(kept, Some(2));
+        renderer.render(&textured, SIZE, SIZE, None);
+        assert!(renderer.stats().reused, "the same texture");
+        // The renderer does not hold it, so capture can change it in place (the same object).
+        let held = textured.surfaces[0].texturing.as_mut().map(|t| &mut t.texture).unwrap();
+        let t = Arc::get_mut(held).expect("held by the frame alone");
+        t.levels[0].texels[0] = Vec4::new(0.25, 0.25, 0.25, 1.0);
+        t.changed();
+        let changed = renderer.render(&textured, SIZE, SIZE, None);
+        assert!(!renderer.stats().reused, "a texture changed in place");
+        assert!(changed.rgba.chunks(4).any(|p| p[0] == 64), "traced with the new texel");
         // The old texture freed first, as capture frees a replaced one.
         textured.surfaces[0].texturing = None;
         textured.surfaces[0].texturing = texturing(texture(0.5));

@@ -4,13 +4,11 @@
 //! where it is taken, so the image is the same for any number of threads.
 
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::Vec4;
 use glray_capture::camera::Camera;
 use glray_capture::frame::{Frame, TriangleId};
-use glray_capture::texture::Texture;
 use rayon::prelude::*;
 
 use crate::effects::{Effects, MAX_PASSES};
@@ -108,14 +106,6 @@ struct Accumulation {
     /// The passes' colours added up (empty for the GL look, which takes one pass).
     sum: Vec<Vec4>,
     last: Rendered,
-    /// The frame's textures, kept alive: the signature knows a texture by its address, which a
-    /// new texture could otherwise take once the old one is freed.
-    _textures: Vec<Arc<Texture>>,
-}
-
-/// The textures `frame` draws with.
-fn textures(frame: &Frame) -> Vec<Arc<Texture>> {
-    frame.surfaces.iter().filter_map(|s| s.texturing.as_ref().map(|t| t.texture.clone())).collect()
 }
 
 /// Renders frames, keeping what outlives a frame: the BVHs of display-list meshes, and the
@@ -198,8 +188,7 @@ impl Renderer {
                     px.copy_from_slice(&to_u8(*s / passes as f32));
                 }
                 self.stats.samples = passes * effects.samples.max(1);
-                let _textures = textures(frame);
-                self.accumulation = Some(Accumulation { key, passes, sum, last: rendered.clone(), _textures });
+                self.accumulation = Some(Accumulation { key, passes, sum, last: rendered.clone() });
             }
             (Some(key), None) => {
                 // The GL look: shown again as long as nothing changes. The copy goes into the
@@ -215,8 +204,7 @@ impl Renderer {
                     }
                     None => rendered.clone(),
                 };
-                let _textures = textures(frame);
-                self.accumulation = Some(Accumulation { key, passes: 1, sum: Vec::new(), last, _textures });
+                self.accumulation = Some(Accumulation { key, passes: 1, sum: Vec::new(), last });
             }
             _ => {
                 self.accumulation = None;

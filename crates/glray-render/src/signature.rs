@@ -8,7 +8,6 @@
 //! (the last picture shown for a new scene) is a chance in 2^64.
 
 use std::hash::{Hash, Hasher};
-use std::sync::Arc;
 
 use glam::Vec2;
 use glray_capture::frame::{Frame, Triangle};
@@ -112,9 +111,9 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
     format!("{:?}", frame.scissored_clears).hash(&mut h);
     frame.depth_clears.hash(&mut h);
     for s in &frame.surfaces {
-        // Textures by identity: a changed texture is a new object in capture.
+        // Textures by version: every change to a texture gives it a new one.
         if let Some(t) = &s.texturing {
-            (Arc::as_ptr(&t.texture) as usize, t.env_mode).hash(&mut h);
+            (t.texture.version, t.env_mode).hash(&mut h);
             floats(&mut h, t.env_color.to_array());
         }
         s.texturing.is_some().hash(&mut h);
@@ -138,6 +137,7 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
 mod tests {
     use super::*;
     use glam::{Vec3, Vec4};
+    use std::sync::Arc;
 
     fn triangle(k: usize) -> Triangle {
         let x = k as f32;
@@ -211,7 +211,11 @@ mod tests {
             Frame { triangles: vec![triangle(0)], solids: vec![line], surfaces: vec![surface], ..Frame::default() };
         let options = Options::default();
         let base = signature(&frame, 64, 64, &options);
-        let changes: [(&str, Change<Frame>); 13] = [
+        let changes: [(&str, Change<Frame>); 14] = [
+            // Changed in place (nothing else held it): the same object, a new version.
+            ("the texture changed", |f| {
+                Arc::make_mut(&mut f.surfaces[0].texturing.as_mut().unwrap().texture).changed()
+            }),
             ("a line moved", |f| f.solids[0].b.y = 1.0),
             ("a line thicker", |f| f.solids[0].radius = 0.2),
             ("a line more", |f| f.solids.push(f.solids[0])),
