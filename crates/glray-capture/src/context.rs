@@ -1121,10 +1121,19 @@ impl Context {
         let (format, ty, data) = (args::uint(a, 6), args::uint(a, 7), args::bytes(a, 8));
         let base = texture::base_format(internal);
         let (w, h) = (w as usize, h as usize);
-        let texels = texture::decode(w, h, format, ty, &unpack, data)
-            .map(|t| t.into_iter().map(|c| texture::to_base(c, base)).collect())
-            .unwrap_or_else(|| vec![Vec4::ONE; w * h]);
         let t = self.texture_to_replace(target, level);
+        // Into the replaced level's memory (when no frame holds the texture), unless that is
+        // over 16 MB and four times what this image needs.
+        let mut texels = std::mem::take(&mut t.levels[level].texels);
+        if texels.capacity() > (1 << 20).max(4 * w * h) {
+            texels = Vec::new();
+        }
+        if texture::decode_into(&mut texels, w, h, format, ty, &unpack, data).is_some() {
+            texels.iter_mut().for_each(|c| *c = texture::to_base(*c, base));
+        } else {
+            texels.clear();
+            texels.resize(w * h, Vec4::ONE);
+        }
         if level == 0 {
             t.base_format = base;
         }
@@ -1974,6 +1983,30 @@ mod tests {
         assert_eq!(now.levels[0].texels[0], Vec4::new(0.0, 1.0, 0.0, 1.0));
         assert_ne!(drawn.texture.version, now.version);
         assert_eq!(c.errors.take(), 0);
+    }
+
+    #[test]
+    fn an_image_of_the_same_size_is_decoded_into_the_last_ones_memory() {
+        let mut c = context();
+        let tex = i(GL_TEXTURE_2D as i64);
+        call(&mut c, "glBindTexture", &[tex.clone(), i(6)]);
+        let upload = |c: &mut Context, size: i64, format: i64, texel: [u8; 4]| {
+            let pixels = texel.repeat((size * size) as usize);
+            let image = [tex.clone(), i(0), i(0x1908), i(size), i(size), i(0), i(format), i(0x1401)];
+            call(c, "glTexImage2D", &[&image[..], &[Value::Blob(&pixels)]].concat());
+            let level = &c.shared.textures[&6].levels[0];
+            (level.texels.capacity(), level.texels.clone())
+        };
+        upload(&mut c, 4, 0x1908, [255, 0, 0, 255]);
+        let (_, texels) = upload(&mut c, 4, 0x1908, [0, 0, 255, 255]);
+        assert_eq!(texels, vec![Vec4::new(0.0, 0.0, 1.0, 1.0); 16]);
+        // Smaller: in the 4x4 image's memory (a new vector would hold 4).
+        let (room, texels) = upload(&mut c, 2, 0x1908, [0, 255, 0, 255]);
+        assert!(room >= 16, "room for {room}");
+        assert_eq!(texels, vec![Vec4::new(0.0, 1.0, 0.0, 1.0); 4]);
+        // A format glray cannot read: white, as before (nothing of the last image is left).
+        let (_, texels) = upload(&mut c, 2, 0x8000, [0, 255, 0, 255]); // not a format
+        assert_eq!(texels, vec![Vec4::ONE; 4]);
     }
 
     #[test]

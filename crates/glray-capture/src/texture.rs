@@ -190,6 +190,24 @@ impl PackedType {
 /// packed type whose component count is not the format's: GL refuses those), or too little
 /// memory.
 pub fn decode(width: usize, height: usize, format: u32, ty: u32, unpack: &Unpack, data: &[u8]) -> Option<Vec<Vec4>> {
+    let mut out = Vec::new();
+    decode_into(&mut out, width, height, format, ty, unpack, data)?;
+    Some(out)
+}
+
+/// `decode` into `out` (cleared first; on None, its contents are unspecified): a program that
+/// uploads an image of the same size every frame has it decoded into the last one's memory,
+/// where a new 64 MB vector for a 2048x2048 image was a page fault every 4 KiB.
+pub fn decode_into(
+    out: &mut Vec<Vec4>,
+    width: usize,
+    height: usize,
+    format: u32,
+    ty: u32,
+    unpack: &Unpack,
+    data: &[u8],
+) -> Option<()> {
+    out.clear();
     let n = components(format)?;
     let packed = PackedType::of(ty);
     let (size, pixel_bytes) = match &packed {
@@ -200,7 +218,7 @@ pub fn decode(width: usize, height: usize, format: u32, ty: u32, unpack: &Unpack
     let row_pixels = if unpack.row_length > 0 { unpack.row_length } else { width };
     let align = unpack.alignment.max(1);
     let row_bytes = (row_pixels * pixel_bytes).div_ceil(align) * align;
-    let mut out = Vec::with_capacity(width * height);
+    out.reserve(width * height);
     // Bytes, the type of nearly every image, read a row at a time through a table of the
     // values `args::normalize` gives (the same floats): element by element through the type's
     // dispatch, a 2048x2048 texture took ~270 ms, every frame a program uploads one.
@@ -246,7 +264,7 @@ pub fn decode(width: usize, height: usize, format: u32, ty: u32, unpack: &Unpack
             out.push(texel(format, c));
         }
     }
-    Some(out)
+    Some(())
 }
 
 /// The texels of a row of pixels of `n` components, `size` bytes each, each component read
