@@ -381,6 +381,13 @@ impl Texture {
     }
 
     /// The filtered texel at `uv` for a level of detail `lod` (log2 of texels per pixel).
+    /// Whether `sample` depends on its level of detail: with mipmaps, or with one filter for
+    /// magnification and another for minification. Without, the level of detail (worked out
+    /// from the triangle's derivatives on the screen at every pixel) can be left out.
+    pub fn reads_lod(&self) -> bool {
+        self.mipmapped() || (self.mag_filter == GL_LINEAR) != (self.min_filter == GL_LINEAR)
+    }
+
     pub fn sample(&self, uv: Vec2, lod: f32) -> Vec4 {
         if !self.complete() {
             return Vec4::ONE;
@@ -528,5 +535,30 @@ mod tests {
         assert_eq!(t.sample(Vec2::new(0.5, 0.5), 0.0), Vec4::splat(0.5));
         let incomplete = Texture { min_filter: GL_LINEAR_MIPMAP_LINEAR, ..t };
         assert!(!incomplete.complete());
+    }
+
+    #[test]
+    fn the_level_of_detail_is_read_only_where_it_changes_a_sample() {
+        // Two levels: 2x1 (black, white) and 1x1 grey.
+        let levels = vec![
+            Level { width: 2, height: 1, texels: vec![Vec4::ZERO, Vec4::ONE] },
+            Level { width: 1, height: 1, texels: vec![Vec4::splat(0.5)] },
+        ];
+        let base = Texture { levels, ..Texture::default() };
+        let at = Vec2::new(0.4, 0.5);
+        let lods = [-3.0, 0.0, 0.5, 1.0, 6.0];
+        for (min, mag) in [
+            (GL_NEAREST, GL_NEAREST),
+            (GL_LINEAR, GL_LINEAR),
+            (GL_NEAREST, GL_LINEAR),
+            (GL_LINEAR, GL_NEAREST),
+            (GL_NEAREST_MIPMAP_NEAREST, GL_NEAREST),
+            (GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR),
+        ] {
+            let t = Texture { min_filter: min, mag_filter: mag, ..base.clone() };
+            let samples: Vec<Vec4> = lods.iter().map(|&lod| t.sample(at, lod)).collect();
+            let varies = samples.iter().any(|s| *s != samples[0]);
+            assert_eq!(t.reads_lod(), varies, "min {min:#x}, mag {mag:#x}: {samples:?}");
+        }
     }
 }

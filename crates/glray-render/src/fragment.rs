@@ -162,7 +162,7 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
     if let Some(tx) = &surface.texturing {
         let l0 = &tx.texture.levels[0];
         let height = if tx.texture.one_d { 0.0 } else { l0.height as f64 };
-        let lod = lod(t, camera, p, DVec2::new(l0.width as f64, height));
+        let lod = if tx.texture.reads_lod() { lod(t, camera, p, DVec2::new(l0.width as f64, height)) } else { 0.0 };
         let s = tx.texture.sample(mix2(t.texcoords), lod);
         let base = tx.texture.base_format;
         let (cf, af, ct, at) = (c.xyz(), c.w, s.xyz(), s.w);
