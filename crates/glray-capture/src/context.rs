@@ -898,9 +898,9 @@ impl Context {
                 if target == GL_TEXTURE_2D || target == GL_TEXTURE_1D {
                     let v = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0) as u32;
                     let pname = args::uint(a, 1);
-                    // Only a value that changes touches the texture. One a frame or the renderer
-                    // still holds is copied to be changed, every level of it, and the copy is a
-                    // new texture to the renderer (no unchanged frame shown again): programs set
+                    // Only a value that changes touches the texture: a change is a new version
+                    // to the renderer (no unchanged frame shown again), and a texture this frame
+                    // has drawn with is copied to be changed, every level of it. Programs set
                     // the same parameters before every draw (VTK does).
                     let name = self.bound_texture_name(target);
                     let now = match self.shared.textures.get(&name) {
@@ -1040,7 +1040,6 @@ impl Context {
     }
 
     /// The texture bound to `target` (GL_TEXTURE_2D or GL_TEXTURE_1D).
-    /// The texture bound to `target` (GL_TEXTURE_1D, or GL_TEXTURE_2D).
     fn bound_texture_name(&self, target: u32) -> u32 {
         if target == GL_TEXTURE_1D {
             self.s.bound_texture_1d
@@ -1059,9 +1058,9 @@ impl Context {
     }
 
     /// The bound texture, its level `level` about to be replaced whole (a new image), with room
-    /// for that level. A texture a frame or the renderer still holds is copied, as
-    /// `Arc::make_mut` would, but without the texels of the level being replaced: a program
-    /// uploading a 2048x2048 image every frame had the old 64 MB copied only to be thrown away.
+    /// for that level. A texture a frame still holds is copied, as `Arc::make_mut` would, but
+    /// without the texels of the level being replaced: a program uploading a 2048x2048 image
+    /// every frame had the old 64 MB copied only to be thrown away.
     fn texture_to_replace(&mut self, target: u32, level: usize) -> &mut Texture {
         let name = self.bound_texture_name(target);
         let t = self.shared.textures.entry(name).or_default();
@@ -1930,8 +1929,7 @@ mod tests {
             a.push(Value::Blob(&texels));
             call(&mut c, "glTexImage2D", &a);
         }
-        // A frame (or the renderer) still holds the texture when the program uploads level 0
-        // again.
+        // A frame still holds the texture when the program uploads level 0 again.
         let held = c.shared.textures[&7].clone();
         let (args, texels) = image(0, 2, [0, 0, 255, 255]);
         let mut a = args.to_vec();
