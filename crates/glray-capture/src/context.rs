@@ -1913,28 +1913,24 @@ mod tests {
         assert!((t[1].colors[0] - Vec4::new(0.2, 0.0, 0.0, 1.0)).length() < 1e-6, "{:?}", t[1].colors[0]);
     }
 
+    /// glTexImage2D into the bound 2D texture: a `size` x `size` image of `texel` (four bytes,
+    /// given as `format`: GL_RGBA is 0x1908).
+    fn tex_image(c: &mut Context, level: i64, size: i64, format: i64, texel: [u8; 4]) {
+        let pixels = texel.repeat((size * size) as usize);
+        let args = [i(GL_TEXTURE_2D as i64), i(level), i(0x1908), i(size), i(size), i(0), i(format), i(0x1401)];
+        call(c, "glTexImage2D", &[&args[..], &[Value::Blob(&pixels)]].concat());
+    }
+
     #[test]
     fn a_new_image_leaves_a_held_texture_alone_and_keeps_the_other_levels() {
         let mut c = context();
         call(&mut c, "glBindTexture", &[i(GL_TEXTURE_2D as i64), i(7)]);
         call(&mut c, "glTexParameteri", &[i(GL_TEXTURE_2D as i64), i(0x2801), i(0x2600)]); // MIN_FILTER NEAREST
-        let image = |level: i64, size: i64, rgba: [u8; 4]| {
-            let texels: Vec<u8> = (0..size * size).flat_map(|_| rgba).collect();
-            let args = [i(0x0DE1), i(level), i(0x1908), i(size), i(size), i(0), i(0x1908), i(0x1401)];
-            (args, texels)
-        };
-        for (level, size, rgba) in [(0, 2, [255, 0, 0, 255]), (1, 1, [0, 255, 0, 255])] {
-            let (args, texels) = image(level, size, rgba);
-            let mut a = args.to_vec();
-            a.push(Value::Blob(&texels));
-            call(&mut c, "glTexImage2D", &a);
-        }
+        tex_image(&mut c, 0, 2, 0x1908, [255, 0, 0, 255]);
+        tex_image(&mut c, 1, 1, 0x1908, [0, 255, 0, 255]);
         // A frame still holds the texture when the program uploads level 0 again.
         let held = c.shared.textures[&7].clone();
-        let (args, texels) = image(0, 2, [0, 0, 255, 255]);
-        let mut a = args.to_vec();
-        a.push(Value::Blob(&texels));
-        call(&mut c, "glTexImage2D", &a);
+        tex_image(&mut c, 0, 2, 0x1908, [0, 0, 255, 255]);
         let now = &c.shared.textures[&7];
         let texel = |t: &Texture, level: usize| t.levels[level].texels[0];
         assert_eq!(texel(&held, 0), Vec4::new(1.0, 0.0, 0.0, 1.0), "the held texture keeps its image");
@@ -1952,13 +1948,11 @@ mod tests {
         let tex = i(GL_TEXTURE_2D as i64);
         call(&mut c, "glBindTexture", &[tex.clone(), i(5)]);
         call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2801), i(0x2600)]); // MIN_FILTER NEAREST
-        let red: Vec<u8> = [255u8, 0, 0, 255].repeat(4);
-        let rgba = [i(0x1908), i(0x1401)]; // GL_RGBA, GL_UNSIGNED_BYTE
-        let image = [tex.clone(), i(0), i(0x1908), i(2), i(2), i(0), rgba[0].clone(), rgba[1].clone()];
-        call(&mut c, "glTexImage2D", &[&image[..], &[Value::Blob(&red)]].concat());
+        tex_image(&mut c, 0, 2, 0x1908, [255, 0, 0, 255]);
         call(&mut c, "glEnable", std::slice::from_ref(&tex));
         let sub = |c: &mut Context, texel: [u8; 4]| {
-            let part = [tex.clone(), i(0), i(0), i(0), i(1), i(1), rgba[0].clone(), rgba[1].clone()];
+            // One texel at (0, 0), GL_RGBA bytes.
+            let part = [tex.clone(), i(0), i(0), i(0), i(1), i(1), i(0x1908), i(0x1401)];
             call(c, "glTexSubImage2D", &[&part[..], &[Value::Blob(&texel)]].concat());
         };
         let first = c.shared.textures[&5].clone();
@@ -1989,9 +1983,7 @@ mod tests {
         let tex = i(GL_TEXTURE_2D as i64);
         call(&mut c, "glBindTexture", &[tex.clone(), i(6)]);
         let upload = |c: &mut Context, size: i64, format: i64, texel: [u8; 4]| {
-            let pixels = texel.repeat((size * size) as usize);
-            let image = [tex.clone(), i(0), i(0x1908), i(size), i(size), i(0), i(format), i(0x1401)];
-            call(c, "glTexImage2D", &[&image[..], &[Value::Blob(&pixels)]].concat());
+            tex_image(c, 0, size, format, texel);
             let level = &c.shared.textures[&6].levels[0];
             (level.texels.capacity(), level.texels.clone())
         };
