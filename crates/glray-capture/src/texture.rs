@@ -380,7 +380,6 @@ impl Texture {
         a.lerp(b, fy)
     }
 
-    /// The filtered texel at `uv` for a level of detail `lod` (log2 of texels per pixel).
     /// Whether `sample` depends on its level of detail: with mipmaps, or with one filter for
     /// magnification and another for minification. Without, the level of detail (worked out
     /// from the triangle's derivatives on the screen at every pixel) can be left out.
@@ -388,6 +387,7 @@ impl Texture {
         self.mipmapped() || (self.mag_filter == GL_LINEAR) != (self.min_filter == GL_LINEAR)
     }
 
+    /// The filtered texel at `uv` for a level of detail `lod` (log2 of texels per pixel).
     pub fn sample(&self, uv: Vec2, lod: f32) -> Vec4 {
         if !self.complete() {
             return Vec4::ONE;
