@@ -704,6 +704,29 @@ fn a_depth_clear_between_draws_lets_the_later_ones_land_over_the_earlier() {
 }
 
 #[test]
+fn the_depth_buffer_clears_to_gl_clear_depths_value() {
+    // tests/helpers/clear_depth.c: glClearDepth below 1, in four frames (a far square failing
+    // against a clear to 0.7; reversed depth, a clear to 0 with GL_GREATER; a depth-only clear
+    // to 0.6 between draws; a clear to 0.7 within a scissor box). glray cleared to 1 always:
+    // the far square showed through the first, the reversed frame came out empty, and the
+    // depth read back was 1 where GL's was the cleared value.
+    let (plain, traced) = plain_and_traced("clear_depth");
+    for line in [
+        "cleared-to-0.7 right 0 0 0 depth 0.7000",
+        "reversed centre 0 255 0 depth 0.8333",
+        "reversed corner 0 0 0 depth 0.0000",
+        "between-draws right 0 255 0 depth 0.6000",
+        "between-draws corner 0 0 0 depth 0.6000",
+        "scissored left 0 0 0 depth 0.7000",
+        "scissored right 0 255 0 depth 0.8333",
+        "clear value 0.70 error 0x0",
+    ] {
+        assert!(plain.contains(line), "Mesa: {line} in {plain}");
+    }
+    assert_eq!(traced, plain, "glray against Mesa");
+}
+
+#[test]
 fn what_a_list_changes_reaches_the_real_gl_when_glray_takes_the_call() {
     // tests/helpers/list_state.c: a list sets the front face, culling, shading, polygon mode,
     // depth, blending, alpha test, line width and point size, and leaves a colour and normal

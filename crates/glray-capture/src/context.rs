@@ -15,7 +15,7 @@ use crate::arrays::{quad_split, BufferDraw, Client};
 use crate::camera::Viewport;
 use crate::client_draws::ClientDraws;
 use crate::error::{ErrorFlag, GlError, GlResult};
-use crate::frame::{Frame, ScissoredClear};
+use crate::frame::{DepthClear, Frame, ScissoredClear};
 use crate::gl::*;
 use crate::immediate::{Immediate, TEXCOORD_UNITS};
 use crate::lists::{DisplayLists, MAX_NESTING};
@@ -687,6 +687,7 @@ impl Context {
                 self.s.clear_color =
                     Vec4::from_array(std::array::from_fn(|i| args::float(a, i) as f32)).clamp(Vec4::ZERO, Vec4::ONE)
             }
+            Op::ClearDepth => self.s.clear_depth = (args::float(a, 0) as f32).clamp(0.0, 1.0),
             Op::Clear => {
                 self.revision += 1;
                 let (color, depth) =
@@ -698,16 +699,23 @@ impl Context {
                     // elsewhere stays, and the box is filled before the frame is traced.
                     if color || depth {
                         let color = color.then_some(self.s.clear_color);
+                        let depth = depth.then_some(self.s.clear_depth);
                         self.frame.scissored_clears.push(ScissoredClear { rect, color, depth });
                     }
                     return Ok(());
                 }
                 if depth {
-                    self.frame.depth_cleared = true;
                     let drawn = !self.frame.triangles.is_empty() || !self.frame.instances.is_empty();
-                    if !color && drawn && self.frame.depth_clears.last() != Some(&self.sequence) {
+                    let cleared = DepthClear { before: self.sequence, depth: self.s.clear_depth };
+                    if color || !drawn {
+                        self.frame.depth_cleared = Some(cleared.depth);
+                    } else if let Some(last) = self.frame.depth_clears.last_mut().filter(|c| c.before == self.sequence)
+                    {
+                        // Two clears with no draw between them: the last one's depth stands.
+                        *last = cleared;
+                    } else {
                         // Between draws: the ones after it land over the ones before.
-                        self.frame.depth_clears.push(self.sequence);
+                        self.frame.depth_clears.push(cleared);
                     }
                 }
                 if color {
@@ -2056,6 +2064,31 @@ mod tests {
         assert!(l[6].model().two_side && !l[5].model().two_side);
         // Each is what the state of its draw makes.
         assert_eq!(l[6], c.lighting_state());
+    }
+
+    #[test]
+    fn depth_clears_take_gl_clear_depths_value_through_the_attribute_stack() {
+        let mut c = context();
+        let depth = || [i(GL_DEPTH_BUFFER_BIT as i64)];
+        call(&mut c, "glClearDepth", &[f(0.25)]);
+        call(&mut c, "glPushAttrib", &depth());
+        call(&mut c, "glClearDepthf", &[f(2.0)]);
+        call(&mut c, "glClear", &depth());
+        assert_eq!(c.frame().depth_cleared, Some(1.0), "clamped to [0, 1]");
+        call(&mut c, "glPopAttrib", &[]);
+        call(&mut c, "glClear", &depth());
+        assert_eq!(c.frame().depth_cleared, Some(0.25), "the value before glPushAttrib");
+        // Between draws: a clear each, two with no draw between them one (the last value).
+        triangle(&mut c, true);
+        call(&mut c, "glClearDepth", &[f(0.5)]);
+        call(&mut c, "glClear", &depth());
+        triangle(&mut c, true);
+        call(&mut c, "glClear", &depth());
+        call(&mut c, "glClearDepth", &[f(0.75)]);
+        call(&mut c, "glClear", &depth());
+        let clears: Vec<_> = c.frame().depth_clears.iter().map(|c| c.depth).collect();
+        assert_eq!(clears, [0.5, 0.75]);
+        assert_eq!(c.frame().depth_cleared, Some(0.25), "the frame still starts at the first");
     }
 
     #[test]

@@ -239,12 +239,21 @@ pub enum Coverage {
 }
 
 /// A glClear within a scissor box: the colour it fills the box with (None when the colour buffer
-/// was not cleared), and whether it cleared depth there.
+/// was not cleared), and the depth (glClearDepth; None when the depth buffer was not cleared).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScissoredClear {
     pub rect: Viewport,
     pub color: Option<Vec4>,
-    pub depth: bool,
+    pub depth: Option<f32>,
+}
+
+/// A glClear of the depth buffer alone between a frame's draws.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DepthClear {
+    /// The sequence number of the draw after it (`Triangle::sequence`).
+    pub before: u32,
+    /// The depth it cleared to (glClearDepth).
+    pub depth: f32,
 }
 
 /// Which triangle of a frame: one of `Frame::triangles`, or one of an instance's mesh.
@@ -300,13 +309,13 @@ pub struct Frame {
     /// Whether the colour buffer was cleared this frame; if not, the frame is drawn over the
     /// previous one (programs that leave trails rely on the buffer keeping its contents).
     pub cleared: bool,
-    /// Whether the depth buffer was cleared this frame.
-    pub depth_cleared: bool,
-    /// Where a glClear of the depth buffer alone came between the frame's draws: the sequence
-    /// number of the draw after each (`Triangle::sequence`). Draws from there on are depth
-    /// tested against the cleared depth only, so they land over all that came before
-    /// (skytentacles draws each tentacle so).
-    pub depth_clears: Vec<u32>,
+    /// The depth the depth buffer was cleared to before the frame's draws (glClearDepth; None
+    /// when it was not cleared this frame).
+    pub depth_cleared: Option<f32>,
+    /// Where a glClear of the depth buffer alone came between the frame's draws. Draws from
+    /// there on are depth tested against the cleared depth only, so they land over all that
+    /// came before (skytentacles draws each tentacle so).
+    pub depth_clears: Vec<DepthClear>,
     /// Clears within a scissor box smaller than the drawable since the last full one (each view
     /// of several clearing its own part of the window), in order.
     pub scissored_clears: Vec<ScissoredClear>,
@@ -326,6 +335,16 @@ pub struct Frame {
 impl Frame {
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty() && self.instances.is_empty()
+    }
+
+    /// Whether the depth buffer can start the frame nearer than the far plane somewhere: the
+    /// last frame's depth under a frame that did not clear the colour buffer, or a glClearDepth
+    /// below 1 (a clear of the whole buffer or of a scissor box). Then even the closest hit
+    /// of a pixel is depth tested against what the buffer held.
+    pub fn depth_starts_near(&self) -> bool {
+        !self.cleared
+            || self.depth_cleared.is_some_and(|d| d < 1.0)
+            || self.scissored_clears.iter().any(|c| c.depth.is_some_and(|d| d < 1.0))
     }
 
     /// Triangles drawn, counting every instance's mesh (before culling).
@@ -454,7 +473,7 @@ impl Frame {
                     viewport: Some(viewport),
                     // The views after the first draw over what the ones before left.
                     cleared: self.cleared && n == 0,
-                    depth_cleared: self.depth_cleared && n == 0,
+                    depth_cleared: self.depth_cleared.filter(|_| n == 0),
                     scissored_clears: if n == 0 { self.scissored_clears.clone() } else { Vec::new() },
                     ..self.clone_without_draws()
                 }

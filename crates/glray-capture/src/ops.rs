@@ -92,6 +92,7 @@ ops! {
     FrontFace = "glFrontFace";
     CullFace = "glCullFace";
     ClearColor = "glClearColor";
+    ClearDepth = "glClearDepth" | "glClearDepthf";
     Clear = "glClear";
     Rect = "glRectf" | "glRectd" | "glRecti" | "glRects" | "glRectfv" | "glRectdv" | "glRectiv" | "glRectsv";
     NewList = "glNewList";

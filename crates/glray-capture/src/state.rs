@@ -54,6 +54,8 @@ pub(crate) struct State {
     pub(crate) depth_range: (f64, f64),
     // GL_COLOR_BUFFER_BIT
     pub(crate) clear_color: Vec4,
+    /// glClearDepth, clamped to [0, 1].
+    pub(crate) clear_depth: f32,
     pub(crate) blend: bool,
     pub(crate) blend_func: (u32, u32),
     pub(crate) alpha_test: bool,
@@ -112,6 +114,7 @@ impl Default for State {
             viewport: Viewport { x: 0, y: 0, width: 0, height: 0 },
             depth_range: (0.0, 1.0),
             clear_color: Vec4::ZERO,
+            clear_depth: 1.0,
             blend: false,
             blend_func: (1, 0),
             alpha_test: false,
@@ -181,6 +184,7 @@ impl State {
         if mask & GL_DEPTH_BUFFER_BIT != 0 {
             self.depth_func = s.depth_func;
             self.depth_mask = s.depth_mask;
+            self.clear_depth = s.clear_depth;
         }
         if mask & (GL_SCISSOR_BIT | GL_ENABLE_BIT) != 0 {
             self.scissor_test = s.scissor_test;

@@ -298,8 +298,8 @@ fn fill_scissored_clears(frame: &Frame, w: usize, rgba: &mut [u8], depth: &mut [
                         colors[k] = color;
                     }
                 }
-                if c.depth {
-                    depth[k] = 1.0;
+                if let Some(d) = c.depth {
+                    depth[k] = d;
                 }
             }
         }
@@ -354,10 +354,10 @@ impl Job<'_> {
         let clear = to_u8(frame.clear_color);
         let (mut rgba, mut depth) = match self.previous {
             Some(p) if !frame.cleared && (p.width, p.height) == (width, height) => {
-                let depth = if frame.depth_cleared { vec![1.0f32; w * h] } else { p.depth.clone() };
+                let depth = frame.depth_cleared.map_or_else(|| p.depth.clone(), |d| vec![d; w * h]);
                 (p.rgba.clone(), depth)
             }
-            _ => (clear.repeat(w * h), vec![1.0f32; w * h]),
+            _ => (clear.repeat(w * h), vec![frame.depth_cleared.unwrap_or(1.0); w * h]),
         };
         // The colours before rounding start as the picture under the frame: the clear colour,
         // or (a view after the first of a frame drawn in several viewports) what is there.

@@ -127,14 +127,14 @@ fn logic(op: u32, src: Vec4, dst: Vec4) -> Vec4 {
 
 /// A pixel's colour and depth after all its fragments, in drawing order. `hits` come with
 /// their fragments; `color` and `depth` are what the pixel held before the frame's draws. A
-/// glClear of the depth buffer between draws (`Frame::depth_clears`) sets the depth back to 1.
+/// glClear of the depth buffer between draws (`Frame::depth_clears`) sets the depth to its value.
 pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4, depth: f64) -> (Vec4, f64) {
     hits.sort_by_key(|(h, _)| (h.sequence, h.id));
     let (mut color, mut depth) = (color, depth);
     let mut clears = frame.depth_clears.iter().peekable();
     for (h, f) in hits.iter() {
-        while clears.next_if(|&&c| c <= h.sequence).is_some() {
-            depth = 1.0;
+        while let Some(c) = clears.next_if(|c| c.before <= h.sequence) {
+            depth = c.depth as f64;
         }
         let s = &frame.surfaces[f.surface as usize];
         if s.clip_planes.iter().any(|p| p.dot(f.eye.extend(1.0)) < 0.0) {
@@ -159,9 +159,9 @@ pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4
         };
         color = Vec4::select(BVec4A::from(s.color_mask), blended, color);
     }
-    if clears.next().is_some() {
-        // A clear after the pixel's last fragment.
-        depth = 1.0;
+    if let Some(c) = clears.last() {
+        // Clears after the pixel's last fragment: the last one's depth stands.
+        depth = c.depth as f64;
     }
     (color, depth)
 }
@@ -174,7 +174,7 @@ pub fn opaque(fragment: &Fragment) -> Vec4 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glray_capture::frame::TriangleId;
+    use glray_capture::frame::{DepthClear, TriangleId};
 
     #[test]
     fn comparisons_and_blending() {
@@ -235,10 +235,17 @@ mod tests {
         let mut frame = Frame { surfaces: vec![Surface::depth_tested()], ..Frame::default() };
         let hits = || vec![(hit(0, 1.0), fragment(red, 0.3)), (hit(1, 2.0), fragment(green, 0.6))];
         assert_eq!(in_drawing_order(&frame, &mut hits(), Vec4::ZERO, 1.0), (red, 0.3));
-        frame.depth_clears = vec![1];
+        let clear = |before: u32, depth: f32| DepthClear { before, depth };
+        frame.depth_clears = vec![clear(1, 1.0)];
         assert!(!closest_hit_suffices(&frame));
         assert_eq!(in_drawing_order(&frame, &mut hits(), Vec4::ZERO, 1.0), (green, 0.6));
-        frame.depth_clears = vec![1, 2];
+        frame.depth_clears = vec![clear(1, 1.0), clear(2, 1.0)];
         assert_eq!(in_drawing_order(&frame, &mut hits(), Vec4::ZERO, 1.0), (green, 1.0));
+        // Cleared to 0.5 (glClearDepth): green, at 0.6, fails against it; after both, the last
+        // clear's depth stands.
+        frame.depth_clears = vec![clear(1, 0.5)];
+        assert_eq!(in_drawing_order(&frame, &mut hits(), Vec4::ZERO, 1.0), (red, 0.5));
+        frame.depth_clears = vec![clear(1, 1.0), clear(2, 0.25), clear(2, 0.75)];
+        assert_eq!(in_drawing_order(&frame, &mut hits(), Vec4::ZERO, 1.0), (green, 0.75));
     }
 }

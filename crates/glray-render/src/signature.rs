@@ -69,7 +69,7 @@ fn triangles_hash(triangles: &[Triangle], textured: &[bool]) -> u64 {
 
 pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Options) -> u64 {
     let mut h = Xxh3::new();
-    (width, height, frame.cleared, frame.depth_cleared, options.per_pixel_lighting).hash(&mut h);
+    (width, height, frame.cleared, frame.depth_cleared.map(f32::to_bits), options.per_pixel_lighting).hash(&mut h);
     doubles(&mut h, [frame.depth_range.0, frame.depth_range.1]);
     format!("{:?}", options.effects).hash(&mut h);
     floats(&mut h, frame.clear_color.to_array());
@@ -109,7 +109,9 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
         format!("{l:?}").hash(&mut h);
     }
     format!("{:?}", frame.scissored_clears).hash(&mut h);
-    frame.depth_clears.hash(&mut h);
+    for c in &frame.depth_clears {
+        (c.before, c.depth.to_bits()).hash(&mut h);
+    }
     for s in &frame.surfaces {
         // Textures by version: every change to a texture gives it a new one.
         if let Some(t) = &s.texturing {
@@ -201,17 +203,23 @@ mod tests {
 
     #[test]
     fn lines_depth_state_and_texture_environment_change_the_signature() {
-        use glray_capture::frame::{Solid, Surface, Texturing};
+        use glray_capture::frame::{DepthClear, Solid, Surface, Texturing};
         use glray_capture::texture::Texture;
         let texture = Arc::new(Texture::default());
         let mut surface = Surface::depth_tested();
         surface.texturing = Some(Texturing { texture, env_mode: 0x2100, env_color: Vec4::ZERO });
         let line = Solid { a: Vec3::ZERO, b: Vec3::X, radius: 0.1, sequence: 0, camera: 0 };
-        let frame =
-            Frame { triangles: vec![triangle(0)], solids: vec![line], surfaces: vec![surface], ..Frame::default() };
+        let frame = Frame {
+            triangles: vec![triangle(0)],
+            solids: vec![line],
+            surfaces: vec![surface],
+            depth_cleared: Some(1.0),
+            depth_clears: vec![DepthClear { before: 1, depth: 1.0 }],
+            ..Frame::default()
+        };
         let options = Options::default();
         let base = signature(&frame, 64, 64, &options);
-        let changes: [(&str, Change<Frame>); 14] = [
+        let changes: [(&str, Change<Frame>); 16] = [
             // Changed in place (nothing else held it): the same object, a new version.
             ("the texture changed", |f| {
                 Arc::make_mut(&mut f.surfaces[0].texturing.as_mut().unwrap().texture).changed()
@@ -220,7 +228,8 @@ mod tests {
             ("a line thicker", |f| f.solids[0].radius = 0.2),
             ("a line more", |f| f.solids.push(f.solids[0])),
             ("the depth range", |f| f.depth_range.1 = 0.5),
-            ("depth not cleared", |f| f.depth_cleared = !f.depth_cleared),
+            ("depth not cleared", |f| f.depth_cleared = None),
+            ("depth cleared to another value", |f| f.depth_cleared = Some(0.5)),
             ("the texture environment", |f| f.surfaces[0].texturing.as_mut().unwrap().env_mode = 0x1E01),
             ("the texture environment's colour", |f| f.surfaces[0].texturing.as_mut().unwrap().env_color.x = 1.0),
             ("the colour mask", |f| f.surfaces[0].color_mask[1] = false),
@@ -228,9 +237,10 @@ mod tests {
             ("antialiased lines", |f| f.surfaces[0].coverage = Some(glray_capture::frame::Coverage::Line(1.0))),
             ("a scissored clear", |f| {
                 let rect = glray_capture::camera::Viewport { x: 0, y: 0, width: 8, height: 8 };
-                f.scissored_clears.push(glray_capture::frame::ScissoredClear { rect, color: None, depth: true })
+                f.scissored_clears.push(glray_capture::frame::ScissoredClear { rect, color: None, depth: Some(1.0) })
             }),
-            ("a depth clear between draws", |f| f.depth_clears.push(1)),
+            ("a depth clear between draws", |f| f.depth_clears.push(DepthClear { before: 2, depth: 1.0 })),
+            ("a depth clear between draws to another depth", |f| f.depth_clears[0].depth = 0.5),
             ("a logic op", |f| f.surfaces[0].logic_op = Some(0x1506)),
         ];
         for (what, change) in changes {

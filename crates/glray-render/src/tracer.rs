@@ -200,15 +200,17 @@ impl Tracer<'_> {
                     self.surface(t, at(&hit), r.direction, sampler, &s.rays, 0)
                 }
             };
-            // Over the last frame (no clear), the depth it left still tests.
-            if !self.frame.cleared && f.depth >= depth_under {
+            // Over the last frame (no clear), or a depth cleared nearer than the far plane, the
+            // closest hit is depth tested too.
+            if self.frame.depth_starts_near() && f.depth >= depth_under {
                 return None;
             }
             return Some((opaque(&f), f.depth));
         }
         self.scene.all(Self::traced(&r), &mut s.hits);
         if s.hits.is_empty() {
-            return None;
+            // No fragment; a depth clear between draws still leaves its depth.
+            return self.frame.depth_clears.last().map(|c| (under, c.depth as f64));
         }
         // A ray through a shared edge hits both triangles; the rasterizer's fill rule gives the
         // pixel to one of them, so one hit per draw and depth is kept.

@@ -107,7 +107,7 @@ pub fn frame(mesh: Mesh, width: u32, height: u32) -> Frame {
         depth_range: (0.0, 1.0),
         clear_color: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
         cleared: true,
-        depth_cleared: true,
+        depth_cleared: Some(1.0),
         lightings: vec![Lighting::new(vec![light], LightModel::default(), [material; 2], None)],
         cameras: vec![View { projection, viewport }],
         width,
