@@ -727,6 +727,20 @@ fn the_depth_buffer_clears_to_gl_clear_depths_value() {
 }
 
 #[test]
+fn blended_layers_drawn_over_each_other_in_one_draw_all_add_up() {
+    // tests/helpers/blend_layers.c: two quads over each other in one glBegin, added with
+    // GL_SRC_ALPHA/GL_ONE (glblur's blur layers), and a quad whose diagonal runs through pixel
+    // centres. glray took two hits of one draw at one depth for a ray through an edge the two
+    // triangles share, and kept one: the layers added up to half (glblur was 100% off), while
+    // keeping every hit would count the diagonal's pixels twice.
+    let (plain, traced) = plain_and_traced("blend_layers");
+    for line in ["layers 128 64 32", "diagonal 64 64 64", "beside 64 64 64", "error 0x0"] {
+        assert!(plain.contains(line), "Mesa: {line} in {plain}");
+    }
+    assert_eq!(traced, plain, "glray against Mesa");
+}
+
+#[test]
 fn what_a_list_changes_reaches_the_real_gl_when_glray_takes_the_call() {
     // tests/helpers/list_state.c: a list sets the front face, culling, shading, polygon mode,
     // depth, blending, alpha test, line width and point size, and leaves a colour and normal

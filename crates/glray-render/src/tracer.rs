@@ -212,19 +212,22 @@ impl Tracer<'_> {
             // No fragment; a depth clear between draws still leaves its depth.
             return self.frame.depth_clears.last().map(|c| (under, c.depth as f64));
         }
-        // A ray through a shared edge hits both triangles; the rasterizer's fill rule gives the
-        // pixel to one of them, so one hit per draw and depth is kept.
         s.hits.sort_by(|a, b| a.sequence.cmp(&b.sequence).then(a.t.total_cmp(&b.t)).then(a.id.cmp(&b.id)));
-        s.hits.dedup_by(|b, a| a.sequence == b.sequence && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1e-3));
         s.frags.clear();
+        let mut last: Option<(Hit, [Vec3; 3])> = None;
         for hit in &s.hits {
-            if let Some(t) = self.frame.triangle(hit.id) {
-                let mut f = self.surface(&t, at(hit), r.direction, sampler, &s.rays, 0);
-                if let Some(offset) = self.frame.surfaces[f.surface as usize].polygon_offset {
-                    f.depth = offset_depth(self.camera, &t, f.depth, offset);
-                }
-                s.frags.push((*hit, f));
+            let Some(t) = self.frame.triangle(hit.id) else { continue };
+            // A ray through an edge two triangles of a draw share hits both; the rasterizer's
+            // fill rule gives the pixel to one of them.
+            if last.is_some_and(|(a, corners)| edge_twin(&a, &corners, hit, &t.positions)) {
+                continue;
             }
+            last = Some((*hit, t.positions));
+            let mut f = self.surface(&t, at(hit), r.direction, sampler, &s.rays, 0);
+            if let Some(offset) = self.frame.surfaces[f.surface as usize].polygon_offset {
+                f.depth = offset_depth(self.camera, &t, f.depth, offset);
+            }
+            s.frags.push((*hit, f));
         }
         Some(in_drawing_order(self.frame, &mut s.frags, under, depth_under))
     }
@@ -284,9 +287,55 @@ impl Tracer<'_> {
     }
 }
 
+/// Whether hit `b` is hit `a` again, on the other side of an edge: the same draw at the same
+/// distance, both on an edge of their triangles (corners `ac`, `bc`), and not the same
+/// triangle drawn twice. Two quads drawn over each other in one glBegin (glblur's blur layers,
+/// added up with blending) are two fragments each pixel, as in GL; a ray through the diagonal
+/// of one quad, or the edge two strip triangles share, is one.
+pub(crate) fn edge_twin(a: &Hit, ac: &[Vec3; 3], b: &Hit, bc: &[Vec3; 3]) -> bool {
+    // Barycentric weights this close to zero put a hit on an edge: a ray through a shared edge
+    // reaches both triangles within the intersection test's rounding.
+    const EDGE: f32 = 1e-4;
+    let on_edge = |h: &Hit| h.uv.x.min(h.uv.y).min(1.0 - h.uv.x - h.uv.y) <= EDGE;
+    let same_triangle = bc.iter().all(|c| ac.contains(c));
+    a.sequence == b.sequence
+        && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1e-3)
+        && !same_triangle
+        && on_edge(a)
+        && on_edge(b)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hits_across_a_shared_edge_are_one_fragment_and_triangles_drawn_twice_two() {
+        let hit = |index: u32, u: f32, v: f32| Hit {
+            id: TriangleId { instance: TriangleId::FLAT, index },
+            t: 2.0,
+            sequence: 3,
+            normal: Vec3::Z,
+            uv: Vec2::new(u, v),
+        };
+        // A quad's two triangles, sharing the diagonal (0,0)-(1,1).
+        let lower = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0)];
+        let upper = [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        // Through the diagonal: one fragment.
+        assert!(edge_twin(&hit(0, 0.5, 0.5), &lower, &hit(1, 0.5, 0.0), &upper));
+        // Inside both copies of a triangle drawn twice in one draw: two.
+        assert!(!edge_twin(&hit(0, 0.3, 0.3), &lower, &hit(2, 0.3, 0.3), &lower));
+        // On the diagonal of a quad drawn twice: the copy of the same triangle is another.
+        assert!(!edge_twin(&hit(0, 0.5, 0.5), &lower, &hit(2, 0.5, 0.5), &lower));
+        // Overlapping triangles of one draw, at the same depth, inside both: two.
+        let small = lower.map(|c| c * 0.5 + Vec3::new(0.25, 0.0, 0.0));
+        assert!(!edge_twin(&hit(0, 0.4, 0.2), &lower, &hit(2, 0.3, 0.3), &small));
+        // Another draw, or another depth: never the same fragment.
+        let other_draw = Hit { sequence: 4, ..hit(1, 0.5, 0.0) };
+        assert!(!edge_twin(&hit(0, 0.5, 0.5), &lower, &other_draw, &upper));
+        let farther = Hit { t: 2.1, ..hit(1, 0.5, 0.0) };
+        assert!(!edge_twin(&hit(0, 0.5, 0.5), &lower, &farther, &upper));
+    }
 
     #[test]
     fn recent_lends_each_id_what_was_made_of_it() {
