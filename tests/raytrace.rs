@@ -113,6 +113,7 @@ fn xscreensaver_hacks_are_ray_traced_like_mesa() {
         ("gravitywell", "antialiased lines (GL_LINE_SMOOTH) from client arrays, blended"),
         ("blocktube", "a display list of quads called 1,000 times, sphere-map texgen, fog"),
         ("atunnel", "a textured tunnel of immediate quads running past the viewer, exponential fog"),
+        ("glblur", "its scene copied into a texture, added over the window in 15 blended layers of one glBegin"),
     ] {
         eprintln!("{name}: {kind}");
         ray_traced_like_mesa(name, &hack(name), &["-window"], 4, 0.02);
