@@ -114,6 +114,7 @@ fn xscreensaver_hacks_are_ray_traced_like_mesa() {
         ("blocktube", "a display list of quads called 1,000 times, sphere-map texgen, fog"),
         ("atunnel", "a textured tunnel of immediate quads running past the viewer, exponential fog"),
         ("glblur", "its scene copied into a texture, added over the window in 15 blended layers of one glBegin"),
+        ("razzledazzle", "a ship drawn into the depth buffer alone, then the sea depth tested in its plane"),
     ] {
         eprintln!("{name}: {kind}");
         ray_traced_like_mesa(name, &hack(name), &["-window"], 4, 0.02);
