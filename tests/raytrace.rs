@@ -743,6 +743,19 @@ fn blended_layers_drawn_over_each_other_in_one_draw_all_add_up() {
 }
 
 #[test]
+fn a_textures_level_of_detail_bias_and_bounds_pick_its_mipmaps_as_gl_does() {
+    // tests/helpers/lod_bias.c: a mipmapped texture (level 0 white, the rest black) drawn one
+    // texel to a pixel, plain, with GL_TEXTURE_LOD_BIAS 0.25, and with GL_TEXTURE_MIN_LOD 1.
+    // glray ignored both (white all three times); xscreensaver's texture fonts set the bias,
+    // so unicrud's text was 1% off.
+    let (plain, traced) = plain_and_traced("lod_bias");
+    for line in ["plain 255 255 255", "bias 191 191 191", "min-lod 0 0 0", "error 0x0"] {
+        assert!(plain.contains(line), "Mesa: {line} in {plain}");
+    }
+    assert_eq!(traced, plain, "glray against Mesa");
+}
+
+#[test]
 fn what_a_list_changes_reaches_the_real_gl_when_glray_takes_the_call() {
     // tests/helpers/list_state.c: a list sets the front face, culling, shading, polygon mode,
     // depth, blending, alpha test, line width and point size, and leaves a colour and normal

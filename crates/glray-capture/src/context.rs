@@ -24,7 +24,7 @@ use crate::mesh::{Mesh, MeshBuilder};
 use crate::ops::{Attr, AttrForm, Op};
 use crate::primitive::{QuadSplit, GL_POLYGON, GL_TRIANGLES};
 use crate::state::State;
-use crate::texture::{self, Level, Texture, Unpack};
+use crate::texture::{self, Level, LodRange, Texture, Unpack};
 use crate::vertex::{decode_attribute, Given};
 
 /// A vertex after the vertex stage: eye position, lit colours of both faces, texture
@@ -904,13 +904,22 @@ impl Context {
             Op::TexParameter => {
                 let target = args::uint(a, 0);
                 if target == GL_TEXTURE_2D || target == GL_TEXTURE_1D {
-                    let v = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0) as u32;
-                    let pname = args::uint(a, 1);
+                    let value = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0);
+                    let (v, pname) = (value as u32, args::uint(a, 1));
+                    let name = self.bound_texture_name(target);
+                    let mut lod = self.shared.textures.get(&name).map_or_else(LodRange::default, |t| t.lod);
+                    if let Some(p) = lod.parameter_mut(pname) {
+                        // A float, set as the others are: only a new value touches the texture.
+                        if *p != value as f32 {
+                            *p = value as f32;
+                            self.texture_mut(target).lod = lod;
+                        }
+                        return Ok(());
+                    }
                     // Only a value that changes touches the texture: a change is a new version
                     // to the renderer (no unchanged frame shown again), and a texture this frame
                     // has drawn with is copied to be changed, every level of it. Programs set
                     // the same parameters before every draw (VTK does).
-                    let name = self.bound_texture_name(target);
                     let now = match self.shared.textures.get(&name) {
                         Some(t) => t.parameter(pname),
                         None => Texture::default().parameter(pname),
@@ -1074,13 +1083,13 @@ impl Context {
         let t = self.shared.textures.entry(name).or_default();
         if Arc::get_mut(t).is_none() {
             // Every field named, so that a new one is not forgotten here.
-            let Texture { levels, base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d, version } = &**t;
+            let Texture { levels, base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d, lod, version } = &**t;
             let levels =
                 levels.iter().enumerate().map(|(i, l)| if i == level { Level::default() } else { l.clone() }).collect();
-            let (base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d) =
-                (*base_format, *min_filter, *mag_filter, *wrap_s, *wrap_t, *one_d);
+            let (base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d, lod) =
+                (*base_format, *min_filter, *mag_filter, *wrap_s, *wrap_t, *one_d, *lod);
             let version = *version;
-            *t = Arc::new(Texture { levels, base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d, version });
+            *t = Arc::new(Texture { levels, base_format, min_filter, mag_filter, wrap_s, wrap_t, one_d, lod, version });
         }
         let t = Arc::get_mut(t).expect("a texture held here alone");
         t.changed();
@@ -2064,6 +2073,24 @@ mod tests {
         assert!(l[6].model().two_side && !l[5].model().two_side);
         // Each is what the state of its draw makes.
         assert_eq!(l[6], c.lighting_state());
+    }
+
+    #[test]
+    fn a_textures_level_of_detail_bias_and_bounds_are_followed() {
+        let mut c = context();
+        let tex = i(GL_TEXTURE_2D as i64);
+        call(&mut c, "glBindTexture", &[tex.clone(), i(1)]);
+        tex_image(&mut c, 0, 2, 0x1908, [255; 4]); // GL_RGBA
+        call(&mut c, "glTexParameterf", &[tex.clone(), i(0x8501), f(0.25)]); // GL_TEXTURE_LOD_BIAS
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x813B), i(3)]); // GL_TEXTURE_MAX_LOD
+        let t = c.shared.textures[&1].clone();
+        assert_eq!((t.lod.bias, t.lod.min, t.lod.max), (0.25, -1000.0, 3.0));
+        // The same value again leaves the same texture.
+        call(&mut c, "glTexParameterf", &[tex.clone(), i(0x8501), f(0.25)]);
+        assert_eq!(c.shared.textures[&1].version, t.version);
+        call(&mut c, "glTexParameterf", &[tex, i(0x813A), f(-2.0)]); // GL_TEXTURE_MIN_LOD
+        assert_eq!(c.shared.textures[&1].lod.min, -2.0);
+        assert_ne!(c.shared.textures[&1].version, t.version);
     }
 
     #[test]

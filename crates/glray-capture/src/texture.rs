@@ -61,11 +61,52 @@ pub struct Texture {
     pub wrap_t: u32,
     /// Made by glTexImage1D: one row, sampled by s alone (its level of detail ignores t).
     pub one_d: bool,
+    /// How the level of detail is moved and bounded (glTexParameterf's GL_TEXTURE_LOD_BIAS,
+    /// GL_TEXTURE_MIN_LOD and GL_TEXTURE_MAX_LOD).
+    pub lod: LodRange,
     /// Which state of the texture this is: a number no state of any texture in the process
     /// has had before, renewed at every change (`changed`). The renderer knows a frame's
     /// textures by it (an address would be taken again by a texture made after one is freed,
     /// and a texture no frame holds is changed in place).
     pub version: u64,
+}
+
+pub const GL_TEXTURE_MIN_LOD: u32 = 0x813A;
+pub const GL_TEXTURE_MAX_LOD: u32 = 0x813B;
+pub const GL_TEXTURE_LOD_BIAS: u32 = 0x8501;
+
+/// A texture's level-of-detail parameters. GL adds the bias to the level of detail worked out
+/// from the pixel's footprint, then clamps the sum to [min, max] (OpenGL 2.1, 3.8.8); the
+/// result picks both the levels and whether the texture is magnified or minified. Programs
+/// set a small positive bias to soften minified text (xscreensaver's texture fonts: 0.25).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LodRange {
+    pub bias: f32,
+    pub min: f32,
+    pub max: f32,
+}
+
+impl Default for LodRange {
+    fn default() -> Self {
+        LodRange { bias: 0.0, min: -1000.0, max: 1000.0 }
+    }
+}
+
+impl LodRange {
+    /// The level of detail a sample takes, from the one of the pixel's footprint.
+    pub fn apply(&self, lod: f32) -> f32 {
+        (lod + self.bias).clamp(self.min, self.max.max(self.min))
+    }
+
+    /// The parameter glTexParameterf's `pname` sets, if it is one of these.
+    pub fn parameter_mut(&mut self, pname: u32) -> Option<&mut f32> {
+        Some(match pname {
+            GL_TEXTURE_LOD_BIAS => &mut self.bias,
+            GL_TEXTURE_MIN_LOD => &mut self.min,
+            GL_TEXTURE_MAX_LOD => &mut self.max,
+            _ => return None,
+        })
+    }
 }
 
 /// A version no texture has had (`Texture::version`).
@@ -108,6 +149,7 @@ impl Default for Texture {
             wrap_s: GL_REPEAT,
             wrap_t: GL_REPEAT,
             one_d: false,
+            lod: LodRange::default(),
             version: next_version(),
         }
     }
@@ -392,6 +434,7 @@ impl Texture {
         if !self.complete() {
             return Vec4::ONE;
         }
+        let lod = self.lod.apply(lod);
         if lod <= 0.0 || !self.mipmapped() {
             let filter = if lod <= 0.0 { self.mag_filter } else { self.min_filter };
             return self.sample_level(0, uv, filter == GL_LINEAR);
@@ -560,5 +603,26 @@ mod tests {
             let varies = samples.iter().any(|s| *s != samples[0]);
             assert_eq!(t.reads_lod(), varies, "min {min:#x}, mag {mag:#x}: {samples:?}");
         }
+    }
+
+    #[test]
+    fn the_level_of_detail_is_biased_then_clamped() {
+        // Two levels: 1x1 white and 1x1 black (level 1 of a 1x1 texture is not complete, but
+        // sampling reads the levels given).
+        let levels = vec![
+            Level { width: 2, height: 2, texels: vec![Vec4::ONE; 4] },
+            Level { width: 1, height: 1, texels: vec![Vec4::ZERO] },
+        ];
+        let t = Texture { levels, min_filter: GL_LINEAR_MIPMAP_LINEAR, ..Texture::default() };
+        let at = Vec2::new(0.5, 0.5);
+        assert_eq!(t.sample(at, 0.5), Vec4::splat(0.5));
+        let biased = Texture { lod: LodRange { bias: 0.25, ..LodRange::default() }, ..t.clone() };
+        assert_eq!(biased.sample(at, 0.5), Vec4::splat(0.25), "half way plus a quarter");
+        // A bias past zero makes a magnified sample minified: it reads the mipmaps.
+        assert_eq!(biased.sample(at, -0.125), Vec4::splat(0.875));
+        let clamped = Texture { lod: LodRange { bias: 0.25, min: 0.0, max: 0.5 }, ..t.clone() };
+        assert_eq!(clamped.sample(at, 0.5), Vec4::splat(0.5), "at most max");
+        let raised = Texture { lod: LodRange { min: 1.0, ..LodRange::default() }, ..t };
+        assert_eq!(raised.sample(at, -3.0), Vec4::ZERO, "at least min");
     }
 }
