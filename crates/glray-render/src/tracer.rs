@@ -310,7 +310,7 @@ fn on_plane(r: &EyeRay, corners: &[Vec3; 3]) -> Option<DVec3> {
 /// triangle drawn twice. Two quads drawn over each other in one glBegin (glblur's blur layers,
 /// added up with blending) are two fragments each pixel, as in GL; a ray through the diagonal
 /// of one quad, or the edge two strip triangles share, is one.
-pub(crate) fn edge_twin(a: &Hit, ac: &[Vec3; 3], b: &Hit, bc: &[Vec3; 3]) -> bool {
+fn edge_twin(a: &Hit, ac: &[Vec3; 3], b: &Hit, bc: &[Vec3; 3]) -> bool {
     // Barycentric weights this close to zero put a hit on an edge: a ray through a shared edge
     // reaches both triangles within the intersection test's rounding.
     const EDGE: f32 = 1e-4;
