@@ -906,25 +906,22 @@ impl Context {
                 if target == GL_TEXTURE_2D || target == GL_TEXTURE_1D {
                     let value = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0);
                     let (v, pname) = (value as u32, args::uint(a, 1));
-                    let name = self.bound_texture_name(target);
-                    let mut lod = self.shared.textures.get(&name).map_or_else(LodRange::default, |t| t.lod);
-                    if let Some(p) = lod.parameter_mut(pname) {
-                        // A float, set as the others are: only a new value touches the texture.
-                        if *p != value as f32 {
-                            *p = value as f32;
-                            self.texture_mut(target).lod = lod;
-                        }
-                        return Ok(());
-                    }
                     // Only a value that changes touches the texture: a change is a new version
                     // to the renderer (no unchanged frame shown again), and a texture this frame
                     // has drawn with is copied to be changed, every level of it. Programs set
                     // the same parameters before every draw (VTK does).
-                    let now = match self.shared.textures.get(&name) {
-                        Some(t) => t.parameter(pname),
-                        None => Texture::default().parameter(pname),
+                    let name = self.bound_texture_name(target);
+                    let (now, mut lod) = match self.shared.textures.get(&name) {
+                        Some(t) => (t.parameter(pname), t.lod),
+                        None => (Texture::default().parameter(pname), LodRange::default()),
                     };
-                    if now.is_some_and(|p| p != v) {
+                    if let Some(p) = lod.parameter_mut(pname) {
+                        // The level-of-detail parameters are floats, set the same way.
+                        if *p != value as f32 {
+                            *p = value as f32;
+                            self.texture_mut(target).lod = lod;
+                        }
+                    } else if now.is_some_and(|p| p != v) {
                         if let Some(p) = self.texture_mut(target).parameter_mut(pname) {
                             *p = v;
                         }

@@ -388,6 +388,7 @@ impl Job<'_> {
             scene: &scene,
             options: self.options,
             simple,
+            depth_starts_near: frame.depth_starts_near(),
             gouraud: Gouraud::new(frame, &camera, self.options, simple),
             eps: diagonal * 1e-4,
             ao_distance: diagonal * self.options.effects.ao_distance,

@@ -27,6 +27,9 @@ pub(crate) struct Tracer<'a> {
     pub options: &'a Options,
     /// The closest hit decides every pixel (no blending, alpha test or unusual depth state).
     pub simple: bool,
+    /// Even the closest hit is depth tested against what the buffer held
+    /// (`Frame::depth_starts_near`, worked out once a frame).
+    pub depth_starts_near: bool,
     /// How far secondary rays start off a surface, and how far occluders count.
     pub eps: f32,
     pub ao_distance: f32,
@@ -202,7 +205,7 @@ impl Tracer<'_> {
             };
             // Over the last frame (no clear), or a depth cleared nearer than the far plane, the
             // closest hit is depth tested too.
-            if self.frame.depth_starts_near() && f.depth >= depth_under {
+            if self.depth_starts_near && f.depth >= depth_under {
                 return None;
             }
             return Some((opaque(&f), f.depth));
