@@ -61,18 +61,20 @@ pub struct Live {
     stats: Option<stats::Sink>,
     capture_time: std::time::Duration,
     /// The threads that trace frames: glray's own, not rayon's global pool, so that a forked
-    /// child (which has none of its parent's threads) can be given new ones (`forked`).
-    pool: Option<rayon::ThreadPool>,
+    /// child (which has none of its parent's threads) can be given new ones (`forked`);
+    /// published for capture's work too (`glray_core::threads`).
+    pool: Option<&'static rayon::ThreadPool>,
 }
 
 /// The tracer's threads (None, logged, if the system gives none: frames are then traced on
 /// rayon's global pool).
-fn tracer_pool() -> Option<rayon::ThreadPool> {
+fn tracer_pool() -> Option<&'static rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
         .thread_name(|i| format!("glray-trace-{i}"))
         .build()
         .map_err(|e| glray_core::warn!("cannot start the tracer's threads ({e}); using rayon's"))
         .ok()
+        .map(glray_core::threads::publish)
 }
 
 /// Turns live ray tracing on with the settings in force; the recorder, started next, keeps
@@ -349,11 +351,9 @@ pub fn take_unseen_error() -> u32 {
 impl Live {
     /// In a child just forked: the parent's tracer threads do not exist here (waiting on them
     /// hung the child's first new frame); the child gets threads of its own. The old pool is
-    /// not dropped: that would signal threads that are not there.
+    /// not dropped (`glray_core::threads` never drops one): that would signal threads that
+    /// are not there.
     pub fn forked(&mut self) {
-        if let Some(old) = self.pool.take() {
-            std::mem::forget(old);
-        }
         self.pool = tracer_pool();
     }
 

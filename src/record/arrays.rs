@@ -323,19 +323,10 @@ fn index_range(count: i64, ty: u32, ptr: u64, base_vertex: i64) -> Option<(u64, 
         // (a copy of 10M triangles' indices was 120 MB of fresh pages per draw).
         unsafe { std::slice::from_raw_parts(ptr as usize as *const u8, bytes) }
     };
-    let mut lo = u64::MAX;
-    let mut hi = 0u64;
-    for chunk in data.chunks_exact(size) {
-        let v = match size {
-            1 => chunk[0] as u64,
-            2 => u16::from_ne_bytes([chunk[0], chunk[1]]) as u64,
-            _ => u32::from_ne_bytes([chunk[0], chunk[1], chunk[2], chunk[3]]) as u64,
-        };
-        let v = (v as i64 + base_vertex).max(0) as u64;
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    Some((lo, hi))
+    let (lo, hi) = glray_core::indices::min_max(data, size)?;
+    // Adding the base vertex keeps the order, so the range moves as a whole.
+    let based = |v: u32| (v as i64 + base_vertex).max(0) as u64;
+    Some((based(lo), based(hi)))
 }
 
 fn union(a: Option<(u64, u64)>, b: Option<(u64, u64)>) -> Option<(u64, u64)> {

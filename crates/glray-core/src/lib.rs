@@ -4,10 +4,12 @@
 pub mod config;
 pub mod gltypes;
 pub mod image;
+pub mod indices;
 pub mod log;
 pub mod pages;
 pub mod prefetch;
 pub mod reallib;
+pub mod threads;
 pub mod trace;
 
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
