@@ -758,13 +758,18 @@ fn a_textures_level_of_detail_bias_and_bounds_pick_its_mipmaps_as_gl_does() {
 #[test]
 fn what_a_list_changes_reaches_the_real_gl_when_glray_takes_the_call() {
     // tests/helpers/list_state.c: a list sets the front face, culling, shading, polygon mode,
-    // depth, blending, alpha test, line width and point size, and leaves a colour and normal
-    // current; the program asks the GL for each after glCallList, and for the raster colour
-    // glRasterPos takes (glBitmap text's). glray takes the glCallList from the real GL, which
-    // answered with the state from before the list (GL_CCW, a white raster colour...).
+    // depth, blending, alpha test, line width and point size, a light (placed under a
+    // translation), materials and the light model, and leaves a colour and normal current; the
+    // program asks the GL for each after glCallList, and for the raster colour glRasterPos
+    // takes (glBitmap text's), unlit and lit. glray takes the glCallList from the real GL,
+    // which answered with the state from before the list (GL_CCW, a white raster colour, light
+    // 1 black at (0, 0, 1, 0), a grey lit raster colour...).
     let (plain, traced) = plain_and_traced("list_state");
     assert!(plain.contains("front face 0x900 cull 0x404 1 shade 0x1d00"), "Mesa: {plain}");
     assert!(plain.contains("raster colour 1.00 0.50 0.25") && plain.contains("error 0x0"), "Mesa: {plain}");
+    assert!(plain.contains("light position 2.00 2.00 3.00 1.00 spot 0.00 -1.00 -1.00 diffuse 0.500"), "Mesa: {plain}");
+    assert!(plain.contains("shininess 32.0") && plain.contains("two-sided 1 colour material 0x404"), "Mesa: {plain}");
+    assert!(plain.contains("lit raster colour 0.040 0.050 0.065"), "Mesa: {plain}");
     assert_eq!(traced, plain, "glray against Mesa");
 }
 

@@ -6,9 +6,11 @@
 //! labels to the viewer, gluProject) or places a raster position with them gets the old ones.
 //! After such a call, the matrix stacks the list changed are put into the real GL, and so is the
 //! rest of the state it changed that the real GL answers queries and draws with
-//! (`list_effects::StateSeen`: enables, face, shading, depth, blending, current colour...).
+//! (`list_effects::StateSeen`: enables, face, shading, depth, blending, current colour, lights
+//! and materials...).
 
 use glray_capture::events::Capture;
+use glray_capture::lighting::{Light, LightModel, Material};
 use glray_capture::list_effects::StateSeen;
 use glray_capture::matrix::Seen;
 
@@ -116,6 +118,132 @@ fn put_state(was: &StateSeen, now: &StateSeen) {
         if now.normal != was.normal {
             let n = now.normal;
             real::glNormal3d(n.x, n.y, n.z);
+        }
+    }
+    put_lighting(was, now);
+}
+
+const GL_FRONT: u32 = 0x0404;
+const GL_BACK: u32 = 0x0405;
+const GL_LIGHT0: u32 = 0x4000;
+const GL_AMBIENT: u32 = 0x1200;
+const GL_DIFFUSE: u32 = 0x1201;
+const GL_SPECULAR: u32 = 0x1202;
+const GL_POSITION: u32 = 0x1203;
+const GL_SPOT_DIRECTION: u32 = 0x1204;
+const GL_SPOT_EXPONENT: u32 = 0x1205;
+const GL_SPOT_CUTOFF: u32 = 0x1206;
+const GL_CONSTANT_ATTENUATION: u32 = 0x1207;
+const GL_LINEAR_ATTENUATION: u32 = 0x1208;
+const GL_QUADRATIC_ATTENUATION: u32 = 0x1209;
+const GL_EMISSION: u32 = 0x1600;
+const GL_SHININESS: u32 = 0x1601;
+const GL_LIGHT_MODEL_LOCAL_VIEWER: u32 = 0x0B51;
+const GL_LIGHT_MODEL_TWO_SIDE: u32 = 0x0B52;
+const GL_LIGHT_MODEL_AMBIENT: u32 = 0x0B53;
+const GL_LIGHT_MODEL_COLOR_CONTROL: u32 = 0x81F8;
+const GL_SINGLE_COLOR: i32 = 0x81F9;
+const GL_SEPARATE_SPECULAR_COLOR: i32 = 0x81FA;
+const GL_MATRIX_MODE: u32 = 0x0BA0;
+const GL_MODELVIEW: u32 = 0x1700;
+const GL_MODELVIEW_MATRIX: u32 = 0x0BA6;
+
+/// Puts into the real GL the lights, materials, light model and colour-material mode that
+/// differ between `was` and `now`.
+fn put_lighting(was: &StateSeen, now: &StateSeen) {
+    let four = |v: glam::DVec4| v.as_vec4().to_array();
+    // SAFETY: as in `after`; each pointer is to a local array of the length the call reads.
+    unsafe {
+        let set = |light: u32, pname: u32, mut v: [f32; 4]| real::glLightfv(light, pname, v.as_mut_ptr().cast());
+        let mut moved = Vec::new();
+        for (k, (light, was_light)) in now.lights.iter().zip(&was.lights).enumerate() {
+            let name = GL_LIGHT0 + k as u32;
+            if light == was_light {
+                continue;
+            }
+            set(name, GL_AMBIENT, four(light.ambient));
+            set(name, GL_DIFFUSE, four(light.diffuse));
+            set(name, GL_SPECULAR, four(light.specular));
+            real::glLightf(name, GL_SPOT_EXPONENT, light.spot_exponent as f32);
+            real::glLightf(name, GL_SPOT_CUTOFF, light.spot_cutoff as f32);
+            real::glLightf(name, GL_CONSTANT_ATTENUATION, light.constant_attenuation as f32);
+            real::glLightf(name, GL_LINEAR_ATTENUATION, light.linear_attenuation as f32);
+            real::glLightf(name, GL_QUADRATIC_ATTENUATION, light.quadratic_attenuation as f32);
+            if (light.position, light.spot_direction) != (was_light.position, was_light.spot_direction) {
+                moved.push((name, light));
+            }
+        }
+        if !moved.is_empty() {
+            put_in_eye_space(&moved);
+        }
+        for (face, (m, was_m)) in [GL_FRONT, GL_BACK].into_iter().zip(now.materials.iter().zip(&was.materials)) {
+            if m != was_m {
+                put_material(face, m);
+            }
+        }
+        if now.light_model != was.light_model {
+            put_light_model(&was.light_model, &now.light_model);
+        }
+        if now.color_material != was.color_material {
+            real::glColorMaterial(now.color_material.0, now.color_material.1);
+        }
+    }
+}
+
+/// The positions and spot directions of `lights`, which capture holds in eye coordinates: GL
+/// takes them through the modelview matrix, so they are given with the identity there, and the
+/// program's matrix and matrix mode put back (not pushed: a full stack would overflow).
+unsafe fn put_in_eye_space(lights: &[(u32, &Light)]) {
+    let mode = real::get_int(GL_MATRIX_MODE) as u32;
+    let mut modelview = [0.0f64; 16];
+    // SAFETY: as in `put_lighting`: GL writes 16 doubles; the others read 4 floats or 16 doubles.
+    unsafe {
+        real::glGetDoublev(GL_MODELVIEW_MATRIX, modelview.as_mut_ptr().cast());
+        real::glMatrixMode(GL_MODELVIEW);
+        real::glLoadIdentity();
+        for (name, light) in lights {
+            let mut position = light.position.as_vec4().to_array();
+            real::glLightfv(*name, GL_POSITION, position.as_mut_ptr().cast());
+            let mut direction = light.spot_direction.as_vec3().extend(0.0).to_array();
+            real::glLightfv(*name, GL_SPOT_DIRECTION, direction.as_mut_ptr().cast());
+        }
+        real::glLoadMatrixd(modelview.as_mut_ptr().cast());
+        real::glMatrixMode(mode);
+    }
+}
+
+/// Material `m` of `face` (GL_FRONT or GL_BACK) into the real GL.
+unsafe fn put_material(face: u32, m: &Material) {
+    // SAFETY: as in `put_lighting`.
+    unsafe {
+        for (pname, v) in
+            [(GL_AMBIENT, m.ambient), (GL_DIFFUSE, m.diffuse), (GL_SPECULAR, m.specular), (GL_EMISSION, m.emission)]
+        {
+            let mut v = v.as_vec4().to_array();
+            real::glMaterialfv(face, pname, v.as_mut_ptr().cast());
+        }
+        real::glMaterialf(face, GL_SHININESS, m.shininess as f32);
+    }
+}
+
+/// The parts of the light model that differ into the real GL (only those: GL 1.1 has no
+/// colour control, and asking for it would leave an error for the program's glGetError).
+unsafe fn put_light_model(was: &LightModel, now: &LightModel) {
+    // SAFETY: as in `put_lighting`.
+    unsafe {
+        if now.ambient != was.ambient {
+            let mut ambient = now.ambient.as_vec4().to_array();
+            real::glLightModelfv(GL_LIGHT_MODEL_AMBIENT, ambient.as_mut_ptr().cast());
+        }
+        if now.local_viewer != was.local_viewer {
+            real::glLightModeli(GL_LIGHT_MODEL_LOCAL_VIEWER, i32::from(now.local_viewer));
+        }
+        if now.two_side != was.two_side {
+            real::glLightModeli(GL_LIGHT_MODEL_TWO_SIDE, i32::from(now.two_side));
+        }
+        if now.separate_specular != was.separate_specular {
+            let control = if now.separate_specular { GL_SEPARATE_SPECULAR_COLOR } else { GL_SINGLE_COLOR };
+            real::glLightModeli(GL_LIGHT_MODEL_COLOR_CONTROL, control);
         }
     }
 }

@@ -1,17 +1,16 @@
 //! What a display list can leave changed, beside the matrices (`matrix::Seen`), that the real GL
 //! must be told when glray takes a glCallList from it (src/raytrace/lists.rs): the enables,
-//! the face, shading, depth, blending, line and point state, the bound 2D texture, and the
-//! current colour and normal. A program that reads one back (glGetIntegerv(GL_FRONT_FACE) after
-//! blocktube's list set GL_CW), or draws with the real GL after the list (glBitmap text in the
-//! colour a list left current, fed through glRasterPos), gets what the list did.
-//!
-//! Lights' and materials' values are not among them (a list's glLight or glMaterial stays
-//! capture's only).
+//! the face, shading, depth, blending, line and point state, the bound 2D texture, the current
+//! colour and normal, and the lights, materials and light model. A program that reads one back
+//! (glGetIntegerv(GL_FRONT_FACE) after blocktube's list set GL_CW), or draws with the real GL
+//! after the list (glBitmap text in the colour a list left current, fed through glRasterPos, lit
+//! by the lights a set-up list gave), gets what the list did.
 
 use glam::{DVec3, DVec4};
 
 use crate::context::Context;
 use crate::gl::*;
+use crate::lighting::{Light, LightModel, Material};
 
 /// The state a list can leave changed that the real GL answers queries with and draws with.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -34,6 +33,13 @@ pub struct StateSeen {
     pub bound_texture: u32,
     pub color: DVec4,
     pub normal: DVec3,
+    /// Each light's colours, position and spot direction (eye coordinates), and attenuation.
+    pub lights: [Light; 8],
+    /// Front and back.
+    pub materials: [Material; 2],
+    pub light_model: LightModel,
+    /// glColorMaterial's face and mode.
+    pub color_material: (u32, u32),
 }
 
 impl Context {
@@ -89,6 +95,10 @@ impl Context {
             bound_texture: s.bound_texture,
             color: self.imm.current.color,
             normal: self.imm.current.normal,
+            lights: s.lights,
+            materials: s.materials,
+            light_model: s.model,
+            color_material: (s.color_material_face, s.color_material_mode),
         }
     }
 }
