@@ -347,6 +347,14 @@ impl Frame {
             || self.scissored_clears.iter().any(|c| c.depth.is_some_and(|d| d < 1.0))
     }
 
+    /// About the bytes shading a hit reads from: the frame's own triangles and each mesh its
+    /// instances draw (once, however many instances draw it).
+    pub fn shading_bytes(&self) -> usize {
+        let mut seen = std::collections::HashSet::new();
+        let meshes: usize = self.instances.iter().filter(|i| seen.insert(i.mesh.id)).map(|i| i.mesh.bytes()).sum();
+        self.triangles.len() * std::mem::size_of::<Triangle>() + meshes
+    }
+
     /// Triangles drawn, counting every instance's mesh (before culling).
     pub fn triangle_count(&self) -> usize {
         self.triangles.len() + self.instances.iter().map(|i| i.mesh.triangles.len()).sum::<usize>()

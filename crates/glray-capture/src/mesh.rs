@@ -209,6 +209,16 @@ impl Mesh {
         }
     }
 
+    /// The bytes its vertices and triangles take (what shading a hit on it reads from).
+    pub fn bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.positions.len() * size_of::<Vec3>()
+            + self.normals.values.len() * size_of::<Vec3>()
+            + self.colors.values.len() * size_of::<Vec4>()
+            + self.texcoords.values.len() * size_of::<Vec4>()
+            + self.triangles.len() * size_of::<[u32; 3]>()
+    }
+
     pub fn vertex_count(&self) -> u32 {
         self.positions.len() as u32
     }
@@ -409,6 +419,23 @@ impl MeshBuilder {
 mod tests {
     use super::*;
     use crate::primitive::{GL_LINES, GL_QUADS, GL_TRIANGLES, GL_TRIANGLE_STRIP};
+
+    #[test]
+    fn a_meshs_bytes_count_its_vertices_values_and_triangles() {
+        // Four vertices with normals and two triangles: 4 x 12 + 4 x 12 + 2 x 12 bytes; no
+        // colours or texture coordinates of their own.
+        let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE];
+        let mesh = Mesh::indexed(positions, vec![Vec3::Z; 4], vec![[0, 1, 2], [2, 1, 3]]).expect("in range");
+        assert_eq!(mesh.bytes(), 48 + 48 + 24);
+        // Colours given per vertex count too.
+        let mut b = MeshBuilder::new(false, QuadSplit::Indexed);
+        b.begin(GL_TRIANGLES);
+        for k in 0..3 {
+            b.color(DVec4::ONE);
+            b.vertex(DVec4::new(k as f64, 0.0, 0.0, 1.0));
+        }
+        assert_eq!(b.finish().bytes(), 3 * 12 + 3 * 16 + 12);
+    }
 
     #[test]
     fn attributes_start_where_the_list_gives_them() {
