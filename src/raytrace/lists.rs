@@ -10,6 +10,7 @@
 //! and materials...).
 
 use glray_capture::events::Capture;
+use glray_capture::gl::*;
 use glray_capture::lighting::{Light, LightModel, Material};
 use glray_capture::list_effects::StateSeen;
 use glray_capture::matrix::Seen;
@@ -123,31 +124,6 @@ fn put_state(was: &StateSeen, now: &StateSeen) {
     put_lighting(was, now);
 }
 
-const GL_FRONT: u32 = 0x0404;
-const GL_BACK: u32 = 0x0405;
-const GL_LIGHT0: u32 = 0x4000;
-const GL_AMBIENT: u32 = 0x1200;
-const GL_DIFFUSE: u32 = 0x1201;
-const GL_SPECULAR: u32 = 0x1202;
-const GL_POSITION: u32 = 0x1203;
-const GL_SPOT_DIRECTION: u32 = 0x1204;
-const GL_SPOT_EXPONENT: u32 = 0x1205;
-const GL_SPOT_CUTOFF: u32 = 0x1206;
-const GL_CONSTANT_ATTENUATION: u32 = 0x1207;
-const GL_LINEAR_ATTENUATION: u32 = 0x1208;
-const GL_QUADRATIC_ATTENUATION: u32 = 0x1209;
-const GL_EMISSION: u32 = 0x1600;
-const GL_SHININESS: u32 = 0x1601;
-const GL_LIGHT_MODEL_LOCAL_VIEWER: u32 = 0x0B51;
-const GL_LIGHT_MODEL_TWO_SIDE: u32 = 0x0B52;
-const GL_LIGHT_MODEL_AMBIENT: u32 = 0x0B53;
-const GL_LIGHT_MODEL_COLOR_CONTROL: u32 = 0x81F8;
-const GL_SINGLE_COLOR: i32 = 0x81F9;
-const GL_SEPARATE_SPECULAR_COLOR: i32 = 0x81FA;
-const GL_MATRIX_MODE: u32 = 0x0BA0;
-const GL_MODELVIEW: u32 = 0x1700;
-const GL_MODELVIEW_MATRIX: u32 = 0x0BA6;
-
 /// Puts into the real GL the lights, materials, light model and colour-material mode that
 /// differ between `was` and `now`.
 fn put_lighting(was: &StateSeen, now: &StateSeen) {
@@ -243,7 +219,7 @@ unsafe fn put_light_model(was: &LightModel, now: &LightModel) {
         }
         if now.separate_specular != was.separate_specular {
             let control = if now.separate_specular { GL_SEPARATE_SPECULAR_COLOR } else { GL_SINGLE_COLOR };
-            real::glLightModeli(GL_LIGHT_MODEL_COLOR_CONTROL, control);
+            real::glLightModeli(GL_LIGHT_MODEL_COLOR_CONTROL, control as i32);
         }
     }
 }

@@ -1,4 +1,5 @@
-//! The GL enums capture reads (from the OpenGL 2.1 headers), in one place.
+//! The GL enums capture reads (from the OpenGL 2.1 headers), in one place; the live layer's
+//! replay of a list's state into the real GL (src/raytrace/lists.rs) takes them from here too.
 #![allow(dead_code)]
 
 // Enable caps.
@@ -54,6 +55,7 @@ pub const GL_LIGHT_MODEL_TWO_SIDE: u32 = 0x0B52;
 pub const GL_LIGHT_MODEL_AMBIENT: u32 = 0x0B53;
 pub const GL_LIGHT_MODEL_COLOR_CONTROL: u32 = 0x81F8;
 pub const GL_SEPARATE_SPECULAR_COLOR: u32 = 0x81FA;
+pub const GL_SINGLE_COLOR: u32 = 0x81F9;
 // Client arrays.
 pub const GL_VERTEX_ARRAY: u32 = 0x8074;
 pub const GL_NORMAL_ARRAY: u32 = 0x8075;
@@ -104,3 +106,8 @@ pub const GL_SCISSOR_BIT: u32 = 0x0008_0000;
 pub const GL_SCISSOR_TEST: u32 = 0x0C11;
 pub const GL_TEXTURE_BIT: u32 = 0x40000;
 pub const MAX_ATTRIB_DEPTH: usize = 16;
+
+// Matrix state the live layer reads back from the real GL.
+pub const GL_MATRIX_MODE: u32 = 0x0BA0;
+pub const GL_MODELVIEW: u32 = 0x1700;
+pub const GL_MODELVIEW_MATRIX: u32 = 0x0BA6;

@@ -37,7 +37,7 @@ mod draw;
 pub mod error;
 pub mod events;
 pub mod frame;
-mod gl;
+pub mod gl;
 pub mod immediate;
 pub mod instance;
 pub mod lighting;
