@@ -8,44 +8,25 @@
 //! time: the library must run on any x86-64) and the scan goes at the speed memory gives it;
 //! a big array is scanned in pieces on glray's threads (`threads`).
 
-/// An index type: GL_UNSIGNED_BYTE, GL_UNSIGNED_SHORT or GL_UNSIGNED_INT.
+/// An index type: GL_UNSIGNED_BYTE, GL_UNSIGNED_SHORT or GL_UNSIGNED_INT (an integer: any bits
+/// are a value, so one can be read from any bytes).
 trait Index: Copy + Ord + Into<u32> {
-    /// Bytes of one value: `size_of::<Self>()`.
-    const BYTES: usize;
+    /// Bytes of one value.
+    const BYTES: usize = std::mem::size_of::<Self>();
     const MIN: Self;
     const MAX: Self;
-    fn read(bytes: &[u8]) -> Self;
 }
 
-impl Index for u8 {
-    const BYTES: usize = 1;
-    const MIN: u8 = u8::MIN;
-    const MAX: u8 = u8::MAX;
-    #[inline(always)]
-    fn read(bytes: &[u8]) -> u8 {
-        bytes[0]
-    }
+macro_rules! index_types {
+    ($($t:ty),*) => {$(
+        impl Index for $t {
+            const MIN: $t = <$t>::MIN;
+            const MAX: $t = <$t>::MAX;
+        }
+    )*};
 }
 
-impl Index for u16 {
-    const BYTES: usize = 2;
-    const MIN: u16 = u16::MIN;
-    const MAX: u16 = u16::MAX;
-    #[inline(always)]
-    fn read(bytes: &[u8]) -> u16 {
-        u16::from_ne_bytes([bytes[0], bytes[1]])
-    }
-}
-
-impl Index for u32 {
-    const BYTES: usize = 4;
-    const MIN: u32 = u32::MIN;
-    const MAX: u32 = u32::MAX;
-    #[inline(always)]
-    fn read(bytes: &[u8]) -> u32 {
-        u32::from_ne_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])
-    }
-}
+index_types!(u8, u16, u32);
 
 /// Lanes kept apart: a 512-bit register's worth of 32-bit values, two AVX2 registers.
 const LANES: usize = 16;
@@ -109,7 +90,8 @@ fn lanes<T: Index>(bytes: &[u8]) -> (u32, u32) {
         }
     }
     for index in blocks.remainder().chunks_exact(T::BYTES) {
-        let v = T::read(index);
+        // SAFETY: as above, one value.
+        let v = unsafe { (index.as_ptr() as *const T).read_unaligned() };
         lo[0] = lo[0].min(v);
         hi[0] = hi[0].max(v);
     }
