@@ -350,7 +350,7 @@ impl Context {
             }
             _ => return None,
         };
-        for (d, hash) in self.arrays.iter().zip(&self.array_hashes) {
+        for ((d, hash), bytes) in self.arrays.iter().zip(&self.array_hashes).zip(&self.array_bytes) {
             words.extend([
                 i64::from(d.kind),
                 i64::from(d.index),
@@ -360,7 +360,7 @@ impl Context {
                 i64::from(d.normalized),
                 d.first as i64,
             ]);
-            words.extend(hash);
+            words.extend(hash.unwrap_or_else(|| content_hash(bytes)));
         }
         // Which arrays are enabled decides what the draw reads, beside the memory given.
         words.extend(pointers.map(|p| i64::from(p.enabled)));

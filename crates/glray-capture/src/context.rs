@@ -113,8 +113,9 @@ pub struct Context {
     /// Client arrays of the next draw (the trace's arrays event that precedes it).
     pub(crate) arrays: Vec<ArrayData<'static>>,
     pub(crate) array_bytes: Vec<Vec<u8>>,
-    /// Each array's `content_hash`, of the bytes in `array_bytes`.
-    pub(crate) array_hashes: Vec<[i64; 2]>,
+    /// Each big array's `content_hash`, of the bytes in `array_bytes` (None for a small one:
+    /// hashed only if a draw's key needs it).
+    pub(crate) array_hashes: Vec<Option<[i64; 2]>>,
     /// Meshes of big draws from client memory, kept by what they read.
     pub(crate) client_draws: ClientDraws,
     pub(crate) frame: Frame,
@@ -213,15 +214,18 @@ impl Context {
 
     /// Client arrays the next draw reads (a trace's arrays event).
     pub fn set_arrays(&mut self, arrays: &[ArrayData]) {
+        // Arrays from this size on are hashed before they are copied (see below); smaller ones
+        // (a glArrayElement's one element, a small draw's) are copied as they are.
+        const HASHED_FROM: usize = 1 << 16;
         self.array_bytes.resize_with(arrays.len(), Vec::new);
-        self.array_hashes.resize(arrays.len(), [0; 2]);
+        self.array_hashes.resize(arrays.len(), None);
         for ((kept, hash), a) in self.array_bytes.iter_mut().zip(&mut self.array_hashes).zip(arrays) {
             // A program drawing from client memory hands over the same arrays frame after
             // frame: hashed where they are (as the draw's key needs anyway), the same bytes as
             // the last draw's are not copied again (10M triangles' positions and normals were
             // 120 MB copied every frame).
-            let h = crate::arrays::content_hash(a.bytes);
-            if h == *hash && kept.len() == a.bytes.len() {
+            let h = (a.bytes.len() >= HASHED_FROM).then(|| crate::arrays::content_hash(a.bytes));
+            if h.is_some() && h == *hash && kept.len() == a.bytes.len() {
                 continue;
             }
             // Into the last draw's allocations: fresh ones were a page fault every 4 KiB of a
@@ -1802,8 +1806,8 @@ mod tests {
         draw(&mut c, &corners, n - 4);
         let frame = c.take_frame();
         assert!(frame.instances.is_empty() && frame.triangles.len() == (n - 4) / 3, "{}", frame.triangles.len());
-        // Arrays the same as the last draw's are not copied again; the draw reads them all the
-        // same, and arrays changed in place are copied anew.
+        // The same small arrays twice, then others in the same memory: each draw reads the
+        // arrays it was given (big ones: `big_arrays_the_same_as_the_last_draws_...`).
         for positions in [&moved, &moved, &corners] {
             draw(&mut c, positions, n - 4);
             let frame = c.take_frame();
@@ -1811,6 +1815,33 @@ mod tests {
             assert_eq!(frame.triangles.len(), (n - 4) / 3);
             assert_eq!(frame.triangles[0].positions[0].x, corner, "the draw reads the arrays it was given");
         }
+        assert_eq!(c.errors.take(), 0);
+    }
+
+    #[test]
+    fn big_arrays_the_same_as_the_last_draws_are_not_copied_and_changed_ones_are() {
+        // 9,000 triangles of 2D positions (216 KB: hashed before copying): drawn, drawn again
+        // from other memory holding the same bytes (not copied), then with the last triangle
+        // moved in place (the same length: copied anew, and the new mesh has it moved).
+        let mut c = context();
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        let n = 27_000usize;
+        let mut floats: Vec<f32> = (0..2 * n).map(|k| (k % 7) as f32).collect();
+        let draw = |c: &mut Context, floats: &[f32]| {
+            let bytes = f32s(floats);
+            c.set_arrays(&[positions_2d(&bytes)]);
+            call(c, "glDrawArrays", &[i(4), i(0), i(n as i64)]);
+            let frame = c.take_frame();
+            let last = TriangleId { instance: 0, index: (n / 3 - 1) as u32 };
+            (frame.instances[0].mesh.clone(), frame.triangle(last).expect("drawn").positions[2])
+        };
+        let (first, _) = draw(&mut c, &floats);
+        let (again, _) = draw(&mut c, &floats.clone());
+        assert!(Arc::ptr_eq(&first, &again), "the same bytes, the same mesh");
+        floats[2 * n - 2] = 100.0;
+        let (moved, corner) = draw(&mut c, &floats);
+        assert!(!Arc::ptr_eq(&first, &moved), "a changed byte makes a new mesh");
+        assert_eq!(corner.x, 100.0, "the new mesh has the moved corner");
         assert_eq!(c.errors.take(), 0);
     }
 
