@@ -146,8 +146,8 @@ fn fetch(sources: &[Option<Source<'_>>; 4], i: u64) -> Fetched {
 /// pieces on glray's threads, and the pieces' hashes hashed: a 10M-triangle draw's indices and
 /// arrays are 240 MB read every frame, more than one core's share of the memory's bandwidth.
 pub(crate) fn content_hash(bytes: &[u8]) -> [i64; 2] {
-    const PIECE: usize = 4 << 20;
-    let h = if bytes.len() < 4 * PIECE {
+    use glray_core::threads::{PIECE, SPLIT_FROM};
+    let h = if bytes.len() < SPLIT_FROM {
         xxh3_128(bytes)
     } else {
         let pieces = glray_core::threads::map_pieces(bytes, PIECE, xxh3_128);

@@ -8,6 +8,8 @@
 //! time: the library must run on any x86-64) and the scan goes at the speed memory gives it;
 //! a big array is scanned in pieces on glray's threads (`threads`).
 
+use crate::threads::{PIECE, SPLIT_FROM};
+
 /// An index type: GL_UNSIGNED_BYTE, GL_UNSIGNED_SHORT or GL_UNSIGNED_INT (an integer: any bits
 /// are a value, so one can be read from any bytes).
 trait Index: Copy + Ord + Into<u32> {
@@ -41,7 +43,7 @@ pub fn min_max(bytes: &[u8], size: usize) -> Option<(u32, u32)> {
         2 => scan::<u16>,
         _ => scan::<u32>,
     };
-    if bytes.len() < 4 * PIECE {
+    if bytes.len() < SPLIT_FROM {
         return scan(bytes);
     }
     // Big arrays in pieces on glray's threads: one core alone gets a fraction of the memory's
@@ -50,9 +52,6 @@ pub fn min_max(bytes: &[u8], size: usize) -> Option<(u32, u32)> {
     let pieces = crate::threads::map_pieces(&bytes[..whole], PIECE, scan);
     pieces.into_iter().flatten().reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
 }
-
-/// Bytes of the pieces a big array is scanned in: a multiple of every index size.
-const PIECE: usize = 4 << 20;
 
 fn scan<T: Index>(bytes: &[u8]) -> Option<(u32, u32)> {
     if bytes.len() < T::BYTES {
@@ -128,7 +127,8 @@ mod tests {
             seed
         };
         for size in [1usize, 2, 4] {
-            for len in [0usize, 1, 2, 3, 5, 15, 16, 17, 31, 32, 33, 64 * size + 3, 1000, 4099, 4 * PIECE + 5 * size + 1]
+            for len in
+                [0usize, 1, 2, 3, 5, 15, 16, 17, 31, 32, 33, 64 * size + 3, 1000, 4099, SPLIT_FROM + 5 * size + 1]
             {
                 let bytes: Vec<u8> = (0..len).map(|_| (next() >> 13) as u8).collect();
                 assert_eq!(min_max(&bytes, size), one_by_one(&bytes, size), "size {size}, {len} bytes");

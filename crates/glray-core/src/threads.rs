@@ -16,6 +16,12 @@ use rayon::ThreadPool;
 
 static POOL: AtomicPtr<ThreadPool> = AtomicPtr::new(std::ptr::null_mut());
 
+/// The pieces a big block of memory is read in on glray's threads (a multiple of every GL
+/// index size), and the size from which a block is split at all (smaller ones take less time
+/// to read than to share out).
+pub const PIECE: usize = 4 << 20;
+pub const SPLIT_FROM: usize = 4 * PIECE;
+
 /// Makes `pool` the one glray's work runs on from now on, and gives it back.
 pub fn publish(pool: ThreadPool) -> &'static ThreadPool {
     let pool: &'static ThreadPool = Box::leak(Box::new(pool));
