@@ -806,6 +806,58 @@ fn big_client_array_draws_follow_the_bytes_they_read_from_frame_to_frame() {
 }
 
 #[test]
+fn big_immediate_mode_runs_are_kept_as_meshes_by_what_they_give() {
+    // tests/helpers/immediate_grid.c: a lit grid of 12,482 triangles given vertex by vertex in
+    // one glBegin, drawn again unchanged, then changed, then with a glMaterial halfway through
+    // the glBegin, then as quads under a local light, then unlit. glray records such a glBegin
+    // as a mesh drawn as an instance, kept by what it gives: frame 1 must reuse frame 0's mesh
+    // (no BVH built), frame 2 must show its change, frame 3's glMaterial must reach the
+    // vertices after it (the run goes back through the vertex stage), frame 4's quads must be
+    // cut as Mesa cuts glBegin quads (frame 6: along the other diagonal, some being outside
+    // the view volume; frame 7: not), and the current values after glEnd must be the last
+    // ones given.
+    let dir = scratch("rt-immediate-grid");
+    let program = osmesa_helper(&dir, "immediate_grid");
+    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "immediate_grid plain"));
+    let stats = dir.join("stats.jsonl");
+    let mut cmd = command(Way::Preload, &[], &program, 60);
+    cmd.env("GLRAY_PRESET", "gl").env("GLRAY_PROGRESSIVE", "false").env("GLRAY_STATS", &stats);
+    let traced = stdout(&run_ok(&mut cmd, "immediate_grid under glray"));
+    let frames = |out: &str| -> Vec<Vec<i32>> {
+        out.lines()
+            .filter(|l| l.starts_with("frame"))
+            .map(|l| l.split([' ', ',', ':']).skip(2).filter_map(|w| w.parse().ok()).collect())
+            .collect()
+    };
+    let (p, t) = (frames(&plain), frames(&traced));
+    assert_eq!(p.len(), 8, "Mesa: {plain}");
+    assert!(p.iter().all(|f| f.len() == 3 * 64), "Mesa: {plain}");
+    assert_eq!(p[0], p[1], "Mesa: the same calls, the same picture");
+    for (a, b) in [(1, 2), (2, 3), (2, 4), (2, 5), (6, 7)] {
+        assert_ne!(p[a], p[b], "Mesa: frame {b} differs from frame {a}");
+    }
+    assert_eq!(t.len(), 8, "glray: {traced}");
+    for (k, (p, t)) in p.iter().zip(&t).enumerate() {
+        let off: Vec<_> = p.iter().zip(t).filter(|(a, b)| (*a - *b).abs() > 3).collect();
+        assert!(off.is_empty(), "frame {k}: glray {t:?}, Mesa {p:?}");
+    }
+    let current = |out: &str| out.lines().find(|l| l.starts_with("current")).map(String::from);
+    assert_eq!(current(&traced), current(&plain), "the current values after glEnd");
+    assert!(traced.contains("error 0x0"), "glray: {traced}");
+    let builds: Vec<f64> = std::fs::read_to_string(&stats)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let v = l.split("\"build_ms\":").nth(1).and_then(|r| r.split(',').next());
+            v.and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("build_ms in {l}"))
+        })
+        .collect();
+    assert_eq!(builds.len(), 8, "{builds:?}");
+    assert!(builds[1] * 20.0 < builds[0], "frame 1 reuses frame 0's mesh and BVH: build ms {builds:?}");
+    assert!(builds[2] * 20.0 > builds[0], "frame 2's mesh is new: build ms {builds:?}");
+}
+
+#[test]
 fn one_dimensional_textures_colour_as_gl_colours() {
     // tests/helpers/texture_1d.c: a colour map as a 1D texture (glTexImage1D, GL_TEXTURE_1D)
     // across a square, sampled nearest, then linear with mipmaps on a slanted square whose t

@@ -25,6 +25,14 @@ pub(crate) struct BufferDraw {
     buffers: [Option<u32>; 5],
 }
 
+impl BufferDraw {
+    /// A key of words alone, for meshes of client memory that no draw's arguments describe
+    /// (`immediate_meshes`).
+    pub(crate) fn of_words(words: Vec<i64>) -> BufferDraw {
+        BufferDraw { words, buffers: [None; 5] }
+    }
+}
+
 /// One array's pointer state, for arrays in buffer objects (client memory arrives with the
 /// draw, in the trace's arrays event).
 #[derive(Debug, Clone, Copy, Default)]

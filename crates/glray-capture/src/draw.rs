@@ -199,14 +199,26 @@ impl Context {
         Setup { projection, viewport, camera, surface, lighting, sequence }
     }
 
+    /// Whether a vertex at `clip` (clip coordinates) and `eye` (eye coordinates) is outside
+    /// the view volume or an enabled clip plane: Mesa then cuts a direct draw's quads as an
+    /// indexed draw's (`draw`).
+    pub(crate) fn clipped(&self, clip: DVec4, eye: DVec4) -> bool {
+        let c = clip;
+        [c.x, -c.x, c.y, -c.y, c.z, -c.z].iter().any(|&d| d > c.w)
+            || self.s.clip_planes.iter().any(|(on, plane)| *on && plane.dot(eye) < 0.0)
+    }
+
     /// Whether a list's mesh can be drawn now as an instance: triangles filled, texture
     /// coordinates not generated from positions, positions with w = 1, an invertible affine
     /// modelview (rays go into the mesh's space through its inverse).
     pub(crate) fn instances(&self, mesh: &Mesh) -> bool {
+        !mesh.lines_or_points && mesh.ws.is_none() && self.instances_now()
+    }
+
+    /// The state's part of `instances`: what no call between glBegin and glEnd can change.
+    pub(crate) fn instances_now(&self) -> bool {
         let mv = self.matrices.modelview.top();
         !self.programmable
-            && !mesh.lines_or_points
-            && mesh.ws.is_none()
             && self.s.polygon_mode == [GL_FILL, GL_FILL]
             && !self.s.texgen.iter().any(|g| g.enabled)
             && mv.determinant().is_normal()
@@ -267,10 +279,7 @@ impl Context {
         // quads with any vertex outside the view volume (or a clip plane) is cut as an
         // indexed draw is. (Mesa decides by everything it draws at once, which may be several
         // glBegin/glEnd with the same state; glray looks at one.)
-        let outside = |(c, v): (&DVec4, &Out)| {
-            [c.x, -c.x, c.y, -c.y, c.z, -c.z].iter().any(|&d| d > c.w)
-                || self.s.clip_planes.iter().any(|(on, plane)| *on && plane.dot(v.eye) < 0.0)
-        };
+        let outside = |(c, v): (&DVec4, &Out)| self.clipped(*c, v.eye);
         let asm = if mode == GL_QUADS && quads == QuadSplit::Direct && clip.iter().zip(verts).any(outside) {
             assemble(mode, verts.len(), QuadSplit::Indexed).unwrap_or(asm)
         } else {

@@ -39,6 +39,7 @@ pub mod events;
 pub mod frame;
 pub mod gl;
 pub mod immediate;
+mod immediate_meshes;
 pub mod instance;
 pub mod lighting;
 pub mod list_effects;

@@ -296,6 +296,16 @@ impl MeshBuilder {
         m.runs.push(Run { mode, start, count });
     }
 
+    /// The positions given so far.
+    pub(crate) fn positions(&self) -> &[Vec3] {
+        &self.mesh.positions
+    }
+
+    /// Cuts its quads as `quads` says from now on (its runs are assembled as they close).
+    pub(crate) fn cut_quads(&mut self, quads: QuadSplit) {
+        self.mesh.quads = quads;
+    }
+
     /// Whether a glBegin is open.
     pub fn is_open(&self) -> bool {
         self.open.is_some()

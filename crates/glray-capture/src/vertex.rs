@@ -107,7 +107,16 @@ pub(crate) fn eye_normal(nm: &DMat3, n: DVec3, normalize: bool, rescale: bool) -
 
 impl Context {
     pub(crate) fn attribute(&mut self, f: AttrForm, a: &[Value]) -> GlResult {
-        match decode_attribute(f, a)? {
+        self.give(decode_attribute(f, a)?)
+    }
+
+    /// What an attribute command gives, taken: by the glBegin recorded as a mesh, if it takes
+    /// it, else by the current values and the vertex stage.
+    fn give(&mut self, given: Given) -> GlResult {
+        if self.recording.is_open() && self.record_given(&given) {
+            return Ok(());
+        }
+        match given {
             Given::Vertex(p) => self.vertex(p),
             Given::Normal(n) => self.imm.normal(n),
             Given::Color(c) => self.imm.color(c),
@@ -150,17 +159,15 @@ impl Context {
         }
         let v = self.element(i as u64);
         self.arrays.clear();
-        if let Some(n) = v.normal {
-            self.imm.normal(n);
-        }
-        if let Some(c) = v.color {
-            self.imm.color(c);
-        }
-        if let Some(t) = v.tex {
-            self.imm.current.texcoords[0] = t;
-        }
-        if let Some(p) = v.position {
-            self.vertex(p);
+        let given = [
+            v.normal.map(Given::Normal),
+            v.color.map(Given::Color),
+            v.tex.map(|t| Given::TexCoord(0, t)),
+            v.position.map(Given::Vertex),
+        ];
+        for g in given.into_iter().flatten() {
+            // (Unit 0 exists: no error.)
+            let _ = self.give(g);
         }
     }
 

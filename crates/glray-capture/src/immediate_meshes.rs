@@ -1,0 +1,246 @@
+//! Big glBegin/glEnd runs kept as meshes, by what they give.
+//!
+//! An immediate-mode program gives its vertices call by call, every frame. Each vertex went
+//! through the vertex stage (transformed and lit in double precision) and each frame's
+//! triangles through a new BVH: a million triangles given as glNormal3fv/glVertex3fv cost ~1.1 s
+//! of capture and ~0.27 s of BVH build a frame, where llvmpipe draws the frame in ~0.15 s.
+//!
+//! Between glBegin and glEnd only the attributes can change, not the state a vertex is
+//! transformed and lit with. So once a glBegin of filled primitives reaches
+//! `MESH_FROM_VERTICES` vertices, and its state lets a mesh be drawn as an instance
+//! (`Context::instances_now`), it is taken from the vertex stage and recorded as a display
+//! list records one: its object-space attributes in a `MeshBuilder`, drawn at glEnd as an
+//! instance (lit per hit, as a list's mesh is). A run that gives the same values as one the
+//! last frame drew is that frame's mesh again, so its BVH is not built again either.
+//!
+//! Until then the run is the vertex stage's, and only what each vertex was given is noted
+//! beside it (`Given`), to make the mesh from should the run get that far: smaller runs stay
+//! on the vertex stage at nearly no cost, as they must (thousands of small instances would
+//! each be a BVH under the top level). A call inside the run that a mesh cannot keep
+//! (glMaterial, glEdgeFlag, another texture unit's coordinates, glCallList, a vertex with w
+//! not 1) ends the watch; after the run was taken, what was given so far goes back through the
+//! vertex stage and the rest of the run follows it there.
+
+use std::sync::Arc;
+
+use glam::{DVec3, DVec4, Vec3, Vec4};
+
+use crate::arrays::{content_hash, BufferDraw};
+use crate::context::Context;
+use crate::mesh::{Attribute, Mesh, MeshBuilder};
+use crate::primitive::{QuadSplit, GL_POLYGON, GL_QUADS, GL_TRIANGLES};
+use crate::vertex::Given;
+
+/// How many vertices a run reaches before it is taken from the vertex stage and kept as a mesh
+/// (as many as a client-array draw needs to be kept).
+pub(crate) const MESH_FROM_VERTICES: usize = crate::client_draws::KEEP_FROM_ELEMENTS as usize;
+
+/// What a vertex of a watched run was given: its position and the current values it took.
+#[derive(Clone, Copy)]
+struct Noted {
+    position: DVec4,
+    normal: DVec3,
+    color: DVec4,
+    texcoord: DVec4,
+}
+
+/// A context's watch over its open glBegin.
+#[derive(Default)]
+pub(crate) struct Recordings {
+    /// The open glBegin's vertices so far, while it may yet be taken as a mesh.
+    watched: Option<Vec<Noted>>,
+    /// The open glBegin, taken from the vertex stage.
+    taken: Option<MeshBuilder>,
+    /// The room of the last watch, for the next.
+    spare: Vec<Noted>,
+}
+
+impl Recordings {
+    /// Whether the open glBegin is watched or taken.
+    #[inline]
+    pub(crate) fn is_open(&self) -> bool {
+        self.watched.is_some() || self.taken.is_some()
+    }
+
+    /// The watch is over; its room is kept for the next.
+    fn unwatch(&mut self) {
+        if let Some(v) = self.watched.take() {
+            self.spare = v;
+        }
+    }
+}
+
+impl Context {
+    /// A glBegin of `mode` has opened: watched, if it draws filled primitives.
+    pub(crate) fn record_begin(&mut self, mode: u32) {
+        let r = &mut self.recording;
+        r.unwatch();
+        r.taken = None;
+        if (GL_TRIANGLES..=GL_POLYGON).contains(&mode) {
+            let mut noted = std::mem::take(&mut r.spare);
+            noted.clear();
+            r.watched = Some(noted);
+        }
+    }
+
+    /// An attribute (or vertex) given inside the open glBegin: true when the vertex stage is
+    /// not to see it (the run is taken from it).
+    pub(crate) fn record_given(&mut self, given: &Given) -> bool {
+        if let Some(b) = self.recording.taken.as_mut() {
+            match *given {
+                Given::Normal(n) => b.normal(n),
+                Given::Color(c) => b.color(c),
+                Given::TexCoord(0, t) => b.texcoord(t),
+                // The vertex stage drops it too.
+                Given::SecondaryColor => {}
+                Given::Vertex(p) if p.w == 1.0 => b.vertex(p),
+                _ => {
+                    self.stop_recording();
+                    return false;
+                }
+            }
+            return true;
+        }
+        match *given {
+            // Noted with the vertex that takes it.
+            Given::Normal(_) | Given::Color(_) | Given::TexCoord(0, _) | Given::SecondaryColor => false,
+            Given::Vertex(p) if p.w == 1.0 => self.note_vertex(p),
+            _ => {
+                self.stop_recording();
+                false
+            }
+        }
+    }
+
+    /// Vertex `p` of the watched run, noted: true when it was the one that made the run long
+    /// enough to be taken as a mesh (and so the vertex stage is not to see it).
+    fn note_vertex(&mut self, p: DVec4) -> bool {
+        let cur = &self.imm.current;
+        let noted = Noted { position: p, normal: cur.normal, color: cur.color, texcoord: cur.texcoords[0] };
+        let Some(watched) = self.recording.watched.as_mut() else { return false };
+        watched.push(noted);
+        if watched.len() < MESH_FROM_VERTICES {
+            return false;
+        }
+        if !self.instances_now() {
+            self.recording.unwatch();
+            return false;
+        }
+        let (Some(mode), Some(watched)) = (self.imm.mode(), self.recording.watched.take()) else { return false };
+        self.recording.taken = Some(taken(mode, &watched));
+        self.recording.spare = watched;
+        // What the vertex stage made of the run so far is not needed.
+        self.open.clear();
+        true
+    }
+
+    /// Something a mesh cannot keep happened inside the open glBegin: the watch ends, and a
+    /// run the vertex stage no longer saw is given to it again (from the current values it
+    /// was taken with: its first vertices' own values are those that changed in it).
+    pub(crate) fn stop_recording(&mut self) {
+        self.recording.unwatch();
+        let Some(b) = self.recording.taken.take() else { return };
+        let (_, _, given) = b.split_open();
+        for g in given {
+            match g {
+                Given::Vertex(p) => self.vertex(p),
+                Given::Normal(n) => self.imm.normal(n),
+                Given::Color(c) => self.imm.color(c),
+                Given::TexCoord(unit, t) => {
+                    // Only unit 0's are recorded.
+                    let _ = self.imm.tex_coord(unit, t);
+                }
+                Given::SecondaryColor | Given::EdgeFlag(_) => {}
+            }
+        }
+    }
+
+    /// glEnd of the open glBegin: when it was taken from the vertex stage, its mesh (the last
+    /// frame's, if that gave the same) drawn, and true; false when the run was the vertex
+    /// stage's.
+    pub(crate) fn end_recording(&mut self, mode: u32) -> bool {
+        self.recording.unwatch();
+        let Some(mut b) = self.recording.taken.take() else { return false };
+        if mode == GL_QUADS && self.any_clipped(b.positions()) {
+            // As the vertex stage's draw would cut them (`Context::draw`).
+            b.cut_quads(QuadSplit::Indexed);
+        }
+        let mesh = b.finish();
+        let key = key(&mesh);
+        let mesh = match self.client_draws.get(&key) {
+            Some(kept) => kept,
+            None => Arc::new(mesh),
+        };
+        self.client_draws.insert(key, mesh.clone());
+        // The glBegin is closed, `instances_now` held in it, and every position's w was 1 in a
+        // run of filled primitives: drawn as an instance.
+        let _ = self.run_mesh(&mesh);
+        true
+    }
+}
+
+impl Context {
+    /// Whether any of `positions` (object coordinates) is outside the view volume or a clip
+    /// plane (`Context::clipped`).
+    fn any_clipped(&self, positions: &[Vec3]) -> bool {
+        let modelview = *self.matrices.modelview.top();
+        let to_clip = *self.matrices.projection.top() * modelview;
+        positions.iter().any(|p| {
+            let p = p.as_dvec3().extend(1.0);
+            self.clipped(to_clip * p, modelview * p)
+        })
+    }
+}
+
+/// The builder a watched run of `mode` continues in, from its noted vertices. An attribute
+/// that kept one value over them is left to the current value at the draw (which it is:
+/// nothing changed it since the last vertex); one that changed is each vertex's own.
+fn taken(mode: u32, noted: &[Noted]) -> MeshBuilder {
+    let mut b = MeshBuilder::new(false, QuadSplit::Direct);
+    b.begin(mode);
+    let first = noted[0];
+    let normals = noted.iter().any(|v| v.normal != first.normal);
+    let colors = noted.iter().any(|v| v.color != first.color);
+    let texcoords = noted.iter().any(|v| v.texcoord != first.texcoord);
+    for v in noted {
+        if normals {
+            b.normal(v.normal);
+        }
+        if colors {
+            b.color(v.color);
+        }
+        if texcoords {
+            b.texcoord(v.texcoord);
+        }
+        b.vertex(v.position);
+    }
+    b
+}
+
+/// A recorded run's key among the kept meshes: every value it gave, and the values it left
+/// current (first word 2: client-array draws' keys start with 0 or 1).
+fn key(mesh: &Mesh) -> BufferDraw {
+    let mut words = vec![2, mesh.quads as i64];
+    for run in &mesh.runs {
+        words.extend([i64::from(run.mode), i64::from(run.start), i64::from(run.count)]);
+    }
+    words.extend(content_hash(bytemuck::cast_slice::<Vec3, u8>(&mesh.positions)));
+    attribute_words(&mut words, &mesh.normals);
+    attribute_words(&mut words, &mesh.colors);
+    attribute_words(&mut words, &mesh.texcoords);
+    let ends = [mesh.end_normal.map(|n| n.extend(0.0)), mesh.end_color, mesh.end_texcoord];
+    for end in ends {
+        let v = end.unwrap_or(DVec4::NAN);
+        words.extend([i64::from(end.is_some())].into_iter().chain(v.to_array().map(|x| x.to_bits() as i64)));
+    }
+    BufferDraw::of_words(words)
+}
+
+/// An attribute's first own value and a hash of its values, onto `words`.
+fn attribute_words<T: bytemuck::Pod>(words: &mut Vec<i64>, a: &Attribute<T>) {
+    words.extend([i64::from(a.first), a.values.len() as i64]);
+    words.extend(content_hash(bytemuck::cast_slice::<T, u8>(&a.values)));
+}
+
+// Positions and attributes are hashed as their bytes.
+const _: () = assert!(std::mem::size_of::<Vec3>() == 12 && std::mem::size_of::<Vec4>() == 16);
