@@ -53,6 +53,9 @@ pub(crate) struct Recordings {
     taken: Option<MeshBuilder>,
     /// The room of the last watch, for the next.
     spare: Vec<Noted>,
+    /// The vectors of the last mesh recorded that was not kept (the same as one already
+    /// kept), for the next.
+    room: Option<Mesh>,
 }
 
 impl Recordings {
@@ -127,7 +130,8 @@ impl Context {
             return false;
         }
         let (Some(mode), Some(watched)) = (self.imm.mode(), self.recording.watched.take()) else { return false };
-        self.recording.taken = Some(taken(mode, &watched));
+        let room = self.recording.room.take();
+        self.recording.taken = Some(taken(mode, &watched, room));
         self.recording.spare = watched;
         // What the vertex stage made of the run so far is not needed.
         self.open.clear();
@@ -165,11 +169,13 @@ impl Context {
             // As the vertex stage's draw would cut them (`Context::draw`).
             b.cut_quads(QuadSplit::Indexed);
         }
-        let mesh = b.finish();
-        let key = key(&mesh);
+        let key = key(b.closed());
         let mesh = match self.client_draws.get(&key) {
-            Some(kept) => kept,
-            None => Arc::new(mesh),
+            Some(kept) => {
+                self.recording.room = Some(b.into_room());
+                kept
+            }
+            None => Arc::new(b.finish()),
         };
         self.client_draws.insert(key, mesh.clone());
         // The glBegin is closed, `instances_now` held in it, and every position's w was 1 in a
@@ -192,11 +198,15 @@ impl Context {
     }
 }
 
-/// The builder a watched run of `mode` continues in, from its noted vertices. An attribute
+/// The builder a watched run of `mode` continues in (in `room`'s vectors, if given), from its
+/// noted vertices. An attribute
 /// that kept one value over them is left to the current value at the draw (which it is:
 /// nothing changed it since the last vertex); one that changed is each vertex's own.
-fn taken(mode: u32, noted: &[Noted]) -> MeshBuilder {
-    let mut b = MeshBuilder::new(false, QuadSplit::Direct);
+fn taken(mode: u32, noted: &[Noted], room: Option<Mesh>) -> MeshBuilder {
+    let mut b = match room {
+        Some(room) => MeshBuilder::reusing(room, false, QuadSplit::Direct),
+        None => MeshBuilder::new(false, QuadSplit::Direct),
+    };
     b.begin(mode);
     let first = noted[0];
     let normals = noted.iter().any(|v| v.normal != first.normal);

@@ -277,6 +277,42 @@ impl MeshBuilder {
         }
     }
 
+    /// `new`, in the room of `room`'s vectors (a mesh made again every frame would otherwise
+    /// fault in fresh pages for all of them each time).
+    pub(crate) fn reusing(room: Mesh, from_arrays: bool, quads: QuadSplit) -> MeshBuilder {
+        let mut b = MeshBuilder::new(from_arrays, quads);
+        let (m, mut r) = (&mut b.mesh, room);
+        r.positions.clear();
+        r.normals.values.clear();
+        r.colors.values.clear();
+        r.texcoords.values.clear();
+        r.triangles.clear();
+        r.provoking.clear();
+        r.runs.clear();
+        (m.positions, m.normals.values, m.colors.values, m.texcoords.values) =
+            (r.positions, r.normals.values, r.colors.values, r.texcoords.values);
+        (m.triangles, m.provoking, m.runs) = (r.triangles, r.provoking, r.runs);
+        b
+    }
+
+    /// The mesh so far with its open glBegin closed, as `finish` would give it but for its id,
+    /// bounds and corner layout (enough to tell it from another).
+    pub(crate) fn closed(&mut self) -> &Mesh {
+        self.end();
+        let m = &mut self.mesh;
+        (m.end_normal, m.end_color, m.end_texcoord) = (self.normal, self.color, self.texcoord);
+        let n = m.positions.len() as u32;
+        for a in [&mut m.normals.first, &mut m.colors.first, &mut m.texcoords.first] {
+            *a = (*a).min(n);
+        }
+        &self.mesh
+    }
+
+    /// Its vectors, for `reusing`.
+    pub(crate) fn into_room(self) -> Mesh {
+        self.mesh
+    }
+
     /// A glBegin: the vertices that follow make a run of `mode`.
     pub fn begin(&mut self, mode: u32) {
         self.end();
@@ -362,14 +398,9 @@ impl MeshBuilder {
 
     /// The finished mesh (an open glBegin is closed).
     pub fn finish(mut self) -> Mesh {
-        self.end();
+        self.closed();
         let mut m = self.mesh;
         m.id = next_id();
-        (m.end_normal, m.end_color, m.end_texcoord) = (self.normal, self.color, self.texcoord);
-        let n = m.positions.len() as u32;
-        for a in [&mut m.normals.first, &mut m.colors.first, &mut m.texcoords.first] {
-            *a = (*a).min(n);
-        }
         (m.min, m.max) = bounds(&m.positions);
         m.sequential = sequential(&m.triangles);
         m
