@@ -133,7 +133,8 @@ pub struct Context {
     pub(crate) framebuffer: u32,
     /// The glBegin/glEnd being compiled into a list, as a mesh.
     pub(crate) building: Option<MeshBuilder>,
-    /// The open glBegin, recorded as a mesh too (`immediate_meshes`).
+    /// The watch over the open glBegin, and its recording as a mesh once it is taken from
+    /// the vertex stage (`immediate_meshes`).
     pub(crate) recording: crate::immediate_meshes::Recordings,
 }
 

@@ -14,7 +14,7 @@
 //! last frame drew is that frame's mesh again, so its BVH is not built again either.
 //!
 //! Until then the run is the vertex stage's, and only what each vertex was given is noted
-//! beside it (`Given`), to make the mesh from should the run get that far: smaller runs stay
+//! beside it (`Noted`), to make the mesh from should the run get that far: smaller runs stay
 //! on the vertex stage at nearly no cost, as they must (thousands of small instances would
 //! each be a BVH under the top level). A call inside the run that a mesh cannot keep
 //! (glMaterial, glEdgeFlag, another texture unit's coordinates, glCallList, a vertex with w
@@ -34,6 +34,9 @@ use crate::vertex::Given;
 /// How many vertices a run reaches before it is taken from the vertex stage and kept as a mesh
 /// (as many as a client-array draw needs to be kept).
 pub(crate) const MESH_FROM_VERTICES: usize = crate::client_draws::KEEP_FROM_ELEMENTS as usize;
+
+// A run is taken before the vertex stage draws any of it (it draws a long one in chunks).
+const _: () = assert!(MESH_FROM_VERTICES <= crate::vertex::IMMEDIATE_CHUNK);
 
 /// What a vertex of a watched run was given: its position and the current values it took.
 #[derive(Clone, Copy)]
@@ -199,9 +202,9 @@ impl Context {
 }
 
 /// The builder a watched run of `mode` continues in (in `room`'s vectors, if given), from its
-/// noted vertices. An attribute
-/// that kept one value over them is left to the current value at the draw (which it is:
-/// nothing changed it since the last vertex); one that changed is each vertex's own.
+/// noted vertices. An attribute that kept one value over them is left to the current value at
+/// the draw (which it is: nothing changed it since the last vertex); one that changed is each
+/// vertex's own.
 fn taken(mode: u32, noted: &[Noted], room: Option<Mesh>) -> MeshBuilder {
     let mut b = match room {
         Some(room) => MeshBuilder::reusing(room, false, QuadSplit::Direct),

@@ -17,7 +17,7 @@ use crate::primitive::{QuadSplit, GL_LINES, GL_POINTS, GL_QUADS, GL_TRIANGLES};
 
 /// How many vertices of a glBegin of separate primitives are drawn at once (a multiple of 1,
 /// 2, 3 and 4, so that no primitive is cut; 3 MB of vertices).
-const IMMEDIATE_CHUNK: usize = 12 * 1024;
+pub(crate) const IMMEDIATE_CHUNK: usize = 12 * 1024;
 
 /// What an attribute command gives, decoded from its arguments.
 #[derive(Debug, Clone, Copy, PartialEq)]
