@@ -773,6 +773,24 @@ fn what_a_list_changes_reaches_the_real_gl_when_glray_takes_the_call() {
     assert_eq!(traced, plain, "glray against Mesa");
 }
 
+/// The pixels a helper printed per frame (`frame K: r,g,b r,g,b ...`, as tests/helpers/wavy_grid.h
+/// prints them).
+fn printed_frames(out: &str) -> Vec<Vec<i32>> {
+    out.lines()
+        .filter(|l| l.starts_with("frame"))
+        .map(|l| l.split([' ', ',', ':']).skip(2).filter_map(|w| w.parse().ok()).collect())
+        .collect()
+}
+
+/// Every frame glray printed is Mesa's to within 3 levels a channel.
+fn assert_frames_near(mesa: &[Vec<i32>], glray: &[Vec<i32>]) {
+    for (k, (p, t)) in mesa.iter().zip(glray).enumerate() {
+        assert_eq!(p.len(), t.len(), "frame {k}");
+        let off: Vec<_> = p.iter().zip(t).filter(|(a, b)| (*a - *b).abs() > 3).collect();
+        assert!(off.is_empty(), "frame {k}: glray {t:?}, Mesa {p:?}");
+    }
+}
+
 #[test]
 fn big_client_array_draws_follow_the_bytes_they_read_from_frame_to_frame() {
     // tests/helpers/client_arrays.c: a lit grid of 12,482 triangles from client arrays, drawn
@@ -783,13 +801,7 @@ fn big_client_array_draws_follow_the_bytes_they_read_from_frame_to_frame() {
     // frame 2; arrays not followed through glPopClientAttrib or glInterleavedArrays (which
     // set them all at once) would leave frames 4 and 5 empty.
     let (plain, traced) = plain_and_traced("client_arrays");
-    let frames = |out: &str| -> Vec<Vec<i32>> {
-        out.lines()
-            .filter(|l| l.starts_with("frame"))
-            .map(|l| l.split([' ', ',', ':']).skip(2).filter_map(|w| w.parse().ok()).collect())
-            .collect()
-    };
-    let (p, t) = (frames(&plain), frames(&traced));
+    let (p, t) = (printed_frames(&plain), printed_frames(&traced));
     assert_eq!(p.len(), 6, "Mesa: {plain}");
     assert!(p.iter().all(|f| f.len() == 3 * 64), "Mesa: {plain}");
     assert_eq!(p[0], p[1], "Mesa: the same bytes, the same picture");
@@ -797,11 +809,7 @@ fn big_client_array_draws_follow_the_bytes_they_read_from_frame_to_frame() {
     assert!(plain.contains("error 0x0"), "Mesa: {plain}");
     assert_eq!(p[3], p[4], "Mesa: the arrays back from the attribute stack");
     assert_eq!(t.len(), 6, "glray: {traced}");
-    for (k, (p, t)) in p.iter().zip(&t).enumerate() {
-        assert_eq!(p.len(), t.len(), "frame {k}");
-        let off: Vec<_> = p.iter().zip(t).filter(|(a, b)| (*a - *b).abs() > 3).collect();
-        assert!(off.is_empty(), "frame {k}: glray {t:?}, Mesa {p:?}");
-    }
+    assert_frames_near(&p, &t);
     assert!(traced.contains("error 0x0"), "glray: {traced}");
 }
 
@@ -823,13 +831,7 @@ fn big_immediate_mode_runs_are_kept_as_meshes_by_what_they_give() {
     let mut cmd = command(Way::Preload, &[], &program, 60);
     cmd.env("GLRAY_PRESET", "gl").env("GLRAY_PROGRESSIVE", "false").env("GLRAY_STATS", &stats);
     let traced = stdout(&run_ok(&mut cmd, "immediate_grid under glray"));
-    let frames = |out: &str| -> Vec<Vec<i32>> {
-        out.lines()
-            .filter(|l| l.starts_with("frame"))
-            .map(|l| l.split([' ', ',', ':']).skip(2).filter_map(|w| w.parse().ok()).collect())
-            .collect()
-    };
-    let (p, t) = (frames(&plain), frames(&traced));
+    let (p, t) = (printed_frames(&plain), printed_frames(&traced));
     assert_eq!(p.len(), 8, "Mesa: {plain}");
     assert!(p.iter().all(|f| f.len() == 3 * 64), "Mesa: {plain}");
     assert_eq!(p[0], p[1], "Mesa: the same calls, the same picture");
@@ -837,10 +839,7 @@ fn big_immediate_mode_runs_are_kept_as_meshes_by_what_they_give() {
         assert_ne!(p[a], p[b], "Mesa: frame {b} differs from frame {a}");
     }
     assert_eq!(t.len(), 8, "glray: {traced}");
-    for (k, (p, t)) in p.iter().zip(&t).enumerate() {
-        let off: Vec<_> = p.iter().zip(t).filter(|(a, b)| (*a - *b).abs() > 3).collect();
-        assert!(off.is_empty(), "frame {k}: glray {t:?}, Mesa {p:?}");
-    }
+    assert_frames_near(&p, &t);
     let current = |out: &str| out.lines().find(|l| l.starts_with("current")).map(String::from);
     assert_eq!(current(&traced), current(&plain), "the current values after glEnd");
     assert!(traced.contains("error 0x0"), "glray: {traced}");
