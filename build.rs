@@ -62,7 +62,7 @@ fn main() {
     let cmds: Vec<&Command> = commands.values().collect();
     write(&out.join("commands.rs"), &gen_commands(&cmds));
     write(&out.join("real.rs"), &gen_real(&cmds));
-    write(&out.join("exports.rs"), &gen_exports(&cmds));
+    write(&out.join("exports.rs"), &gen_exports(&cmds, &types));
     write(&out.join("record.rs"), &gen_record(&cmds, &types, &sizes));
     write(&out.join("replay.rs"), &gen_replay(&cmds));
     write(&out.join("params.rs"), &gen_params(&cmds, &types));
@@ -484,9 +484,10 @@ fn refused_inside_begin(c: &Command) -> bool {
     ["state", "dlist", "client", "query", "pass"].contains(&c.class.as_str()) && c.list != "-" && !c.handler && !allowed
 }
 
-fn gen_exports(cmds: &[&Command]) -> String {
+fn gen_exports(cmds: &[&Command], types: &HashMap<String, String>) -> String {
     let mut s = String::new();
     let mut recorded = String::new();
+    let mut typed_names = Vec::new();
     for c in cmds {
         let (params, args, ret) = signature(c);
         let call = if c.handler {
@@ -534,6 +535,12 @@ fn gen_exports(cmds: &[&Command]) -> String {
         } else {
             format!("{{ let _ = skip__; {call} }}")
         };
+        // Attribute commands go to capture typed when they can (`record::given`), else recorded.
+        let given = given_call(c, types);
+        if given.is_some() {
+            typed_names.push(c.name.as_str());
+        }
+        let typed = given.map_or(String::new(), |g| format!("!{g} && "));
         writeln!(
             recorded,
             "#[cold]\n#[inline(never)]\n#[allow(clippy::unnecessary_cast)]\npub unsafe fn {name}({params}){ret} {{\n    \
@@ -541,7 +548,7 @@ fn gen_exports(cmds: &[&Command]) -> String {
              {before}\
              let ret__ = {call};\n    \
              if outer__ {{\n        \
-             if crate::record::wants(crate::commands::cmd::{name}) {{\n            \
+             if {typed}crate::record::wants(crate::commands::cmd::{name}) {{\n            \
              crate::record::with(|rec__| crate::record::generated::{name}(rec__, {args}{sep}ret__));\n        \
              }}\n        \
              crate::record::leave();\n    \
@@ -551,6 +558,9 @@ fn gen_exports(cmds: &[&Command]) -> String {
         )
         .unwrap();
     }
+    writeln!(s, "/// The commands whose exports hand them to capture typed (`record::given`).").unwrap();
+    let typed: Vec<String> = typed_names.iter().map(|n| format!("crate::commands::cmd::{n}")).collect();
+    writeln!(s, "pub static TYPED: [usize; {}] = [{}];", typed.len(), typed.join(", ")).unwrap();
     writeln!(s, "/// The exports' slow path, taken while recording.\nmod recorded {{\n    use std::ffi::{{c_ulong, c_void}};\n{recorded}}}").unwrap();
     writeln!(s, "/// The address of each export, in COMMANDS order: what GetProcAddress hands out.").unwrap();
     writeln!(s, "pub static EXPORTS: [FnAddr; COUNT] = [").unwrap();
@@ -559,6 +569,39 @@ fn gen_exports(cmds: &[&Command]) -> String {
     }
     writeln!(s, "];").unwrap();
     s
+}
+
+/// The commands capture takes typed (`record::given`): the per-vertex attributes of the vertex
+/// stage (position, normal, colour, texture coordinates). The rest of class `vertex` (edge
+/// flags, fog coordinates, secondary colours, materials...) is recorded.
+const GIVEN_PREFIXES: &[&str] = &["glVertex", "glNormal", "glColor", "glTexCoord", "glMultiTexCoord"];
+
+/// The call that hands attribute command `c` to capture typed: its components as numbers, or
+/// its pointer to them as the type it points to, and a glMultiTexCoord's target; None for other
+/// commands.
+fn given_call(c: &Command, types: &HashMap<String, String>) -> Option<String> {
+    if c.class != "vertex" || !GIVEN_PREFIXES.iter().any(|p| c.name.starts_with(p)) {
+        return None;
+    }
+    let (target, parts) = match c.params.split_first() {
+        Some((t, rest)) if t.name == "target" => (format!("{} as u32", ident(&t.name)), rest),
+        _ => ("0".to_string(), &c.params[..]),
+    };
+    let name = &c.name;
+    match parts {
+        [p] if p.rust.contains('*') => {
+            let ty = types.get(&pointee(&p.c))?;
+            Some(format!(
+                "crate::record::given::given_ptr::<{ty}>(crate::commands::cmd::{name}, {target}, {} as *const {ty})",
+                ident(&p.name)
+            ))
+        }
+        _ if parts.iter().all(|p| !p.rust.contains('*')) => {
+            let raw: Vec<String> = parts.iter().map(|p| format!("{} as f64", ident(&p.name))).collect();
+            Some(format!("crate::record::given::given(crate::commands::cmd::{name}, {target}, &[{}])", raw.join(", ")))
+        }
+        _ => None,
+    }
 }
 
 /// gl-spec/sizes.txt: COMPSIZE argument list -> rule name.

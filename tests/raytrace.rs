@@ -857,6 +857,43 @@ fn big_immediate_mode_runs_are_kept_as_meshes_by_what_they_give() {
 }
 
 #[test]
+fn every_form_of_an_attribute_command_gives_what_it_gives_mesa() {
+    // tests/helpers/attribute_forms.c: colours, positions, normals and texture coordinates in
+    // each form GL has for them (scalar and vector; bytes to doubles, signed and unsigned), a
+    // form a cell, then in display lists. Without a trace file glray hands these commands to
+    // capture typed (`record::given`); with one, as recorded calls. Both must give Mesa's
+    // picture, and the same scenes.
+    let dir = scratch("rt-attribute-forms");
+    let program = osmesa_helper(&dir, "attribute_forms");
+    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "attribute_forms plain"));
+    let run = |way: &str| {
+        let scenes = dir.join(format!("scenes-{way}"));
+        let mut cmd = command(Way::Preload, &[], &program, 60);
+        cmd.env("GLRAY_PRESET", "gl").env("GLRAY_DUMP_SCENE", &scenes);
+        if way == "recorded" {
+            cmd.env("GLRAY_RECORD", dir.join("forms.trace"));
+        }
+        (stdout(&run_ok(&mut cmd, &format!("attribute_forms, {way}"))), scenes)
+    };
+    let (typed, typed_scenes) = run("typed");
+    let (recorded, recorded_scenes) = run("recorded");
+    let p = printed_frames(&plain);
+    assert_eq!(p.len(), 6, "Mesa: {plain}");
+    assert!(p.iter().all(|f| f.len() == 3 * 64), "Mesa: {plain}");
+    assert_eq!((&p[0], &p[2]), (&p[4], &p[5]), "Mesa: the lists draw what the calls drew");
+    assert_frames_near(&p, &printed_frames(&typed));
+    assert_eq!(typed, recorded, "the same output with a trace file and without");
+    let errors = |out: &str| out.lines().filter(|l| l.contains("error")).map(String::from).collect::<Vec<_>>();
+    assert_eq!(errors(&typed), errors(&plain));
+    for frame in 0..6 {
+        for ext in ["obj", "json"] {
+            let name = format!("scene-{frame:04}.{ext}");
+            assert_same_file(&typed_scenes.join(&name), &recorded_scenes.join(&name), &name);
+        }
+    }
+}
+
+#[test]
 fn one_dimensional_textures_colour_as_gl_colours() {
     // tests/helpers/texture_1d.c: a colour map as a 1D texture (glTexImage1D, GL_TEXTURE_1D)
     // across a square, sampled nearest, then linear with mipmaps on a slanted square whose t

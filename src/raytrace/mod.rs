@@ -18,6 +18,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use glray_capture::events::{Capture, LiveCall};
+use glray_capture::ops::AttrForm;
 use glray_core::config::Config;
 use glray_core::trace::{Event, Reader, Value};
 
@@ -182,6 +183,20 @@ fn follow_in<'a>(capture: &mut Capture, event: &Event, name: &dyn Fn(usize) -> &
 /// What capture is to know of the call this thread just made.
 fn live_call() -> LiveCall {
     LiveCall { unseen: UNSEEN.with(|u| u.replace(false)) || in_skipped_begin(), core_profile: crate::profile::core() }
+}
+
+/// Capture follows an attribute command handed over typed (`record::given`); false when it is
+/// to be followed as a recorded call instead.
+pub fn follow_given(live: &mut Live, thread: u32, form: AttrForm, target: u32, raw: &[f64]) -> bool {
+    if !ON.load(Ordering::Relaxed) {
+        return true;
+    }
+    let mut taken = true;
+    guarded(live, |live| {
+        taken = live.capture.given(thread, form, target, raw, live_call());
+        Ok(())
+    });
+    taken
 }
 
 /// Capture follows one call the recorder made without encoding it (no trace file is

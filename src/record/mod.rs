@@ -10,6 +10,7 @@
 //! every few MiB, and at exit.
 
 mod arrays;
+pub mod given;
 mod out;
 pub mod sizes;
 
@@ -173,14 +174,7 @@ pub fn with(f: impl FnOnce(&mut Recorder)) {
     }
     let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
     let Some(rec) = guard.as_mut() else { return };
-    let thread = THREAD.with(|t| {
-        if t.get() == u32::MAX {
-            t.set(rec.next_thread);
-            rec.next_thread += 1;
-        }
-        t.get()
-    });
-    rec.thread = thread;
+    rec.thread = rec.calling_thread();
     let ok = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         if rec.file.is_none() && rec.path.is_some() {
             rec.open()?;
@@ -363,6 +357,17 @@ impl Recorder {
             self.threads.resize_with(t + 1, ThreadState::default);
         }
         &mut self.threads[t]
+    }
+
+    /// The calling thread's number, given at its first recorded call.
+    fn calling_thread(&mut self) -> u32 {
+        THREAD.with(|t| {
+            if t.get() == u32::MAX {
+                t.set(self.next_thread);
+                self.next_thread += 1;
+            }
+            t.get()
+        })
     }
 
     /// Starts the record of a call; a command's first call also names it in the trace.

@@ -278,7 +278,7 @@ impl Context {
 
     /// Records a command's outcome in the error flag (and, for a call the real GL did not get,
     /// in the flag glGetError adds to the real one).
-    fn raise(&mut self, r: GlResult) {
+    pub(crate) fn raise(&mut self, r: GlResult) {
         if self.unseen {
             self.unseen_error.record(r);
         }

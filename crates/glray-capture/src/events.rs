@@ -11,7 +11,7 @@ use glray_core::trace::{Event, Value};
 
 use crate::context::Context;
 use crate::frame::Frame;
-use crate::ops::{op_for, Op};
+use crate::ops::{op_for, AttrForm, Op};
 
 /// Every call looks its thread's context up (four maps, twice per call): a 10M-vertex display
 /// list is 60M calls, and SipHash on these small integer keys was a fifth of compiling it.
@@ -167,6 +167,15 @@ impl Capture {
             }
             Some(Kind::Gl(..) | Kind::CopiesTexture) | None => {}
         }
+    }
+
+    /// An attribute command of `thread`'s handed over typed (`Context::take_given`); false when
+    /// it is to be followed as a recorded call instead.
+    pub fn given(&mut self, thread: u32, form: AttrForm, target: u32, raw: &[f64], live: LiveCall) -> bool {
+        self.last_thread = thread;
+        let ctx = self.context(thread);
+        live.give(ctx);
+        ctx.take_given(form, target, raw)
     }
 
     /// The context current on a thread, holding its share group's objects.

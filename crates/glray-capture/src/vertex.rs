@@ -31,17 +31,11 @@ pub(crate) enum Given {
     EdgeFlag(bool),
 }
 
-/// Decodes glVertex*, glNormal*, glColor*, glTexCoord*, glMultiTexCoord*, ...: missing
-/// components take GL's defaults, integer colours and normals are normalised.
+/// Decodes glVertex*, glNormal*, glColor*, glTexCoord*, glMultiTexCoord*, ... from a recorded
+/// call's arguments (`given_from` makes what they give).
 pub(crate) fn decode_attribute(f: AttrForm, a: &[Value]) -> GlResult<Given> {
-    let (first, unit) = match f.attr {
-        Attr::MultiTexCoord => {
-            let unit = args::uint(a, 0).wrapping_sub(GL_TEXTURE0) as usize;
-            if unit >= TEXCOORD_UNITS {
-                return Err(GlError::InvalidEnum);
-            }
-            (1, unit)
-        }
+    let (first, target) = match f.attr {
+        Attr::MultiTexCoord => (1, args::uint(a, 0)),
         _ => (0, 0),
     };
     // At most four values, on the stack: this runs for every glVertex, glNormal and glColor a
@@ -58,7 +52,25 @@ pub(crate) fn decode_attribute(f: AttrForm, a: &[Value]) -> GlResult<Given> {
         }
         n
     };
-    let raw = &values[..len];
+    given_from(f, target, &values[..len])
+}
+
+/// What an attribute command of form `f` gives with its components `raw` as the program passed
+/// them (integers not yet normalised) and, for glMultiTexCoord, its `target`: missing
+/// components take GL's defaults, integer colours and normals are normalised. The one place
+/// both the recorded calls (`decode_attribute`) and the typed ones (`Context::take_given`)
+/// make their values.
+pub(crate) fn given_from(f: AttrForm, target: u32, raw: &[f64]) -> GlResult<Given> {
+    let unit = match f.attr {
+        Attr::MultiTexCoord => {
+            let unit = target.wrapping_sub(GL_TEXTURE0) as usize;
+            if unit >= TEXCOORD_UNITS {
+                return Err(GlError::InvalidEnum);
+            }
+            unit
+        }
+        _ => 0,
+    };
     let get = |k: usize, default: f64| raw.get(k).copied().unwrap_or(default);
     let norm = |k: usize, default: f64| raw.get(k).map_or(default, |x| args::normalize(*x, f.ty));
     Ok(match f.attr {
@@ -108,6 +120,23 @@ pub(crate) fn eye_normal(nm: &DMat3, n: DVec3, normalize: bool, rescale: bool) -
 impl Context {
     pub(crate) fn attribute(&mut self, f: AttrForm, a: &[Value]) -> GlResult {
         self.give(decode_attribute(f, a)?)
+    }
+
+    /// An attribute command the live layer hands over typed, not as a recorded call (no trace
+    /// file is written): `raw` its components as the program passed them, `target` a
+    /// glMultiTexCoord's unit. Does what `call` does with the same command, outside display
+    /// list compilation; false, with nothing done, while a list is being compiled (the call
+    /// then goes the recorded way, which compiles it).
+    pub fn take_given(&mut self, f: AttrForm, target: u32, raw: &[f64]) -> bool {
+        if self.core_profile {
+            return true;
+        }
+        if self.compiling() {
+            return false;
+        }
+        let r = given_from(f, target, raw).and_then(|g| self.give(g));
+        self.raise(r);
+        true
     }
 
     /// What an attribute command gives, taken: by the glBegin recorded as a mesh, if it takes
