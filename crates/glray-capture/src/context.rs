@@ -340,40 +340,25 @@ impl Context {
         let mut items = Vec::new();
         // glArrayElement's client data is copied at compile time: the element's values now.
         let element = (op == Op::ArrayElement && args::int(a, 0) >= 0).then(|| self.element(args::int(a, 0) as u64));
+        let given = match op {
+            Op::Attr(f) if self.building.is_some() => decode_attribute(f, a).ok(),
+            _ => None,
+        };
+        if given.is_some_and(|g| self.compile_given(&g)) {
+            return items;
+        }
         if let Some(b) = self.building.as_mut() {
-            let given = match op {
-                Op::Attr(f) => decode_attribute(f, a).ok(),
-                _ => None,
-            };
             let open = b.is_open();
-            let kept = match (op, given) {
-                (Op::Attr(_), Some(Given::Normal(n))) => {
-                    b.normal(n);
-                    true
-                }
-                (Op::Attr(_), Some(Given::Color(c))) => {
-                    b.color(c);
-                    true
-                }
-                (Op::Attr(_), Some(Given::TexCoord(0, t))) => {
-                    b.texcoord(t);
-                    true
-                }
-                (Op::Attr(_), Some(Given::Vertex(p))) => {
-                    // (Outside glBegin a vertex does nothing: the builder ignores it.)
-                    b.vertex(p);
-                    true
-                }
-                (Op::Attr(_), Some(Given::SecondaryColor)) => true,
-                (Op::End, _) if open => {
+            let kept = match op {
+                Op::End if open => {
                     b.end();
                     true
                 }
-                (Op::Begin, _) if !open && args::uint(a, 0) <= GL_POLYGON => {
+                Op::Begin if !open && args::uint(a, 0) <= GL_POLYGON => {
                     b.begin(args::uint(a, 0));
                     true
                 }
-                (Op::ArrayElement, _) if open && element.is_some() => {
+                Op::ArrayElement if open && element.is_some() => {
                     b.give(&element.expect("fetched"));
                     true
                 }
@@ -409,6 +394,23 @@ impl Context {
         }
         items.push(Item::Call(op, ty, a.iter().map(keep).collect()));
         items
+    }
+
+    /// What an attribute command gives, kept by the mesh the open list is making from its
+    /// glBegin/glEnd runs, if it is making one and can keep it (all but another texture unit's
+    /// coordinates and edge flags).
+    pub(crate) fn compile_given(&mut self, given: &Given) -> bool {
+        let Some(b) = self.building.as_mut() else { return false };
+        match *given {
+            Given::Normal(n) => b.normal(n),
+            Given::Color(c) => b.color(c),
+            Given::TexCoord(0, t) => b.texcoord(t),
+            // (Outside glBegin a vertex does nothing: the builder ignores it.)
+            Given::Vertex(p) => b.vertex(p),
+            Given::SecondaryColor => {}
+            Given::TexCoord(..) | Given::EdgeFlag(_) => return false,
+        }
+        true
     }
 
     /// Ends the mesh being compiled: its closed glBegin/glEnd as a mesh, an open one back as

@@ -124,17 +124,24 @@ impl Context {
 
     /// An attribute command the live layer hands over typed, not as a recorded call (no trace
     /// file is written): `raw` its components as the program passed them, `target` a
-    /// glMultiTexCoord's unit. Does what `call` does with the same command, outside display
-    /// list compilation; false, with nothing done, while a list is being compiled (the call
-    /// then goes the recorded way, which compiles it).
+    /// glMultiTexCoord's unit. Does what `call` does with the same command. False, with nothing
+    /// done, when a list being compiled keeps it other than in the mesh it is making (the call
+    /// then goes the recorded way, which keeps it as a call).
     pub fn take_given(&mut self, f: AttrForm, target: u32, raw: &[f64]) -> bool {
         if self.core_profile {
             return true;
         }
-        if self.compiling() {
-            return false;
+        let given = given_from(f, target, raw);
+        if let Some((_, execute)) = self.shared.lists.compiling() {
+            if !given.as_ref().is_ok_and(|g| self.compile_given(g)) {
+                return false;
+            }
+            if !execute {
+                self.arrays.clear();
+                return true;
+            }
         }
-        let r = given_from(f, target, raw).and_then(|g| self.give(g));
+        let r = given.and_then(|g| self.give(g));
         self.raise(r);
         true
     }
