@@ -18,12 +18,12 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use glray_capture::events::{Capture, LiveCall};
-use glray_capture::ops::AttrForm;
 use glray_core::config::Config;
 use glray_core::trace::{Event, Reader, Value};
 
 use crate::commands::cmd;
 use crate::dispatch::{self, Backend};
+use crate::record::given::Given;
 
 static ON: AtomicBool = AtomicBool::new(false);
 
@@ -185,18 +185,20 @@ fn live_call() -> LiveCall {
     LiveCall { unseen: UNSEEN.with(|u| u.replace(false)) || in_skipped_begin(), core_profile: crate::profile::core() }
 }
 
-/// Capture follows an attribute command handed over typed (`record::given`); false when it is
-/// to be followed as a recorded call instead.
-pub fn follow_given(live: &mut Live, thread: u32, form: AttrForm, target: u32, raw: &[f64]) -> bool {
+/// Capture follows attribute commands of `thread`'s handed over typed (`record::given`), in
+/// the order they were made.
+pub fn follow_given<'a>(live: &mut Live, thread: u32, calls: impl Iterator<Item = &'a Given>) {
     if !ON.load(Ordering::Relaxed) {
-        return true;
+        return;
     }
-    let mut taken = true;
+    let core_profile = crate::profile::core();
     guarded(live, |live| {
-        taken = live.capture.given(thread, form, target, raw, live_call());
+        for g in calls {
+            let call = LiveCall { unseen: g.unseen, core_profile };
+            live.capture.given(thread, g.form, g.target, g.components(), call);
+        }
         Ok(())
     });
-    taken
 }
 
 /// Capture follows one call the recorder made without encoding it (no trace file is

@@ -174,6 +174,7 @@ pub fn with(f: impl FnOnce(&mut Recorder)) {
     }
     let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
     let Some(rec) = guard.as_mut() else { return };
+    given::drain(rec);
     rec.thread = rec.calling_thread();
     let ok = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         if rec.file.is_none() && rec.path.is_some() {
@@ -221,7 +222,9 @@ pub fn with_live<R>(f: impl FnOnce(&mut crate::raytrace::Live) -> R) -> Option<R
         return None;
     }
     let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
-    guard.as_mut()?.e.live().map(f)
+    let rec = guard.as_mut()?;
+    given::drain(rec);
+    rec.e.live().map(f)
 }
 
 /// Called before the real call of commands that touch client state, with their arguments as

@@ -6,7 +6,9 @@
  *   2: normals under a light, glNormal3{b,s,i,f,d}{,v} (integer normals are normalised);
  *   3: texture coordinates, glTexCoord{1,2,3,4}{s,i,f,d}{,v} and the same as
  *      glMultiTexCoord*(GL_TEXTURE0), picking a texel of an 8 x 8 texture each;
- *   4: frame 0's colours compiled into a display list, then called;
+ *   4: frame 0's colours compiled into a display list, then called; the list then gives a
+ *      colour outside glBegin and the second unit's coordinates inside one (calls a list keeps
+ *      as calls, not in the mesh it makes), for a quad over the last cell;
  *   5: frame 2's normals in a list compiled and executed at once.
  * glray hands these commands to capture typed when no trace file is written, and as recorded
  * calls when one is. Prints an 8 x 8 grid of pixels per frame (the cells' centres) and the
@@ -138,6 +140,11 @@ int main(void) {
     if (f == 4) {
       glNewList(lists, GL_COMPILE);
       cells(0);
+      glColor3ub(10, 200, 30);
+      glBegin(GL_QUADS);
+      glMultiTexCoord2f(GL_TEXTURE1, 0.5f, 0.5f);
+      glVertex2i(W - CELL, W - CELL), glVertex2i(W, W - CELL), glVertex2i(W, W), glVertex2i(W - CELL, W);
+      glEnd();
       glEndList();
       glCallList(lists);
     } else if (f == 5) {

@@ -169,9 +169,8 @@ impl Capture {
         }
     }
 
-    /// An attribute command of `thread`'s handed over typed (`Context::take_given`); false when
-    /// it is to be followed as a recorded call instead.
-    pub fn given(&mut self, thread: u32, form: AttrForm, target: u32, raw: &[f64], live: LiveCall) -> bool {
+    /// An attribute command of `thread`'s handed over typed (`Context::take_given`).
+    pub fn given(&mut self, thread: u32, form: AttrForm, target: u32, raw: &[f64], live: LiveCall) {
         self.last_thread = thread;
         let ctx = self.context(thread);
         live.give(ctx);

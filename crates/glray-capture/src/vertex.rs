@@ -12,7 +12,7 @@ use crate::frame::{color_materials, Lighting};
 use crate::gl::*;
 use crate::immediate::TEXCOORD_UNITS;
 use crate::lighting::light_face;
-use crate::ops::{Attr, AttrForm};
+use crate::ops::{Attr, AttrForm, Op};
 use crate::primitive::{QuadSplit, GL_LINES, GL_POINTS, GL_QUADS, GL_TRIANGLES};
 
 /// How many vertices of a glBegin of separate primitives are drawn at once (a multiple of 1,
@@ -124,26 +124,32 @@ impl Context {
 
     /// An attribute command the live layer hands over typed, not as a recorded call (no trace
     /// file is written): `raw` its components as the program passed them, `target` a
-    /// glMultiTexCoord's unit. Does what `call` does with the same command. False, with nothing
-    /// done, when a list being compiled keeps it other than in the mesh it is making (the call
-    /// then goes the recorded way, which keeps it as a call).
-    pub fn take_given(&mut self, f: AttrForm, target: u32, raw: &[f64]) -> bool {
+    /// glMultiTexCoord's unit. Does what `call` does with the same command.
+    pub fn take_given(&mut self, f: AttrForm, target: u32, raw: &[f64]) {
         if self.core_profile {
-            return true;
+            return;
         }
         let given = given_from(f, target, raw);
         if let Some((_, execute)) = self.shared.lists.compiling() {
             if !given.as_ref().is_ok_and(|g| self.compile_given(g)) {
-                return false;
+                // A call the list keeps as a call: the recorded way, with the components as
+                // the scalar form's arguments (which the list decodes back to the same).
+                let mut a = [Value::UInt(target as u64), Value::Null, Value::Null, Value::Null, Value::Null];
+                let first = usize::from(f.attr == Attr::MultiTexCoord);
+                for (slot, x) in a[first..].iter_mut().zip(raw) {
+                    *slot = Value::F64(*x);
+                }
+                let scalar = AttrForm { vector: false, ..f };
+                self.call(Op::Attr(scalar), f.ty, &a[..first + raw.len()]);
+                return;
             }
             if !execute {
                 self.arrays.clear();
-                return true;
+                return;
             }
         }
         let r = given.and_then(|g| self.give(g));
         self.raise(r);
-        true
     }
 
     /// What an attribute command gives, taken: by the glBegin recorded as a mesh, if it takes
