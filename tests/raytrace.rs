@@ -862,7 +862,8 @@ fn every_form_of_an_attribute_command_gives_what_it_gives_mesa() {
     // each form GL has for them (scalar and vector; bytes to doubles, signed and unsigned), a
     // form a cell, then in display lists. Without a trace file glray hands these commands to
     // capture typed (`record::given`); with one, as recorded calls. Both must give Mesa's
-    // picture, and the same scenes.
+    // picture, and the same scenes. Frame 6's colour is given just before another context (a
+    // core profile) is made current: it must be followed in the context it was given in.
     let dir = scratch("rt-attribute-forms");
     let program = osmesa_helper(&dir, "attribute_forms");
     let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "attribute_forms plain"));
@@ -878,15 +879,16 @@ fn every_form_of_an_attribute_command_gives_what_it_gives_mesa() {
     let (typed, typed_scenes) = run("typed");
     let (recorded, recorded_scenes) = run("recorded");
     let p = printed_frames(&plain);
-    assert_eq!(p.len(), 6, "Mesa: {plain}");
+    assert_eq!(p.len(), 7, "Mesa: {plain}");
     assert!(p.iter().all(|f| f.len() == 3 * 64), "Mesa: {plain}");
     assert_eq!((&p[0][..63 * 3], &p[2]), (&p[4][..63 * 3], &p[5]), "Mesa: the lists draw what the calls drew");
     assert_eq!(p[4][63 * 3..], [10, 200, 30], "Mesa: the list's last quad");
+    assert!(p[6].chunks(3).all(|c| c == [250, 20, 120]), "Mesa: the colour given before the other context");
     assert_frames_near(&p, &printed_frames(&typed));
     assert_eq!(typed, recorded, "the same output with a trace file and without");
     let errors = |out: &str| out.lines().filter(|l| l.contains("error")).map(String::from).collect::<Vec<_>>();
     assert_eq!(errors(&typed), errors(&plain));
-    for frame in 0..6 {
+    for frame in 0..7 {
         for ext in ["obj", "json"] {
             let name = format!("scene-{frame:04}.{ext}");
             assert_same_file(&typed_scenes.join(&name), &recorded_scenes.join(&name), &name);

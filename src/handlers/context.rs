@@ -1,6 +1,7 @@
 //! MakeCurrent: after a successful bind, the thread's GL calls go to the implementation that owns
 //! the context (glvnd for GLX and EGL, Mesa's OSMesa for OSMesa). A failed bind changes nothing,
-//! as in GL.
+//! as in GL. Before any bind, capture follows the attribute calls the thread made in the context
+//! it leaves (`record::given::flush`).
 
 use std::ffi::{c_ulong, c_void};
 
@@ -17,25 +18,31 @@ fn bound_if<T: PartialEq + Default>(ok: T, backend: Backend) -> T {
 }
 
 pub unsafe fn glXMakeCurrent(dpy: *mut c_void, drawable: c_ulong, ctx: *mut c_void) -> i32 {
+    crate::record::given::flush();
     bound_if(real::glXMakeCurrent(dpy, drawable, ctx), Backend::Glvnd)
 }
 
 pub unsafe fn glXMakeContextCurrent(dpy: *mut c_void, draw: c_ulong, read: c_ulong, ctx: *mut c_void) -> i32 {
+    crate::record::given::flush();
     bound_if(real::glXMakeContextCurrent(dpy, draw, read, ctx), Backend::Glvnd)
 }
 
 pub unsafe fn glXMakeCurrentReadSGI(dpy: *mut c_void, draw: c_ulong, read: c_ulong, ctx: *mut c_void) -> i32 {
+    crate::record::given::flush();
     bound_if(real::glXMakeCurrentReadSGI(dpy, draw, read, ctx), Backend::Glvnd)
 }
 
 pub unsafe fn eglMakeCurrent(dpy: *mut c_void, draw: *mut c_void, read: *mut c_void, ctx: *mut c_void) -> u32 {
+    crate::record::given::flush();
     bound_if(real::eglMakeCurrent(dpy, draw, read, ctx), Backend::Glvnd)
 }
 
 pub unsafe fn eglReleaseThread() -> u32 {
+    crate::record::given::flush();
     bound_if(real::eglReleaseThread(), Backend::Glvnd)
 }
 
 pub unsafe fn OSMesaMakeCurrent(ctx: *mut c_void, buffer: *mut c_void, type_: u32, width: i32, height: i32) -> u8 {
+    crate::record::given::flush();
     bound_if(real::OSMesaMakeCurrent(ctx, buffer, type_, width, height), Backend::OSMesa)
 }

@@ -131,11 +131,8 @@ fn keep(form: AttrForm, target: u32, raw: [f64; 4]) -> bool {
     });
     match full {
         Ok(Some(full)) => {
-            if full && forked_check() {
-                let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
-                if let Some(rec) = guard.as_mut() {
-                    drain(rec);
-                }
+            if full {
+                flush();
             }
             true
         }
@@ -155,6 +152,19 @@ pub(super) fn drain(rec: &mut Recorder) {
             }
         }
     });
+}
+
+/// Capture follows the calling thread's batch now: before the thread binds another context,
+/// so that its calls are followed in the context, and the profile, they were made in (the
+/// binding changes what `profile::core` says before capture follows the MakeCurrent).
+pub fn flush() {
+    let pending = PENDING.try_with(|p| p.try_borrow().is_ok_and(|b| b.len > 0));
+    if pending == Ok(true) && forked_check() {
+        let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(rec) = guard.as_mut() {
+            drain(rec);
+        }
+    }
 }
 
 /// `drain` for batch `b`.

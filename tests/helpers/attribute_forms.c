@@ -9,7 +9,9 @@
  *   4: frame 0's colours compiled into a display list, then called; the list then gives a
  *      colour outside glBegin and the second unit's coordinates inside one (calls a list keeps
  *      as calls, not in the mesh it makes), for a quad over the last cell;
- *   5: frame 2's normals in a list compiled and executed at once.
+ *   5: frame 2's normals in a list compiled and executed at once;
+ *   6: a colour given, a core-profile context made current and the first one again, then a
+ *      quad over the window in that colour (the colour belongs to the first context).
  * glray hands these commands to capture typed when no trace file is written, and as recorded
  * calls when one is. Prints an 8 x 8 grid of pixels per frame (the cells' centres) and the
  * errors glGetError reports, among them a glMultiTexCoord of a unit that does not exist.
@@ -159,9 +161,26 @@ int main(void) {
     glFinish();
     print_frame(f, buf);
   }
+  int core_attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
+                        OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+  OSMesaContext core = OSMesaCreateContextAttribs(core_attribs, NULL);
+  unsigned char core_buf[16 * 16 * 4];
+  glColor3ub(250, 20, 120);
+  if (!core || !OSMesaMakeCurrent(core, core_buf, GL_UNSIGNED_BYTE, 16, 16) ||
+      !OSMesaMakeCurrent(c, buf, GL_UNSIGNED_BYTE, W, W)) {
+    printf("no core profile context\n");
+    return 1;
+  }
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glBegin(GL_QUADS);
+  glVertex2i(0, 0), glVertex2i(W, 0), glVertex2i(W, W), glVertex2i(0, W);
+  glEnd();
+  glFinish();
+  print_frame(6, buf);
   printf("error 0x%x\n", glGetError());
   glMultiTexCoord2f(GL_TEXTURE0 + 40, 0, 0);
   printf("unit 40 error 0x%x\n", glGetError());
+  OSMesaDestroyContext(core);
   OSMesaDestroyContext(c);
   free(buf);
   return 0;
