@@ -8,7 +8,11 @@ use std::ffi::{c_ulong, c_void};
 use crate::dispatch::{set_backend, Backend};
 use crate::real;
 
-fn bound_if<T: PartialEq + Default>(ok: T, backend: Backend) -> T {
+/// Binds with `bind` (the real MakeCurrent), after capture followed what the thread made in the
+/// context it leaves.
+fn bind<T: PartialEq + Default>(bind: impl FnOnce() -> T, backend: Backend) -> T {
+    crate::record::given::flush();
+    let ok = bind();
     if ok != T::default() {
         set_backend(backend);
         crate::profile::made_current();
@@ -18,31 +22,25 @@ fn bound_if<T: PartialEq + Default>(ok: T, backend: Backend) -> T {
 }
 
 pub unsafe fn glXMakeCurrent(dpy: *mut c_void, drawable: c_ulong, ctx: *mut c_void) -> i32 {
-    crate::record::given::flush();
-    bound_if(real::glXMakeCurrent(dpy, drawable, ctx), Backend::Glvnd)
+    bind(|| real::glXMakeCurrent(dpy, drawable, ctx), Backend::Glvnd)
 }
 
 pub unsafe fn glXMakeContextCurrent(dpy: *mut c_void, draw: c_ulong, read: c_ulong, ctx: *mut c_void) -> i32 {
-    crate::record::given::flush();
-    bound_if(real::glXMakeContextCurrent(dpy, draw, read, ctx), Backend::Glvnd)
+    bind(|| real::glXMakeContextCurrent(dpy, draw, read, ctx), Backend::Glvnd)
 }
 
 pub unsafe fn glXMakeCurrentReadSGI(dpy: *mut c_void, draw: c_ulong, read: c_ulong, ctx: *mut c_void) -> i32 {
-    crate::record::given::flush();
-    bound_if(real::glXMakeCurrentReadSGI(dpy, draw, read, ctx), Backend::Glvnd)
+    bind(|| real::glXMakeCurrentReadSGI(dpy, draw, read, ctx), Backend::Glvnd)
 }
 
 pub unsafe fn eglMakeCurrent(dpy: *mut c_void, draw: *mut c_void, read: *mut c_void, ctx: *mut c_void) -> u32 {
-    crate::record::given::flush();
-    bound_if(real::eglMakeCurrent(dpy, draw, read, ctx), Backend::Glvnd)
+    bind(|| real::eglMakeCurrent(dpy, draw, read, ctx), Backend::Glvnd)
 }
 
 pub unsafe fn eglReleaseThread() -> u32 {
-    crate::record::given::flush();
-    bound_if(real::eglReleaseThread(), Backend::Glvnd)
+    bind(|| real::eglReleaseThread(), Backend::Glvnd)
 }
 
 pub unsafe fn OSMesaMakeCurrent(ctx: *mut c_void, buffer: *mut c_void, type_: u32, width: i32, height: i32) -> u8 {
-    crate::record::given::flush();
-    bound_if(real::OSMesaMakeCurrent(ctx, buffer, type_, width, height), Backend::OSMesa)
+    bind(|| real::OSMesaMakeCurrent(ctx, buffer, type_, width, height), Backend::OSMesa)
 }
