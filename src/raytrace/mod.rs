@@ -193,10 +193,8 @@ pub fn follow_given<'a>(live: &mut Live, thread: u32, calls: impl Iterator<Item 
     }
     let core_profile = crate::profile::core();
     guarded(live, |live| {
-        for g in calls {
-            let call = LiveCall { unseen: g.unseen, core_profile };
-            live.capture.given(thread, g.form, g.target, g.components(), call);
-        }
+        let calls = calls.map(|g| (g.form, g.target, g.components(), g.unseen));
+        live.capture.given(thread, core_profile, calls);
         Ok(())
     });
 }

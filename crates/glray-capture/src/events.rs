@@ -169,12 +169,22 @@ impl Capture {
         }
     }
 
-    /// An attribute command of `thread`'s handed over typed (`Context::take_given`).
-    pub fn given(&mut self, thread: u32, form: AttrForm, target: u32, raw: &[f64], live: LiveCall) {
+    /// Attribute commands of `thread`'s handed over typed, in the order they were made
+    /// (`Context::take_given`): each its form, glMultiTexCoord's target, components, and
+    /// whether the real GL did not get it. They all go to one context: the live layer hands a
+    /// thread's calls over before anything that could change its context.
+    pub fn given<'a>(
+        &mut self,
+        thread: u32,
+        core_profile: bool,
+        calls: impl IntoIterator<Item = (AttrForm, u32, &'a [f64], bool)>,
+    ) {
         self.last_thread = thread;
         let ctx = self.context(thread);
-        live.give(ctx);
-        ctx.take_given(form, target, raw)
+        for (form, target, raw, unseen) in calls {
+            LiveCall { unseen, core_profile }.give(ctx);
+            ctx.take_given(form, target, raw);
+        }
     }
 
     /// The context current on a thread, holding its share group's objects.
