@@ -71,11 +71,8 @@ impl Drop for Batch {
     /// A thread ending: capture follows what it left (the current values it gave belong to
     /// its context, which another thread may make current).
     fn drop(&mut self) {
-        if self.len > 0 && forked_check() {
-            let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
-            if let Some(rec) = guard.as_mut() {
-                follow(rec, self);
-            }
+        if self.len > 0 {
+            locked(|rec| follow(rec, self));
         }
     }
 }
@@ -159,10 +156,16 @@ pub(super) fn drain(rec: &mut Recorder) {
 /// binding changes what `profile::core` says before capture follows the MakeCurrent).
 pub fn flush() {
     let pending = PENDING.try_with(|p| p.try_borrow().is_ok_and(|b| b.len > 0));
-    if pending == Ok(true) && forked_check() {
-        let mut guard = RECORDER.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(rec) = guard.as_mut() {
-            drain(rec);
+    if pending == Ok(true) {
+        locked(drain);
+    }
+}
+
+/// Runs `f` with the recorder under its lock, when there is one.
+fn locked(f: impl FnOnce(&mut Recorder)) {
+    if forked_check() {
+        if let Some(rec) = RECORDER.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
+            f(rec);
         }
     }
 }
