@@ -3,6 +3,8 @@
 //! until it has `WIDTH` children; ranges of at most `LEAF_SIZE` triangles are leaves, and
 //! ranges of up to `MAX_BLOCKS` times that are leaves where the SAH says so (`as_node`).
 //!
+//! `Quality::Fast` builds a linear BVH instead (`morton`), sooner and walked more slowly.
+//!
 //! Lean on purpose (issue 5: build time and peak memory): one 32-byte record per triangle
 //! (its box, the triangle's index in the box's spare lane) partitioned in place, no binary tree
 //! in between, and the top of the tree built on rayon in parallel.
@@ -197,6 +199,14 @@ fn blocks(n: u32) -> f32 {
 /// One part of a split range: where it ends (the first part) or starts (the second), the box
 /// around its triangles, and the box around their centroids.
 type Part = (usize, Bounds, Centroids);
+
+/// How a tree is built: by binned SAH here (the tree the walks take fastest), or as a linear
+/// BVH (`morton`: the build in about half the time, rays ~13-20% slower; docs/performance.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quality {
+    Sah,
+    Fast,
+}
 
 /// The best split of a range found by binning: the plane, the boxes of its two sides, and its
 /// SAH cost (`half_area * blocks` of each side, summed).
@@ -432,22 +442,22 @@ fn halve(records: &[Record]) -> (Part, Part) {
 /// building, a leaf's reference is `LEAF | its first record` and `lens` holds its length; the
 /// leaves themselves are made at the end, when the records are in their final order.
 #[derive(Default)]
-struct Out {
-    nodes: Vec<Node>,
-    lens: Vec<[u8; WIDTH]>,
+pub(super) struct Out {
+    pub nodes: Vec<Node>,
+    pub lens: Vec<[u8; WIDTH]>,
 }
 
 impl Out {
     /// Room for the nodes over `records` records: trees here have about one node per 13
     /// triangles (eight children, leaves of 3.6 on average), so the vectors do not copy their
     /// nodes as they grow. Pages reserved and never written cost no memory.
-    fn for_records(records: usize) -> Out {
+    pub fn for_records(records: usize) -> Out {
         let nodes = records / 8 + 1;
         Out { nodes: pages::huge_vec(nodes), lens: Vec::with_capacity(nodes) }
     }
 
     /// Appends a subtree built elsewhere; returns its root's reference here.
-    fn append(&mut self, sub: Out, root: u32) -> u32 {
+    pub fn append(&mut self, sub: Out, root: u32) -> u32 {
         let n0 = self.nodes.len() as u32;
         let moved = |c: u32| if c & LEAF != 0 { c } else { c + n0 };
         self.nodes.extend(sub.nodes.into_iter().map(|mut n| {
@@ -571,7 +581,7 @@ fn blocks_of_leaves(lens: &[u8; WIDTH]) -> u32 {
 /// How many subtrees a walk can leave pending below a node with `children` children, the
 /// deepest of which leaves `below` (see `stack::most_pending`): all its children but the one
 /// it goes on with, and then what that one's subtree can leave.
-fn pending(children: usize, below: usize) -> usize {
+pub(super) fn pending(children: usize, below: usize) -> usize {
     children - 1 + below
 }
 
@@ -633,8 +643,8 @@ pub(super) struct Built {
     pub most_pending: usize,
 }
 
-/// The tree over `count` triangles whose corners `corners` gives.
-pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> Built {
+/// The tree over `count` triangles whose corners `corners` gives, built as `quality` says.
+pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync, quality: Quality) -> Built {
     let record = |i: usize| Record::new(i, corners(i));
     // Past what leaf references can index (2^30 blocks), the rest of the mesh is left out,
     // and said so (a mesh that size is ~34 GB of build records alone).
@@ -646,6 +656,9 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     } else {
         count
     };
+    if quality == Quality::Fast {
+        return super::morton::build(count, corners);
+    }
     let mut records: Vec<Record> = if count >= PARALLEL {
         let mut records = pages::huge_vec(count);
         (0..count).into_par_iter().map(record).collect_into_vec(&mut records);
@@ -675,11 +688,20 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     let todo = Todo { first: 0, centroids, split: None };
     let (root, most_pending) = shared_subtree(&mut records, todo, whole, &shared);
     let mut out = shared.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner());
-    // The leaves, numbered in node order, each as the triangles of its records; the records
-    // go before the leaves are made (peak memory). In parallel over runs of nodes, each run
-    // numbering on from its first node's first leaf (one thread numbering them all was 4-5%
-    // of a build), into vectors of the exact length (collecting a parallel iterator's pieces
-    // and joining them raised the 10M peak by 55 MB).
+    let (ids, counts) = number_leaves(&mut out, |k| records[k].index());
+    // The records go before the leaves are made (peak memory).
+    drop(records);
+    let leaves = make_leaves(&ids, &counts, corners);
+    Built { nodes: out.nodes, leaves, root, most_pending }
+}
+
+/// The leaves of a tree whose leaf children are still `LEAF | first` with lengths in
+/// `out.lens`, numbered in node order: each leaf child's reference set to its blocks, and each
+/// block's triangles (`index(k)`: the triangle at position k of the build's order) and count.
+/// In parallel over runs of nodes, each run numbering on from its first node's first leaf (one
+/// thread numbering them all was 4-5% of a build), into vectors of the exact length
+/// (collecting a parallel iterator's pieces and joining them raised the 10M peak by 55 MB).
+pub(super) fn number_leaves(out: &mut Out, index: impl Fn(usize) -> u32 + Sync) -> (Vec<[u32; 4]>, Vec<u8>) {
     let mut total = 0;
     let firsts: Vec<u32> = out
         .lens
@@ -708,26 +730,30 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
         for (node, lens) in nodes.iter_mut().zip(lens) {
             for lane in (0..WIDTH).filter(|&lane| lens[lane] > 0) {
                 let start = (node.child[lane] & !LEAF) as usize;
-                let range = &records[start..start + lens[lane] as usize];
-                let blocks = range.len().div_ceil(LEAF_SIZE as usize);
-                node.child[lane] = leaf_ref(first + k as u32, blocks as u32);
-                for block in range.chunks(LEAF_SIZE as usize) {
-                    for (slot, r) in ids[k].iter_mut().zip(block) {
-                        *slot = r.index();
+                let len = lens[lane] as usize;
+                node.child[lane] = leaf_ref(first + k as u32, len.div_ceil(LEAF_SIZE as usize) as u32);
+                for block in (start..start + len).step_by(LEAF_SIZE as usize) {
+                    let n = (start + len - block).min(LEAF_SIZE as usize);
+                    for (slot, at) in ids[k].iter_mut().zip(block..block + n) {
+                        *slot = index(at);
                     }
-                    counts[k] = block.len() as u8;
+                    counts[k] = n as u8;
                     k += 1;
                 }
             }
         }
     });
-    drop(records);
-    // In parallel from a few thousand leaves on (each reads its triangles' corners from the
-    // mesh: 7% of a 98K build, whose 27K leaves were below `PARALLEL`).
+    (ids, counts)
+}
+
+/// The blocks numbered by `number_leaves`, made from their triangles' corners. In parallel
+/// from a few thousand leaves on (each reads its triangles' corners from the mesh: 7% of a 98K
+/// build, whose 27K leaves were below `PARALLEL`).
+pub(super) fn make_leaves(ids: &[[u32; 4]], counts: &[u8], corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> Vec<Tri4> {
     let make = |(leaf, &n): (&[u32; 4], &u8)| Tri4::new(&leaf[..n as usize], |i| corners(i as usize));
-    let mut leaves = pages::huge_vec(total);
-    ids.par_iter().zip(&counts).with_min_len(2048).map(make).collect_into_vec(&mut leaves);
-    Built { nodes: out.nodes, leaves, root, most_pending }
+    let mut leaves = pages::huge_vec(ids.len());
+    ids.par_iter().zip(counts).with_min_len(2048).map(make).collect_into_vec(&mut leaves);
+    leaves
 }
 
 #[cfg(test)]
@@ -793,7 +819,7 @@ mod tests {
         // Serial (under PARALLEL records) and parallel builds, and a tree of one leaf.
         for n in [3, 1000, 100_000] {
             let tris = super::super::tests::soup(n);
-            let built = build(tris.len(), |i| tris[i]);
+            let built = build(tris.len(), |i| tris[i], Quality::Sah);
             let walked = super::super::stack::most_pending(&built.nodes, built.root);
             assert_eq!(built.most_pending, walked, "{n} triangles");
             assert!(n < 1000 || walked > 10, "{n} triangles: a tree that deep leaves more pending");

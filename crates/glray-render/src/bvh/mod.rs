@@ -17,6 +17,7 @@ mod build;
 mod bundle;
 mod frustum;
 mod lanes;
+mod morton;
 mod node;
 mod packet;
 mod stack;
@@ -25,6 +26,7 @@ use glam::{Vec2, Vec3, Vec3A, Vec4};
 use glray_core::prefetch;
 use obvhs::ray::Ray;
 
+pub use build::Quality;
 pub use bundle::BUNDLE;
 
 use boxes::{Boxes, Sse};
@@ -338,7 +340,12 @@ pub struct TriBvh {
 impl TriBvh {
     /// The tree over `count` triangles, whose corners `corners` gives by index.
     pub fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> TriBvh {
-        let build::Built { nodes, leaves, root, most_pending } = build::build(count, corners);
+        TriBvh::build_as(count, corners, Quality::Sah)
+    }
+
+    /// The same, built as `quality` says (`Quality::Fast`: sooner, walked more slowly).
+    pub fn build_as(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync, quality: Quality) -> TriBvh {
+        let build::Built { nodes, leaves, root, most_pending } = build::build(count, corners, quality);
         let bytes = nodes.len() * size_of::<Node>() + leaves.len() * size_of::<Tri4>();
         TriBvh { nodes, leaves, root, shallow: most_pending <= stack::FIXED, far: bytes > FAR }
     }
@@ -729,24 +736,9 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_tree_built_in_parallel_holds_every_triangle_once_inside_its_boxes() {
-        // Past build::PARALLEL (32K): the top of the tree is built on several threads.
-        let n = 100_000;
-        let tris = soup(n);
-        let bvh = build(&tris);
-        let mut seen = vec![0u32; n as usize];
-        check(&bvh, &tris, bvh.root, Vec3::NEG_INFINITY, Vec3::INFINITY, &mut seen);
-        assert!(seen.iter().all(|&k| k == 1), "every triangle in exactly one leaf");
-        for k in 0..100 {
-            let o = Vec3A::new(random(k * 3 + 50_000), random(k * 3 + 50_001), 2.0);
-            let ray = Ray::new(o, Vec3A::NEG_Z, 0.0, f32::INFINITY);
-            assert_eq!(bvh.closest(&ray, |_, _| true).map(|h| (h.index, h.t)), brute(&tris, &ray), "ray {k}");
-        }
-        // The same tree, bit for bit, on one thread or three (the splits made ahead in
-        // parallel depend on the ranges alone), so that every node of a cluster traces the same.
-        // Read from the root down: where the threads put their subtrees in the node vector
-        // depends on which finished first, and does not matter.
+    /// A tree's nodes and leaves as bits, read from the root down: where the threads put
+    /// their subtrees in the node vector depends on which finished first, and does not matter.
+    fn tree(t: &TriBvh) -> Vec<u32> {
         fn bits(t: &TriBvh, at: u32, out: &mut Vec<u32>) {
             if at == EMPTY {
                 return;
@@ -765,11 +757,69 @@ mod tests {
                 }
             }
         }
-        let tree = |t: &TriBvh| {
-            let mut out = Vec::new();
-            bits(t, t.root, &mut out);
-            out
-        };
+        let mut out = Vec::new();
+        bits(t, t.root, &mut out);
+        out
+    }
+
+    #[test]
+    fn a_fast_tree_holds_every_triangle_once_and_finds_what_testing_every_triangle_finds() {
+        let fast = |tris: &[Triangle]| TriBvh::build_as(tris.len(), |i| tris[i], Quality::Fast);
+        // One leaf, a node of leaves, deeper trees, and one past morton::PARALLEL (32K): its
+        // top built on several threads.
+        for n in [1, 3, 4, 5, 8, 9, 17, 2000, 50_000] {
+            let tris = soup(n);
+            let bvh = fast(&tris);
+            let mut seen = vec![0u32; n as usize];
+            check(&bvh, &tris, bvh.root, Vec3::NEG_INFINITY, Vec3::INFINITY, &mut seen);
+            assert!(seen.iter().all(|&k| k == 1), "{n} triangles: every triangle in exactly one leaf");
+            let most = if bvh.root & LEAF != 0 { 0 } else { stack::most_pending(&bvh.nodes, bvh.root) };
+            assert!(bvh.shallow == (most <= stack::FIXED), "{n} triangles");
+            for k in 0..300 {
+                let o = Vec3A::new(random(k * 7 + 200_000), random(k * 7 + 200_001), 2.0);
+                let target = Vec3A::new(random(k * 7 + 200_002), random(k * 7 + 200_003), 0.0);
+                let ray = Ray::new(o, (target - o).normalize(), 0.0, f32::INFINITY);
+                let expected = brute(&tris, &ray);
+                assert_eq!(bvh.closest(&ray, |_, _| true).map(|h| (h.index, h.t)), expected, "{n} triangles, ray {k}");
+                assert_eq!(bvh.occluded(&ray), expected.is_some(), "{n} triangles, ray {k}");
+                let packet = bvh.packet_hits(&[ray; 8], |_, _| true);
+                assert!(packet.iter().all(|h| h.map(|h| (h.index, h.t)) == expected), "{n} triangles, ray {k}");
+            }
+        }
+        // The same tree on one thread or three.
+        let tris = soup(50_000);
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        assert!(tree(&one.install(|| fast(&tris))) == tree(&three.install(|| fast(&tris))), "threads change the tree");
+        // Triangles on top of each other (one code: the ranges halve), and some not finite
+        // (left out, as the SAH build leaves them).
+        let mut heap = vec![soup(1)[0]; 1000];
+        heap[500] = [Vec3::NAN; 3];
+        heap[7] = [Vec3::INFINITY, Vec3::ZERO, Vec3::ONE];
+        let bvh = fast(&heap);
+        let mut seen = vec![0u32; heap.len()];
+        check(&bvh, &heap, bvh.root, Vec3::NEG_INFINITY, Vec3::INFINITY, &mut seen);
+        assert_eq!(seen.iter().filter(|&&k| k == 1).count(), 998);
+        assert_eq!((seen[500], seen[7]), (0, 0), "triangles not finite are left out");
+        assert!(fast(&[[Vec3::NAN; 3]; 3]).is_empty() && fast(&[]).is_empty());
+    }
+
+    #[test]
+    fn a_tree_built_in_parallel_holds_every_triangle_once_inside_its_boxes() {
+        // Past build::PARALLEL (32K): the top of the tree is built on several threads.
+        let n = 100_000;
+        let tris = soup(n);
+        let bvh = build(&tris);
+        let mut seen = vec![0u32; n as usize];
+        check(&bvh, &tris, bvh.root, Vec3::NEG_INFINITY, Vec3::INFINITY, &mut seen);
+        assert!(seen.iter().all(|&k| k == 1), "every triangle in exactly one leaf");
+        for k in 0..100 {
+            let o = Vec3A::new(random(k * 3 + 50_000), random(k * 3 + 50_001), 2.0);
+            let ray = Ray::new(o, Vec3A::NEG_Z, 0.0, f32::INFINITY);
+            assert_eq!(bvh.closest(&ray, |_, _| true).map(|h| (h.index, h.t)), brute(&tris, &ray), "ray {k}");
+        }
+        // The same tree, bit for bit, on one thread or three (the splits made ahead in
+        // parallel depend on the ranges alone), so that every node of a cluster traces the same.
         for threads in [1, 3] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             assert!(tree(&pool.install(|| build(&tris))) == tree(&bvh), "{threads} threads build another tree");
