@@ -48,13 +48,17 @@ impl Sink {
         let result = match self {
             Sink::Stderr => writeln!(
                 std::io::stderr(),
-                "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
+                "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms{}, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
                  present {:.2} ms; {} triangles, {} samples per pixel{}",
                 s.frame,
                 s.width,
                 s.height,
                 ms(s.capture),
                 ms(r.build),
+                match r.fast_builds {
+                    0 => String::new(),
+                    n => format!(" ({n} built fast)"),
+                },
                 ms(r.trace),
                 r.rays,
                 mrays,
@@ -66,7 +70,7 @@ impl Sink {
             Sink::File(f) => writeln!(
                 f,
                 "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
-                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{}}}",
+                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{}}}",
                 s.frame,
                 s.thread,
                 s.width,
@@ -79,7 +83,8 @@ impl Sink {
                 mrays,
                 r.triangles,
                 r.samples,
-                r.reused
+                r.reused,
+                r.fast_builds
             ),
         };
         if let Err(e) = result {

@@ -16,6 +16,7 @@
 //!   that show the same scene (`signature`), statistics, progress on a terminal (`progress`).
 
 pub mod bvh;
+pub mod bvh_choice;
 pub mod effects;
 pub mod fragment;
 mod gouraud;

@@ -11,6 +11,7 @@ use glray_capture::camera::Camera;
 use glray_capture::frame::{Frame, TriangleId};
 use rayon::prelude::*;
 
+use crate::bvh_choice::{ray_work, BvhBuild};
 use crate::effects::{Effects, MAX_PASSES};
 use crate::gouraud::Gouraud;
 use crate::pieces::{self, for_each_block, Piece};
@@ -51,6 +52,8 @@ pub struct Options {
     /// Evaluate lighting per pixel instead of interpolating per-vertex colours.
     pub per_pixel_lighting: bool,
     pub effects: Effects,
+    /// How BVHs are built (setting `bvh`).
+    pub bvh: BvhBuild,
 }
 
 impl Options {
@@ -78,7 +81,8 @@ impl Options {
             e.shadows = on;
         }
         e.progressive = config.flag("progressive").unwrap_or(true);
-        Some(Options { per_pixel_lighting: config.per_pixel_lighting(), effects: e })
+        let bvh = BvhBuild::from_setting(config.bvh()).unwrap_or_default();
+        Some(Options { per_pixel_lighting: config.per_pixel_lighting(), effects: e, bvh })
     }
 }
 
@@ -96,6 +100,8 @@ pub struct Stats {
     /// The picture is the last one's, shown again: nothing changed since, and it had all its
     /// samples (DESIGN rule 5: render only if something changed).
     pub reused: bool,
+    /// BVHs built fast (`bvh_choice`) for the frame.
+    pub fast_builds: u32,
 }
 
 /// Samples added up over frames that show the same scene (for the GL look, one pass: the
@@ -385,7 +391,9 @@ impl Job<'_> {
             return (Rendered { width, height, rgba, depth }, colors, stats);
         };
         let start = Instant::now();
-        let scene = Scene::build(frame, meshes);
+        let pixels = u64::from(width) * u64::from(height);
+        let scene = Scene::build(frame, meshes, self.options.bvh, ray_work(pixels, &self.options.effects));
+        stats.fast_builds = meshes.fast_builds;
         stats.build = start.elapsed();
         let start = Instant::now();
         let diagonal = scene.diagonal().max(1e-6);
@@ -502,6 +510,7 @@ impl Job<'_> {
             let (rendered, colors, s) = job.run(meshes, linear);
             (stats.build, stats.trace) = (stats.build + s.build, stats.trace + s.trace);
             (stats.rays, stats.triangles) = (stats.rays + s.rays, stats.triangles + s.triangles);
+            stats.fast_builds += s.fast_builds;
             last = Some((rendered, colors));
         }
         let (rendered, colors) = last.expect("by_viewport gives two views or more");

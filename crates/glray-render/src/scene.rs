@@ -23,7 +23,8 @@ use obvhs::ray::RayHit;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
-use crate::bvh::{TriBvh, TriHit, BUNDLE};
+use crate::bvh::{Quality, TriBvh, TriHit, BUNDLE};
+use crate::bvh_choice::{BvhBuild, BIG_MESH};
 use crate::effects::{leaving, Origin};
 use crate::sampling::Hemisphere;
 
@@ -92,37 +93,80 @@ pub struct MeshBvh {
 }
 
 impl MeshBvh {
-    fn build(mesh: &Mesh) -> MeshBvh {
-        MeshBvh { bvh: TriBvh::build(mesh.triangles.len(), |i| mesh.corners(i)) }
+    fn build(mesh: &Mesh, quality: Quality) -> MeshBvh {
+        MeshBvh { bvh: TriBvh::build_as(mesh.triangles.len(), |i| mesh.corners(i), quality) }
     }
 }
 
-/// The BVHs of display-list meshes, kept across frames for as long as a list holds the mesh.
+/// A kept mesh's BVH, and in how many frames the mesh has been drawn.
+struct Kept {
+    mesh: Weak<Mesh>,
+    bvh: Arc<MeshBvh>,
+    triangles: usize,
+    frames: u32,
+}
+
+/// The BVHs of kept meshes (display lists, buffer objects, big client-array and immediate-mode
+/// draws), kept across frames for as long as capture holds the mesh.
 #[derive(Default)]
 pub struct Meshes {
-    built: HashMap<u64, (Weak<Mesh>, Arc<MeshBvh>)>,
+    built: HashMap<u64, Kept>,
+    /// Whether the program replaces its meshes frame after frame: the last mesh of `BIG_MESH`
+    /// triangles or more that went was drawn in one frame only, and none has been drawn in two
+    /// frames since (smaller meshes, a label or a cursor made anew beside a kept dataset, tell
+    /// nothing of it). A new mesh's BVH is then one the next frame builds again (`BvhBuild`).
+    replacing: bool,
+    /// BVHs built fast (`Quality::Fast`) in the last `prepare`.
+    pub(crate) fast_builds: u32,
 }
 
 impl Meshes {
     /// The BVH of each of the frame's instances' meshes: built (in parallel) for meshes not
-    /// seen before; those of meshes no list holds any more are dropped.
-    fn prepare(&mut self, frame: &Frame) -> Vec<Arc<MeshBvh>> {
+    /// seen before, as `choice` says for a tree the next frame builds again when the program
+    /// replaces its meshes (`replacing`); those of meshes capture no longer holds are dropped.
+    fn prepare(&mut self, frame: &Frame, choice: BvhBuild, ray_work: f64) -> Vec<Arc<MeshBvh>> {
         self.prune();
         let mut new: Vec<&Arc<Mesh>> =
             frame.instances.iter().map(|i| &i.mesh).filter(|m| !self.built.contains_key(&m.id)).collect();
         new.sort_by_key(|m| m.id);
         new.dedup_by_key(|m| m.id);
-        let bvhs: Vec<(u64, Weak<Mesh>, Arc<MeshBvh>)> =
-            new.par_iter().map(|m| (m.id, Arc::downgrade(m), Arc::new(MeshBvh::build(m)))).collect();
-        for (id, mesh, bvh) in bvhs {
-            self.built.insert(id, (mesh, bvh));
+        let replacing = self.replacing;
+        let quality = |m: &Mesh| choice.quality(m.triangles.len(), replacing, ray_work);
+        self.fast_builds = new.iter().filter(|m| quality(m) == Quality::Fast).count() as u32;
+        let bvhs: Vec<(&Arc<Mesh>, Arc<MeshBvh>)> =
+            new.par_iter().map(|m| (*m, Arc::new(MeshBvh::build(m, quality(m))))).collect();
+        for (m, bvh) in bvhs {
+            let kept = Kept { mesh: Arc::downgrade(m), bvh, triangles: m.triangles.len(), frames: 0 };
+            self.built.insert(m.id, kept);
         }
-        frame.instances.iter().map(|i| self.built[&i.mesh.id].1.clone()).collect()
+        let mut drawn: Vec<u64> = frame.instances.iter().map(|i| i.mesh.id).collect();
+        drawn.sort_unstable();
+        drawn.dedup();
+        for id in drawn {
+            let kept = self.built.get_mut(&id).expect("built above");
+            kept.frames += 1;
+            if kept.frames == 2 && kept.triangles >= BIG_MESH {
+                self.replacing = false;
+            }
+        }
+        frame.instances.iter().map(|i| self.built[&i.mesh.id].bvh.clone()).collect()
     }
 
-    /// Drops the BVHs of meshes no list holds any more.
+    /// Drops the BVHs of meshes capture no longer holds, noting whether the last big one was
+    /// drawn in one frame only (`replacing`).
     pub fn prune(&mut self) {
-        self.built.retain(|_, (mesh, _)| mesh.strong_count() > 0);
+        let mut gone: Vec<(u64, u32, usize)> = Vec::new();
+        self.built.retain(|&id, kept| {
+            let held = kept.mesh.strong_count() > 0;
+            if !held {
+                gone.push((id, kept.frames, kept.triangles));
+            }
+            held
+        });
+        // The latest mesh first (ids grow as meshes are made).
+        if let Some(&(_, frames, _)) = gone.iter().filter(|g| g.2 >= BIG_MESH).max_by_key(|g| g.0) {
+            self.replacing = frames == 1;
+        }
     }
 
     /// How many meshes have a BVH.
@@ -208,9 +252,13 @@ fn coarse(triangles: usize, frame: &Frame) -> bool {
 const FEW_INSTANCES: usize = 8;
 
 impl<'f> Scene<'f> {
-    pub fn build(frame: &'f Frame, meshes: &mut Meshes) -> Scene<'f> {
-        let bvh = TriBvh::build(frame.triangles.len(), |i| frame.triangles[i].positions);
-        let bvhs = meshes.prepare(frame);
+    /// The scene of `frame`, its trees built as `choice` says for a frame tracing `ray_work`
+    /// rays (`bvh_choice`); the frame's own triangles' tree is built again next frame.
+    pub fn build(frame: &'f Frame, meshes: &mut Meshes, choice: BvhBuild, ray_work: f64) -> Scene<'f> {
+        let quality = choice.quality(frame.triangles.len(), true, ray_work);
+        let bvh = TriBvh::build_as(frame.triangles.len(), |i| frame.triangles[i].positions, quality);
+        let bvhs = meshes.prepare(frame, choice, ray_work);
+        meshes.fast_builds += u32::from(quality == Quality::Fast && !frame.triangles.is_empty());
         let placed: Vec<Placed> = frame
             .instances
             .iter()
@@ -627,7 +675,7 @@ mod tests {
             DMat4::IDENTITY,
         );
         let frame = Frame { instances: vec![floor, wall], ..Frame::default() };
-        let scene = Scene::build(&frame, &mut Meshes::default());
+        let scene = Scene::build(&frame, &mut Meshes::default(), BvhBuild::Sah, 0.0);
         let (distance, eps) = (1.5, 1e-4);
         let (mut fast, mut one_by_one, mut some, mut differ) = (0.0, 0.0, 0, 0);
         for k in 0..200u32 {
@@ -668,7 +716,7 @@ mod tests {
         for m in modelviews {
             let (frame, [a, b, c]) = one_instance(m);
             let expected = (b - a).cross(c - a);
-            let scene = Scene::build(&frame, &mut Meshes::default());
+            let scene = Scene::build(&frame, &mut Meshes::default(), BvhBuild::Sah, 0.0);
             let centre = (a + b + c) / 3.0;
             let r = ray([0.0, 0.0, 0.0], centre.to_array());
             let hit = scene.closest(r).expect("the ray through the triangle's centre hits it");

@@ -14,6 +14,7 @@ use glray_capture::instance::Instance;
 use glray_capture::lighting::{Light, LightModel, Material};
 use glray_capture::mesh::Mesh;
 use glray_core::image::Image;
+use glray_render::bvh_choice::BvhBuild;
 use glray_render::effects::{occlusion, Origin};
 use glray_render::pieces::{for_each_block, TILE};
 use glray_render::sampling::Sampler;
@@ -37,6 +38,7 @@ pub struct Args<'a> {
     pub threads: Option<usize>,
     pub frames: u32,
     pub builds: u32,
+    pub bvh: BvhBuild,
     pub json: bool,
     pub out: Option<&'a Path>,
 }
@@ -176,9 +178,10 @@ struct Kernels {
     ao_rays: u64,
 }
 
-fn kernels(frame: &Frame, ao: u32, frames: u32) -> Kernels {
+fn kernels(frame: &Frame, ao: u32, frames: u32, bvh: BvhBuild) -> Kernels {
     let mut meshes = Meshes::default();
-    let scene = Scene::build(frame, &mut meshes);
+    // The mesh is drawn unchanged, as in the frames below: no tree is built again next frame.
+    let scene = Scene::build(frame, &mut meshes, bvh, 0.0);
     let camera = glray_capture::camera::Camera::new(
         frame.projection.expect("the bench frame has a projection"),
         frame.viewport.expect("and a viewport"),
@@ -270,7 +273,7 @@ pub fn run(a: &Args) -> Result<(), String> {
     let load_s = start.elapsed().as_secs_f64();
     let (nv, nt) = (mesh.positions.len(), mesh.triangles.len());
     let frame = frame(mesh, a.width, a.height);
-    let gl = Options { effects: Effects { progressive: false, ..Effects::GL }, ..Options::default() };
+    let gl = Options { effects: Effects { progressive: false, ..Effects::GL }, bvh: a.bvh, ..Options::default() };
     // Builds: a fresh renderer each time, so the mesh's BVH is built anew.
     let mut builds = Vec::new();
     for _ in 0..a.builds.max(1) {
@@ -278,7 +281,7 @@ pub fn run(a: &Args) -> Result<(), String> {
         r.render(&frame, a.width, a.height, None);
         builds.push(r.stats().build.as_secs_f64());
     }
-    let k = kernels(&frame, a.ao, a.frames.max(1));
+    let k = kernels(&frame, a.ao, a.frames.max(1), a.bvh);
     let mut renderer = Renderer::new(gl);
     let (primary, image) = time_frames(&mut renderer, &frame, a.frames.max(1));
     let hits = image.rgba.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
@@ -426,7 +429,7 @@ mod tests {
     fn the_kernels_hit_where_the_frame_is_lit() {
         let (w, h) = (96, 54);
         let f = frame(ball(24), w, h);
-        let k = kernels(&f, 4, 1);
+        let k = kernels(&f, 4, 1, BvhBuild::Sah);
         let image =
             Renderer::new(Options { effects: Effects { progressive: false, ..Effects::GL }, ..Options::default() })
                 .render(&f, w, h, None);

@@ -127,6 +127,10 @@ enum Command {
         /// Timed BVH builds.
         #[arg(long, default_value_t = 3)]
         builds: u32,
+        /// How the BVH is built (the `bvh` setting; `auto` builds the bench's mesh, drawn
+        /// unchanged, by SAH).
+        #[arg(long, default_value = "auto", value_parser = glray_render::bvh_choice::CHOICES.to_vec())]
+        bvh: String,
         /// Print one JSON object instead of RESULT lines.
         #[arg(long)]
         json: bool,
@@ -167,17 +171,20 @@ fn main() -> ExitCode {
             replay(&trace, renderer, &out, frames, readpixels)
         }
         Command::Dump { trace, calls } => dump(&trace, calls),
-        Command::Bench { mesh, width, height, ao, threads, frames, builds, json, out } => bench::run(&bench::Args {
-            mesh: &mesh,
-            width,
-            height,
-            ao,
-            threads,
-            frames,
-            builds,
-            json,
-            out: out.as_deref(),
-        }),
+        Command::Bench { mesh, width, height, ao, threads, frames, builds, bvh, json, out } => {
+            bench::run(&bench::Args {
+                mesh: &mesh,
+                bvh: glray_render::bvh_choice::BvhBuild::from_setting(&bvh).unwrap_or_default(),
+                width,
+                height,
+                ao,
+                threads,
+                frames,
+                builds,
+                json,
+                out: out.as_deref(),
+            })
+        }
         Command::DropinDir { library } => {
             find_library(library).and_then(|lib| dropin_dir(&lib)).map(|d| println!("{}", d.display()))
         }
