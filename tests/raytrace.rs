@@ -863,6 +863,49 @@ fn big_immediate_mode_runs_are_kept_as_meshes_by_what_they_give() {
 }
 
 #[test]
+fn meshes_replaced_every_frame_get_their_bvhs_built_fast() {
+    // tests/helpers/time_steps.c: a simulation's time steps, a 79,202-triangle surface put into
+    // buffer objects anew every frame, then drawn again as it is for two frames, then a new
+    // step. Under `bvh` = `auto` glray builds a replaced mesh's BVH fast (a linear BVH) from the
+    // second step on, and by SAH once the program has stayed on a step; `sah` and `fast` build
+    // every one their way. The trees differ, the pictures must not: each is Mesa's.
+    let dir = scratch("rt-time-steps");
+    let program = osmesa_helper(&dir, "time_steps");
+    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "time_steps plain"));
+    let p = printed_frames(&plain);
+    assert_eq!(p.len(), 7, "Mesa: {plain}");
+    assert!(p.iter().all(|f| f.len() == 3 * 64), "Mesa: {plain}");
+    for (a, b) in [(0, 1), (1, 2), (2, 3), (5, 6)] {
+        assert_ne!(p[a], p[b], "Mesa: step {b} differs from step {a}");
+    }
+    assert!(p[3] == p[4] && p[4] == p[5], "Mesa: the same step, the same picture");
+    let mut printed = Vec::new();
+    for (bvh, want) in [("auto", [0, 1, 1, 1, 0, 0, 0]), ("sah", [0; 7]), ("fast", [1, 1, 1, 1, 0, 0, 1])] {
+        let stats = dir.join(format!("stats-{bvh}.jsonl"));
+        let mut cmd = command(Way::Preload, &[], &program, 60);
+        cmd.env("GLRAY_PRESET", "gl")
+            .env("GLRAY_PROGRESSIVE", "false")
+            .env("GLRAY_STATS", &stats)
+            .env("GLRAY_BVH", bvh);
+        let traced = stdout(&run_ok(&mut cmd, &format!("time_steps under glray, bvh {bvh}")));
+        let t = printed_frames(&traced);
+        assert_eq!(t.len(), 7, "glray, bvh {bvh}: {traced}");
+        assert_frames_near(&p, &t);
+        let fast: Vec<u32> = std::fs::read_to_string(&stats)
+            .unwrap()
+            .lines()
+            .map(|l| {
+                let v = l.split("\"fast_builds\":").nth(1).and_then(|r| r.trim_end_matches('}').split(',').next());
+                v.and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("fast_builds in {l}"))
+            })
+            .collect();
+        assert_eq!(fast, want, "bvh {bvh}: BVHs built fast, frame by frame");
+        printed.push(t);
+    }
+    assert!(printed.iter().all(|t| *t == printed[0]), "the trees differ, the pictures must not");
+}
+
+#[test]
 fn every_form_of_an_attribute_command_gives_what_it_gives_mesa() {
     // tests/helpers/attribute_forms.c: colours, positions, normals and texture coordinates in
     // each form GL has for them (scalar and vector; bytes to doubles, signed and unsigned), a

@@ -6,7 +6,10 @@
 #include <math.h>
 #include <stdio.h>
 
+/* The grid's side, in vertices (a helper may ask for a bigger grid before including this). */
+#ifndef N
 #define N 80
+#endif
 
 static float pos[N * N * 3], nrm[N * N * 3];
 static unsigned char col[N * N * 4];
