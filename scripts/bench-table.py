@@ -70,6 +70,21 @@ def main():
             ("AO, 16 rays/hit, ms per pass (Embree low tree, rtcOccluded1)", g["ao_ms_min"],
              num(low_ao1, "ao_pass_ms_min")),
             ("peak memory, MB (Embree medium)", g["peak_mb"], num(info, "maxrss_kb") / 1024),
+        ]
+        # glray's fast build (a linear BVH, `bvh=fast`) beside Embree's low one (a Morton build).
+        try:
+            f = json.load(open(f"{d}/mesh_{n}.glray-fast.json"))
+        except FileNotFoundError:
+            f = {}
+        fast = lambda key: f.get(key, float("nan"))
+        rows += [
+            ("BVH build, s, glray fast (Embree low)", fast("build_s_min"), num(pick(low, "build"), "min_s")),
+            ("primary rays, ms per frame, glray fast tree (Embree low tree, single rays)", fast("primary_ms_min"),
+             num(low_single, "frame_ms_min")),
+            ("AO, 16 rays/hit, ms per pass, glray fast tree (Embree low tree, rtcOccluded1)", fast("ao_ms_min"),
+             num(low_ao1, "ao_pass_ms_min")),
+        ]
+        rows += [
             ("GL-look frame, ms (shaded; no anchor)", g["frame_ms_min"], float("nan")),
             ("GL look x AO frame, ms (shaded; no anchor)", g["ao_frame_ms_min"], float("nan")),
         ]
@@ -85,6 +100,11 @@ def main():
             gr = pick(results(f"{d}/mesh_{n}.glray-osmesa-reused-{m}.txt"), "osmesa")
             rows.append((f"osmesa_bench {m} frame, ms (llvmpipe; glray as a user runs it: unchanged frames shown again)",
                          num(gr, "frame_ms_median"), num(ll, "frame_ms_median")))
+        # A new mesh every frame (time steps): glray's defaults build its BVH fast.
+        ll = pick(results(f"{d}/mesh_{n}.steps.txt"), "steps")
+        gr = pick(results(f"{d}/mesh_{n}.glray-steps.txt"), "steps")
+        rows.append(("steps_bench frame, ms (llvmpipe; glray: a new mesh every frame, as time steps)",
+                     num(gr, "frame_ms_median"), num(ll, "frame_ms_median")))
         for what, ours, theirs in rows:
             anchor = f"{theirs:.3g}" if theirs == theirs else "-"
             print(f"| {name} | {what} | {ours:.3g} | {anchor} | {ratio(theirs, ours)} |")

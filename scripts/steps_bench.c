@@ -1,7 +1,9 @@
 /* A program that steps through time as a simulation viewer does: every frame the mesh's
  * positions and normals are put into their buffer objects anew (glBufferData; the same mesh,
  * standing in for the next time step's data), then drawn with glDrawElements and glFinish, with
- * the anchors' camera and light (../shared/anchors/common.h). Prints each frame's time.
+ * the anchors' camera and light (../shared/anchors/common.h). Prints each frame's time, then a
+ * RESULT line (as osmesa_bench's) over frames 1 on: frame 0 is a first frame, the steps after
+ * it are what a viewer stepping through time waits for.
  *   gcc -O2 -I../shared/anchors -o steps_bench scripts/steps_bench.c -lOSMesa -lGLU -lpng -lm
  *   ./steps_bench mesh_573.bin 4      # llvmpipe
  *   glray run --set preset=gl --set bvh=auto|sah -- ./steps_bench mesh_573.bin 4 */
@@ -35,6 +37,9 @@ int main(int argc, char **argv) {
   bindBuffer(GL_ELEMENT_ARRAY_BUFFER, vbo[2]);
   bufferData(GL_ELEMENT_ARRAY_BUFFER, 12 * (GLsizeiptr)m.nt, m.idx, GL_STATIC_DRAW);
   glEnableClientState(GL_VERTEX_ARRAY); glEnableClientState(GL_NORMAL_ARRAY);
+  double ft[257];
+  if (frames < 1) frames = 1;
+  if (frames > 256) frames = 256;
   for (int f = 0; f <= frames; f++) {
     double t0 = now_s();
     bindBuffer(GL_ARRAY_BUFFER, vbo[0]); bufferData(GL_ARRAY_BUFFER, 12 * (GLsizeiptr)m.nv, m.pos, GL_DYNAMIC_DRAW);
@@ -45,7 +50,10 @@ int main(int argc, char **argv) {
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     glDrawElements(GL_TRIANGLES, 3 * (GLsizei)m.nt, GL_UNSIGNED_INT, 0);
     glFinish();
-    printf("frame %d %.1f ms\n", f, (now_s() - t0) * 1e3);
+    ft[f] = now_s() - t0;
+    printf("frame %d %.1f ms\n", f, ft[f] * 1e3);
   }
+  printf("RESULT steps tris=%u frames=%d frame_ms_min=%.2f frame_ms_median=%.2f\n", m.nt, frames,
+         vmin(ft + 1, frames) * 1e3, median(ft + 1, frames) * 1e3);
   return 0;
 }

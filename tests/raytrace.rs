@@ -867,8 +867,9 @@ fn meshes_replaced_every_frame_get_their_bvhs_built_fast() {
     // tests/helpers/time_steps.c: a simulation's time steps, a 79,202-triangle surface put into
     // buffer objects anew every frame, then drawn again as it is for two frames, then a new
     // step. Under `bvh` = `auto` glray builds a replaced mesh's BVH fast (a linear BVH) from the
-    // second step on, and by SAH once the program has stayed on a step; `sah` and `fast` build
-    // every one their way. The trees differ, the pictures must not: each is Mesa's.
+    // second step on; the step the program stays on gets an SAH tree in its second frame (4),
+    // and the next step is built by SAH too; `sah` and `fast` build every one their way (no
+    // rebuild). The trees differ, the pictures must not: each is Mesa's.
     let dir = scratch("rt-time-steps");
     let program = osmesa_helper(&dir, "time_steps");
     let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "time_steps plain"));
@@ -891,15 +892,23 @@ fn meshes_replaced_every_frame_get_their_bvhs_built_fast() {
         let t = printed_frames(&traced);
         assert_eq!(t.len(), 7, "glray, bvh {bvh}: {traced}");
         assert_frames_near(&p, &t);
-        let fast: Vec<u32> = std::fs::read_to_string(&stats)
-            .unwrap()
-            .lines()
-            .map(|l| {
-                let v = l.split("\"fast_builds\":").nth(1).and_then(|r| r.trim_end_matches('}').split(',').next());
-                v.and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("fast_builds in {l}"))
-            })
-            .collect();
+        let lines = std::fs::read_to_string(&stats).unwrap();
+        let field = |key: &str| -> Vec<f64> {
+            let key = format!("\"{key}\":");
+            lines
+                .lines()
+                .map(|l| {
+                    let v = l.split(key.as_str()).nth(1).and_then(|r| r.trim_end_matches('}').split(',').next());
+                    v.and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("{key} in {l}"))
+                })
+                .collect()
+        };
+        let fast: Vec<u32> = field("fast_builds").into_iter().map(|v| v as u32).collect();
         assert_eq!(fast, want, "bvh {bvh}: BVHs built fast, frame by frame");
+        // Frame 5 builds nothing; frame 4 builds the kept step's SAH tree under `auto` only.
+        let build = field("build_ms");
+        assert!(build[5] < 1.0, "bvh {bvh}: frame 5 builds nothing: build ms {build:?}");
+        assert_eq!(build[4] > 1.0, bvh == "auto", "bvh {bvh}: the kept step rebuilt by SAH: build ms {build:?}");
         printed.push(t);
     }
     assert!(printed.iter().all(|t| *t == printed[0]), "the trees differ, the pictures must not");

@@ -166,7 +166,8 @@ pub const SETTINGS: &[Setting] = &[
               `fast`, a linear BVH (Morton order: the build in about half the time, rays 13-20% slower); \
               `auto`, fast only for a tree the next frame builds again (the frame's loose triangles, or a mesh \
               the program replaces every frame, such as simulation time steps) when its build outweighs the \
-              frame's rays, otherwise by SAH.",
+              frame's rays (a mesh built so that then stays is built by SAH in its second frame), otherwise \
+              by SAH.",
     },
     Setting {
         key: "present",

@@ -6,7 +6,8 @@
 //! replaces every frame: simulation time steps, a surface deformed frame after frame) is paid
 //! for by one frame's rays. `auto` builds such a tree fast when the build would cost more than
 //! the slower walk: when its triangles outnumber a share of the frame's rays (`FAST_PER_RAY`).
-//! Trees kept across frames (a mesh drawn again) are always built by SAH under `auto`.
+//! Trees kept across frames (a mesh drawn again) are built by SAH under `auto`: a mesh built
+//! fast that turns out to stay gets its SAH tree in its second frame (`scene::Meshes`).
 
 use crate::bvh::Quality;
 use crate::effects::Effects;
