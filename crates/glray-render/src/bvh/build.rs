@@ -49,14 +49,20 @@ impl Record {
     }
 }
 
+/// A box (grown from records here, from corners in `morton`).
 #[derive(Clone, Copy)]
-struct Bounds {
-    lo: Vec3A,
-    hi: Vec3A,
+pub(super) struct Bounds {
+    pub lo: Vec3A,
+    pub hi: Vec3A,
 }
 
 impl Bounds {
-    const EMPTY: Bounds = Bounds { lo: Vec3A::INFINITY, hi: Vec3A::NEG_INFINITY };
+    pub const EMPTY: Bounds = Bounds { lo: Vec3A::INFINITY, hi: Vec3A::NEG_INFINITY };
+
+    /// The box grown to hold point `v`.
+    pub fn with(self, v: Vec3) -> Bounds {
+        self.union(Bounds { lo: v.into(), hi: v.into() })
+    }
 
     /// The box around a range's triangles.
     fn of(records: &[Record]) -> Bounds {
@@ -71,7 +77,7 @@ impl Bounds {
         self.hi = self.hi.max(Vec3A::from_vec4(r.hi));
     }
 
-    fn union(self, o: Bounds) -> Bounds {
+    pub fn union(self, o: Bounds) -> Bounds {
         Bounds { lo: self.lo.min(o.lo), hi: self.hi.max(o.hi) }
     }
 

@@ -4,7 +4,8 @@
 //! codes stay in index order, so the tree never depends on the number of threads); a range
 //! splits where the highest bit in which its first and last codes differ turns from 0 to 1
 //! (a binary search), a node's children splitting so, the fullest first, until it has `WIDTH`.
-//! Boxes come bottom-up, each triangle's corners read once for its leaf's box and block.
+//! Boxes come bottom-up, from each leaf's triangles' corners (read again when the leaves'
+//! blocks are made, by the SAH build's own code).
 //!
 //! No binning and no partitioning, and 8 bytes a triangle where the SAH build's records take
 //! 32: the build in a fraction of the SAH build's time, for a tree the walks take longer
@@ -16,7 +17,7 @@ use glam::{Vec3, Vec3A};
 use glray_core::pages;
 use rayon::prelude::*;
 
-use super::build::{make_leaves, number_leaves, pending, Built, Out};
+use super::build::{make_leaves, number_leaves, pending, Bounds, Built, Out};
 use super::node::Node;
 use super::{leaf_ref, Tri4, EMPTY, LEAF, LEAF_SIZE, MAX_BLOCKS, WIDTH};
 
@@ -92,25 +93,6 @@ fn split_at(keys: &[Keyed]) -> usize {
     keys.partition_point(|&k| code(k) >> bit & 1 == 0)
 }
 
-/// A box being grown.
-#[derive(Clone, Copy)]
-struct Bounds {
-    lo: Vec3A,
-    hi: Vec3A,
-}
-
-impl Bounds {
-    const EMPTY: Bounds = Bounds { lo: Vec3A::INFINITY, hi: Vec3A::NEG_INFINITY };
-
-    fn union(self, o: Bounds) -> Bounds {
-        Bounds { lo: self.lo.min(o.lo), hi: self.hi.max(o.hi) }
-    }
-
-    fn with(self, v: Vec3) -> Bounds {
-        self.union(Bounds { lo: v.into(), hi: v.into() })
-    }
-}
-
 /// A child made: its reference (a leaf's as `LEAF | its first key`, its length in the node's
 /// `lens`), box, and the most subtrees a walk below it can leave pending.
 type Made = (u32, Bounds, usize);
@@ -120,9 +102,9 @@ fn bounds_of(keys: &[Keyed], corners: &impl Fn(usize) -> [Vec3; 3]) -> Bounds {
     keys.iter().fold(Bounds::EMPTY, |b, &k| corners(index(k) as usize).iter().fold(b, |b, &v| b.with(v)))
 }
 
-/// A node over `keys` (sorted, more than a leaf's worth; `first` the position of the first
-/// among all keys): its children's ranges (the fullest split until there are `WIDTH`), those of
-/// up to `MAX_BLOCKS` blocks made leaves, with their lengths.
+/// A node over `keys` (sorted, more than a leaf's worth): its children's ranges (the fullest
+/// split until there are `WIDTH`), and the lengths of those made leaves (up to `MAX_BLOCKS`
+/// blocks; 0 for the others).
 fn children(keys: &[Keyed]) -> (Vec<(usize, usize)>, [u8; WIDTH]) {
     let mut kids: Vec<(usize, usize)> = vec![(0, keys.len())];
     while kids.len() < WIDTH {
