@@ -40,7 +40,7 @@ pub const PRESETS: &[&str] = &["off", "gl", "ao", "full"];
 pub const TRIGGERS: &[&str] = &["auto", "swap", "finish", "flush", "readpixels"];
 pub const LIGHTING: &[&str] = &["vertex", "pixel"];
 pub const PRESENTS: &[&str] = &["auto", "pixels", "shader"];
-/// The values of `bvh` (glray-render's `bvh_choice::CHOICES` holds the same, checked by a test).
+/// The values of `bvh` (glray-render's `bvh_choice::BvhBuild`).
 pub const BVH_BUILDS: &[&str] = &["auto", "sah", "fast"];
 
 /// Every setting glray has. docs/settings.md is checked against this table by a test.

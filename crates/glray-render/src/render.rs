@@ -393,7 +393,7 @@ impl Job<'_> {
         let start = Instant::now();
         let pixels = u64::from(width) * u64::from(height);
         let scene = Scene::build(frame, meshes, self.options.bvh, ray_work(pixels, &self.options.effects));
-        stats.fast_builds = meshes.fast_builds;
+        stats.fast_builds = scene.fast_builds;
         stats.build = start.elapsed();
         let start = Instant::now();
         let diagonal = scene.diagonal().max(1e-6);

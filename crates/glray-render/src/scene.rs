@@ -117,8 +117,6 @@ pub struct Meshes {
     /// frames since (smaller meshes, a label or a cursor made anew beside a kept dataset, tell
     /// nothing of it). A new mesh's BVH is then one the next frame builds again (`BvhBuild`).
     replacing: bool,
-    /// BVHs built fast (`Quality::Fast`) in the last `prepare`.
-    pub(crate) fast_builds: u32,
 }
 
 /// Whether a mesh drawn in its second frame, whose BVH `auto` built fast, gets an SAH tree now:
@@ -133,7 +131,8 @@ impl Meshes {
     /// The BVH of each of the frame's instances' meshes: built (in parallel) for meshes not
     /// seen before, as `choice` says for a tree the next frame builds again when the program
     /// replaces its meshes (`replacing`); those of meshes capture no longer holds are dropped.
-    fn prepare(&mut self, frame: &Frame, choice: BvhBuild, ray_work: f64) -> Vec<Arc<MeshBvh>> {
+    /// Also how many were built fast.
+    fn prepare(&mut self, frame: &Frame, choice: BvhBuild, ray_work: f64) -> (Vec<Arc<MeshBvh>>, u32) {
         self.prune();
         let mut new: Vec<&Arc<Mesh>> =
             frame.instances.iter().map(|i| &i.mesh).filter(|m| !self.built.contains_key(&m.id)).collect();
@@ -141,7 +140,7 @@ impl Meshes {
         new.dedup_by_key(|m| m.id);
         let replacing = self.replacing;
         let quality = |m: &Mesh| choice.quality(m.triangles.len(), replacing, ray_work);
-        self.fast_builds = new.iter().filter(|m| quality(m) == Quality::Fast).count() as u32;
+        let fast_builds = new.iter().filter(|m| quality(m) == Quality::Fast).count() as u32;
         let bvhs: Vec<(&Arc<Mesh>, Quality, Arc<MeshBvh>)> = new
             .par_iter()
             .map(|m| {
@@ -173,7 +172,7 @@ impl Meshes {
             let kept = self.built.get_mut(&id).expect("drawn above");
             (kept.bvh, kept.quality) = (bvh, Quality::Sah);
         }
-        frame.instances.iter().map(|i| self.built[&i.mesh.id].bvh.clone()).collect()
+        (frame.instances.iter().map(|i| self.built[&i.mesh.id].bvh.clone()).collect(), fast_builds)
     }
 
     /// Drops the BVHs of meshes capture no longer holds, noting whether the last big one was
@@ -242,6 +241,8 @@ impl Placed<'_> {
 pub struct Scene<'f> {
     frame: &'f Frame,
     bvh: TriBvh,
+    /// How many of the scene's BVHs were built fast for it (`bvh_choice`).
+    pub fast_builds: u32,
     /// Whether the frame's own triangles' packets test a node once for all their rays (as
     /// `Placed::frustum` for a mesh).
     frustum: bool,
@@ -281,8 +282,8 @@ impl<'f> Scene<'f> {
     pub fn build(frame: &'f Frame, meshes: &mut Meshes, choice: BvhBuild, ray_work: f64) -> Scene<'f> {
         let quality = choice.quality(frame.triangles.len(), true, ray_work);
         let bvh = TriBvh::build_as(frame.triangles.len(), |i| frame.triangles[i].positions, quality);
-        let bvhs = meshes.prepare(frame, choice, ray_work);
-        meshes.fast_builds += u32::from(quality == Quality::Fast && !frame.triangles.is_empty());
+        let (bvhs, fast_meshes) = meshes.prepare(frame, choice, ray_work);
+        let fast_builds = fast_meshes + u32::from(quality == Quality::Fast && !frame.triangles.is_empty());
         let placed: Vec<Placed> = frame
             .instances
             .iter()
@@ -324,6 +325,7 @@ impl<'f> Scene<'f> {
         Scene {
             frame,
             bvh,
+            fast_builds,
             frustum,
             placed,
             boxes: bounds,
