@@ -140,7 +140,6 @@ impl Meshes {
         new.dedup_by_key(|m| m.id);
         let replacing = self.replacing;
         let quality = |m: &Mesh| choice.quality(m.triangles.len(), replacing, ray_work);
-        let fast_builds = new.iter().filter(|m| quality(m) == Quality::Fast).count() as u32;
         let bvhs: Vec<(&Arc<Mesh>, Quality, Arc<MeshBvh>)> = new
             .par_iter()
             .map(|m| {
@@ -148,6 +147,7 @@ impl Meshes {
                 (*m, quality, Arc::new(MeshBvh::build(m, quality)))
             })
             .collect();
+        let fast_builds = bvhs.iter().filter(|b| b.1 == Quality::Fast).count() as u32;
         for (m, quality, bvh) in bvhs {
             let kept = Kept { mesh: Arc::downgrade(m), bvh, quality, triangles: m.triangles.len(), frames: 0 };
             self.built.insert(m.id, kept);

@@ -649,6 +649,26 @@ pub(super) struct Built {
     pub most_pending: usize,
 }
 
+impl Built {
+    /// The tree of at most a leaf's worth of triangles `ids` (none: the empty tree), whose
+    /// corners `corners` gives.
+    pub fn small(ids: &[u32], corners: impl Fn(usize) -> [Vec3; 3]) -> Built {
+        if ids.is_empty() {
+            return Built { nodes: Vec::new(), leaves: Vec::new(), root: EMPTY, most_pending: 0 };
+        }
+        let leaves = vec![Tri4::new(ids, |i| corners(i as usize))];
+        Built { nodes: Vec::new(), leaves, root: leaf_ref(0, 1), most_pending: 0 }
+    }
+}
+
+/// Below how many triangles a subtree is built whole on one thread (by either build): a
+/// sixteenth of the mesh, between 8K and `PARALLEL`. A 98K mesh's eight top subtrees (12K
+/// each) were too few and too uneven to keep two threads busy (8K there: -8% build); bigger
+/// meshes gain nothing from more, smaller tasks (10M: +4%).
+pub(super) fn whole(triangles: usize) -> usize {
+    (triangles / 16).clamp(1 << 13, PARALLEL)
+}
+
 /// The tree over `count` triangles whose corners `corners` gives, built as `quality` says.
 pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync, quality: Quality) -> Built {
     let record = |i: usize| Record::new(i, corners(i));
@@ -676,21 +696,13 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync, q
     // finite): it stays out, and no NaN or infinity reaches the bins and node bounds (SSE's
     // min and max happen to drop a NaN in one operand order and keep it in the other).
     records.retain(|r| Vec3A::from_vec4(r.lo).is_finite() && Vec3A::from_vec4(r.hi).is_finite());
-    if records.is_empty() {
-        return Built { nodes: Vec::new(), leaves: Vec::new(), root: EMPTY, most_pending: 0 };
-    }
     if records.len() as u32 <= LEAF_SIZE {
         let ids: Vec<u32> = records.iter().map(Record::index).collect();
-        let leaves = vec![Tri4::new(&ids, |i| corners(i as usize))];
-        return Built { nodes: Vec::new(), leaves, root: leaf_ref(0, 1), most_pending: 0 };
+        return Built::small(&ids, corners);
     }
     let centroids = Centroids::of(&records);
     let shared = Mutex::new(Out::for_records(records.len()));
-    // Subtrees are built whole on one thread below a sixteenth of the mesh, between 8K and
-    // `PARALLEL` records: a 98K mesh's eight top subtrees (12K each) were too few and too
-    // uneven to keep two threads busy (8K there: -8% build); bigger meshes gain nothing from
-    // more, smaller tasks (10M: +4%).
-    let whole = (records.len() / 16).clamp(1 << 13, PARALLEL);
+    let whole = whole(records.len());
     let todo = Todo { first: 0, centroids, split: None };
     let (root, most_pending) = shared_subtree(&mut records, todo, whole, &shared);
     let mut out = shared.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner());

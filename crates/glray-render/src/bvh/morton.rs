@@ -17,12 +17,9 @@ use glam::{Vec3, Vec3A};
 use glray_core::pages;
 use rayon::prelude::*;
 
-use super::build::{make_leaves, number_leaves, pending, Bounds, Built, Out};
+use super::build::{make_leaves, number_leaves, pending, whole, Bounds, Built, Out};
 use super::node::Node;
-use super::{leaf_ref, Tri4, EMPTY, LEAF, LEAF_SIZE, MAX_BLOCKS, WIDTH};
-
-/// Ranges at least this long build their children's subtrees in parallel.
-const PARALLEL: usize = 1 << 15;
+use super::{LEAF, LEAF_SIZE, MAX_BLOCKS, WIDTH};
 
 /// A triangle's code in the low 32 bits, its index in the high ones.
 type Keyed = u64;
@@ -197,7 +194,6 @@ fn shared_subtree(
 /// The tree over triangles `0..count` whose corners `corners` gives (`count` within what a
 /// tree indexes), those with a corner not finite left out (never hit).
 pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> Built {
-    let empty = || Built { nodes: Vec::new(), leaves: Vec::new(), root: EMPTY, most_pending: 0 };
     let box_of = |i: usize| {
         let t = corners(i);
         let c = centroid(t);
@@ -210,7 +206,7 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     let all = (0..count).into_par_iter().with_min_len(4096).map(box_of).reduce(|| Bounds::EMPTY, Bounds::union);
     let extent = all.hi - all.lo;
     if !extent.is_finite() {
-        return empty();
+        return Built::small(&[], corners);
     }
     let scale = Vec3A::select(extent.cmpgt(Vec3A::ZERO), Vec3A::splat(1024.0 * 0.9999) / extent, Vec3A::ZERO);
     let keyed = |i: usize| {
@@ -222,18 +218,13 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     };
     let mut keys: Vec<Keyed> = pages::huge_vec(count);
     keys.par_extend((0..count).into_par_iter().with_min_len(4096).filter_map(keyed));
-    if keys.is_empty() {
-        return empty();
-    }
     sort(&mut keys);
     if keys.len() <= LEAF_SIZE as usize {
         let ids: Vec<u32> = keys.iter().map(|&k| index(k)).collect();
-        let leaves = vec![Tri4::new(&ids, |i| corners(i as usize))];
-        return Built { nodes: Vec::new(), leaves, root: leaf_ref(0, 1), most_pending: 0 };
+        return Built::small(&ids, corners);
     }
     let shared = Mutex::new(Out::for_records(keys.len()));
-    let whole = (keys.len() / 16).clamp(1 << 13, PARALLEL);
-    let (root, _, most_pending) = shared_subtree(&keys, 0, &corners, whole, &shared);
+    let (root, _, most_pending) = shared_subtree(&keys, 0, &corners, whole(keys.len()), &shared);
     let mut out = shared.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner());
     let (ids, counts) = number_leaves(&mut out, |k| index(keys[k]));
     drop(keys);
