@@ -24,6 +24,9 @@ use super::{LEAF, LEAF_SIZE, MAX_BLOCKS, WIDTH};
 /// A triangle's code in the low 32 bits, its index in the high ones.
 type Keyed = u64;
 
+/// The code of a triangle with a corner not finite, above every 30-bit code: sorted last.
+const LEFT_OUT: u32 = u32::MAX;
+
 fn code(k: Keyed) -> u32 {
     k as u32
 }
@@ -211,14 +214,21 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
     let scale = Vec3A::select(extent.cmpgt(Vec3A::ZERO), Vec3A::splat(1024.0 * 0.9999) / extent, Vec3A::ZERO);
     let keyed = |i: usize| {
         let t = corners(i);
-        finite(&t).then(|| {
-            let q = ((centroid(t) - all.lo) * scale).clamp(Vec3A::ZERO, Vec3A::splat(1023.0));
-            u64::from(interleave([q.x as u32, q.y as u32, q.z as u32])) | (i as u64) << 32
-        })
+        let code = match finite(&t) {
+            true => {
+                let q = ((centroid(t) - all.lo) * scale).clamp(Vec3A::ZERO, Vec3A::splat(1023.0));
+                interleave([q.x as u32, q.y as u32, q.z as u32])
+            }
+            false => LEFT_OUT,
+        };
+        u64::from(code) | (i as u64) << 32
     };
+    // Every triangle keyed in place (a filtered parallel collect would gather each thread's
+    // keys in vectors of its own first, and copy them), those left out sorted last and cut.
     let mut keys: Vec<Keyed> = pages::huge_vec(count);
-    keys.par_extend((0..count).into_par_iter().with_min_len(4096).filter_map(keyed));
+    (0..count).into_par_iter().with_min_len(4096).map(keyed).collect_into_vec(&mut keys);
     sort(&mut keys);
+    keys.truncate(keys.partition_point(|&k| code(k) != LEFT_OUT));
     if keys.len() <= LEAF_SIZE as usize {
         let ids: Vec<u32> = keys.iter().map(|&k| index(k)).collect();
         return Built::small(&ids, corners);
