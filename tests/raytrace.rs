@@ -280,10 +280,15 @@ fn the_trigger_setting_chooses_where_frames_are_ray_traced() {
 
 /// tests/helpers/`name`.c compiled against OSMesa into `dir`.
 fn osmesa_helper(dir: &Path, name: &str) -> PathBuf {
+    osmesa_helper_with(dir, name, &[])
+}
+
+/// OSMesa helper `name` built with the C compiler's `flags` too (`-DN=...`).
+fn osmesa_helper_with(dir: &Path, name: &str, flags: &[&str]) -> PathBuf {
     let program = dir.join(name);
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/helpers/{name}.c"));
     run_ok(
-        Command::new("cc").arg("-O1").arg("-o").arg(&program).arg(&src).args(["-lOSMesa", "-lGL", "-lm"]),
+        Command::new("cc").arg("-O1").args(flags).arg("-o").arg(&program).arg(&src).args(["-lOSMesa", "-lGL", "-lm"]),
         &format!("cc {name}.c"),
     );
     program
@@ -912,6 +917,38 @@ fn meshes_replaced_every_frame_get_their_bvhs_built_fast() {
         printed.push(t);
     }
     assert!(printed.iter().all(|t| *t == printed[0]), "the trees differ, the pictures must not");
+}
+
+#[test]
+fn memory_a_replaced_mesh_frees_is_kept_for_the_next_step_and_only_then() {
+    // tests/helpers/time_steps.c with a 640 x 640 grid (816,642 triangles: its arrays and BVH
+    // are big enough to be kept, `glray_core::reuse::BIG`). While the program replaces its mesh
+    // every frame (frames 1-3), what the last step freed is kept for the next one; once it
+    // stays on a step (frame 4) and after (5, 6: the step it stayed on was drawn in three
+    // frames), nothing is. The pictures stay Mesa's.
+    let dir = scratch("rt-time-steps-kept");
+    let program = osmesa_helper_with(&dir, "time_steps", &["-DN=640"]);
+    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 120), "time_steps plain"));
+    let stats = dir.join("stats.jsonl");
+    let mut cmd = command(Way::Preload, &[], &program, 120);
+    cmd.env("GLRAY_PRESET", "gl").env("GLRAY_PROGRESSIVE", "false").env("GLRAY_STATS", &stats);
+    let traced = stdout(&run_ok(&mut cmd, "time_steps under glray"));
+    let (p, t) = (printed_frames(&plain), printed_frames(&traced));
+    assert_eq!((p.len(), t.len()), (7, 7), "Mesa: {plain}\nglray: {traced}");
+    assert_frames_near(&p, &t);
+    let lines = std::fs::read_to_string(&stats).unwrap();
+    let kept: Vec<f64> = lines
+        .lines()
+        .map(|l| {
+            let v = l.split("\"kept_mb\":").nth(1).and_then(|r| r.trim_end_matches('}').split(',').next());
+            v.and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("kept_mb in {l}"))
+        })
+        .collect();
+    assert_eq!(kept.len(), 7, "{lines}");
+    let keeps: Vec<bool> = kept.iter().map(|&mb| mb > 0.0).collect();
+    assert_eq!(keeps, [false, true, true, true, false, false, false], "MB kept, frame by frame: {kept:?}");
+    // What a step's BVH build leaves (its sort's keys and copy: 6.2 MB each) is kept at least.
+    assert!(kept[1..4].iter().all(|&mb| mb >= 12.0), "MB kept: {kept:?}");
 }
 
 #[test]

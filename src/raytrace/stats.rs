@@ -27,6 +27,10 @@ fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
 
+fn mb(bytes: u64) -> f64 {
+    bytes as f64 / (1 << 20) as f64
+}
+
 impl Sink {
     /// `stderr`, or a file to append to.
     pub fn open(spec: &str) -> Result<Sink, String> {
@@ -49,7 +53,7 @@ impl Sink {
             Sink::Stderr => writeln!(
                 std::io::stderr(),
                 "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms{}, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
-                 present {:.2} ms; {} triangles, {} samples per pixel{}",
+                 present {:.2} ms; {} triangles, {} samples per pixel{}{}",
                 s.frame,
                 s.width,
                 s.height,
@@ -65,12 +69,16 @@ impl Sink {
                 ms(s.present),
                 r.triangles,
                 r.samples,
-                if r.reused { " (unchanged: the last picture shown again)" } else { "" }
+                if r.reused { " (unchanged: the last picture shown again)" } else { "" },
+                match r.kept_bytes {
+                    0 => String::new(),
+                    b => format!("; {:.1} MB kept for the next frame", mb(b)),
+                }
             ),
             Sink::File(f) => writeln!(
                 f,
                 "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
-                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{}}}",
+                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"kept_mb\":{:.1}}}",
                 s.frame,
                 s.thread,
                 s.width,
@@ -84,7 +92,8 @@ impl Sink {
                 r.triangles,
                 r.samples,
                 r.reused,
-                r.fast_builds
+                r.fast_builds,
+                mb(r.kept_bytes)
             ),
         };
         if let Err(e) = result {

@@ -7,9 +7,12 @@
  *   6: a new step again.
  * Under glray a mesh replaced frame after frame gets a BVH built fast (`bvh` setting, `auto`),
  * from the second step on; once the program stays on a step, the next one's is built by SAH
- * again. GLRAY_STATS counts the fast builds (`fast_builds`). Prints an 8 x 8 grid of pixels per frame. Built by
- * tests/raytrace.rs with cc. */
+ * again. GLRAY_STATS counts the fast builds (`fast_builds`) and the memory kept for the next
+ * step (`kept_mb`). Prints an 8 x 8 grid of pixels per frame. Built by tests/raytrace.rs with
+ * cc (-DN=640 for arrays big enough to be kept). */
+#ifndef N
 #define N 200
+#endif
 #include "gl_functions.h"
 #include "wavy_grid.h"
 

@@ -9,6 +9,7 @@ pub mod log;
 pub mod pages;
 pub mod prefetch;
 pub mod reallib;
+pub mod reuse;
 pub mod threads;
 pub mod trace;
 

@@ -102,6 +102,9 @@ pub struct Stats {
     pub reused: bool,
     /// BVHs built fast (`bvh_choice`) for the frame.
     pub fast_builds: u32,
+    /// Bytes of freed big arrays kept for the next frame's (`glray_core::reuse`), as the frame
+    /// ends: more than none only while the program replaces its meshes.
+    pub kept_bytes: u64,
 }
 
 /// Samples added up over frames that show the same scene (for the GL look, one pass: the
@@ -149,6 +152,8 @@ impl Renderer {
     /// Renders `frame` into a `width` x `height` image. A frame that did not clear the colour
     /// buffer is drawn over `previous` (the last frame of the same drawable), as GL would.
     pub fn render(&mut self, frame: &Frame, width: u32, height: u32, previous: Option<&Rendered>) -> Rendered {
+        // Big arrays freed before the last frame began, and not taken since, go back.
+        glray_core::reuse::frame_begins();
         self.meshes.prune();
         let effects = self.options.effects;
         // Only a cleared frame is all its own: one drawn over the last depends on it.
@@ -177,7 +182,7 @@ impl Renderer {
             flatten_below: self.flatten_below,
         };
         let (mut rendered, linear, stats) = job.run(&mut self.meshes, key.is_some() && effects.beyond_gl());
-        self.stats = stats;
+        self.stats = Stats { kept_bytes: glray_core::reuse::kept_bytes() as u64, ..stats };
         match (key, linear) {
             (Some(key), Some(linear)) => {
                 let (passes, sum) = match self.accumulation.take() {

@@ -156,15 +156,17 @@ impl Meshes {
         drawn.sort_by_key(|m| m.id);
         drawn.dedup_by_key(|m| m.id);
         let mut kept_now = Vec::new();
+        let mut kept_for_good = false;
         for m in drawn {
             let kept = self.built.get_mut(&m.id).expect("built above");
             kept.frames += 1;
-            if kept.frames == 2 && kept.triangles >= BIG_MESH {
-                self.replacing = false;
-            }
+            kept_for_good |= kept.frames == 2 && kept.triangles >= BIG_MESH;
             if rebuilt_for_keeps(kept, choice) {
                 kept_now.push(m);
             }
+        }
+        if kept_for_good {
+            self.set_replacing(false);
         }
         let rebuilt: Vec<(u64, Arc<MeshBvh>)> =
             kept_now.par_iter().map(|m| (m.id, Arc::new(MeshBvh::build(m, Quality::Sah)))).collect();
@@ -178,18 +180,21 @@ impl Meshes {
     /// Drops the BVHs of meshes capture no longer holds, noting whether the last big one was
     /// drawn in one frame only (`replacing`).
     pub fn prune(&mut self) {
-        let mut gone: Vec<(u64, u32, usize)> = Vec::new();
-        self.built.retain(|&id, kept| {
-            let held = kept.mesh.strong_count() > 0;
-            if !held {
-                gone.push((id, kept.frames, kept.triangles));
-            }
-            held
-        });
+        let ids: Vec<u64> = self.built.iter().filter(|(_, k)| k.mesh.strong_count() == 0).map(|(&id, _)| id).collect();
+        let gone: Vec<(u64, Kept)> = ids.into_iter().filter_map(|id| self.built.remove_entry(&id)).collect();
         // The latest mesh first (ids grow as meshes are made).
-        if let Some(&(_, frames, _)) = gone.iter().filter(|g| g.2 >= BIG_MESH).max_by_key(|g| g.0) {
-            self.replacing = frames == 1;
+        if let Some((_, kept)) = gone.iter().filter(|g| g.1.triangles >= BIG_MESH).max_by_key(|g| g.0) {
+            self.set_replacing(kept.frames == 1);
         }
+        // Freed only now: their arrays are kept for the new mesh's BVH when it replaces them.
+        drop(gone);
+    }
+
+    /// Notes whether the program replaces its meshes, and has the allocator keep what the
+    /// last frame's meshes free for the next ones as long as it does (`glray_core::reuse`).
+    fn set_replacing(&mut self, replacing: bool) {
+        self.replacing = replacing;
+        glray_core::reuse::keep_freed(replacing);
     }
 
     /// How many meshes have a BVH.
