@@ -57,27 +57,59 @@ fn finite(t: &[Vec3; 3]) -> bool {
     t.iter().all(|v| v.is_finite())
 }
 
-/// Sorts `keys` by their codes, stably (LSD radix, a byte at a time over the 30 bits).
+/// Sorts `keys` by their codes, stably (LSD radix, a byte at a time over the 30 bits), in a
+/// chunk per thread.
 fn sort(keys: &mut Vec<Keyed>) {
-    let mut other: Vec<Keyed> = vec![0; keys.len()];
+    let chunks = if keys.len() < SORT_CHUNK { 1 } else { rayon::current_num_threads().max(1) };
+    sort_in(keys, chunks);
+}
+
+/// Keys fewer than this are sorted on one thread.
+const SORT_CHUNK: usize = 1 << 16;
+
+/// `sort` with the keys cut into `chunks` runs: each pass counts each run's bytes, and each
+/// run's keys go to their bucket's part for that run, after those of the runs before it (in
+/// parts of the other array split off in that order: no two runs write the same place), so the
+/// order of equal bytes stays, and the result is the same for any number of runs.
+fn sort_in(keys: &mut Vec<Keyed>, chunks: usize) {
+    let len = keys.len();
+    let run = len.div_ceil(chunks.max(1)).max(1);
+    let mut other: Vec<Keyed> = vec![0; len];
     for shift in [0, 8, 16, 24] {
-        let mut counts = [0usize; 256];
-        for &k in keys.iter() {
-            counts[(code(k) >> shift) as usize & 255] += 1;
-        }
-        if counts.contains(&keys.len()) {
+        let byte = |k: Keyed| (code(k) >> shift) as usize & 255;
+        let counts: Vec<[usize; 256]> = keys
+            .par_chunks(run)
+            .map(|c| {
+                let mut n = [0usize; 256];
+                for &k in c {
+                    n[byte(k)] += 1;
+                }
+                n
+            })
+            .collect();
+        let total = |b: usize| counts.iter().map(|n| n[b]).sum::<usize>();
+        if (0..256).any(|b| total(b) == len) {
             // Every code has the same byte here: the order stays.
             continue;
         }
-        let mut at = 0;
-        for c in counts.iter_mut() {
-            (*c, at) = (at, at + *c);
+        // Each run's part of each bucket, bucket by bucket and run by run within a bucket.
+        let mut parts: Vec<Vec<&mut [Keyed]>> = (0..counts.len()).map(|_| Vec::with_capacity(256)).collect();
+        let mut rest: &mut [Keyed] = &mut other;
+        for b in 0..256 {
+            for (r, n) in counts.iter().enumerate() {
+                let (part, after) = std::mem::take(&mut rest).split_at_mut(n[b]);
+                parts[r].push(part);
+                rest = after;
+            }
         }
-        for &k in keys.iter() {
-            let b = (code(k) >> shift) as usize & 255;
-            other[counts[b]] = k;
-            counts[b] += 1;
-        }
+        keys.par_chunks(run).zip(parts).for_each(|(c, mut parts)| {
+            let mut at = [0usize; 256];
+            for &k in c {
+                let b = byte(k);
+                parts[b][at[b]] = k;
+                at[b] += 1;
+            }
+        });
         std::mem::swap(keys, &mut other);
     }
 }
@@ -269,6 +301,11 @@ mod tests {
             .collect();
         let mut want = keys.clone();
         want.sort_by_key(|&k| (code(k), index(k)));
+        for chunks in [1, 2, 3, 7] {
+            let mut sorted = keys.clone();
+            sort_in(&mut sorted, chunks);
+            assert!(sorted == want, "{chunks} runs");
+        }
         sort(&mut keys);
         assert!(keys == want);
     }
