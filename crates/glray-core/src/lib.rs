@@ -9,7 +9,17 @@ pub mod log;
 pub mod pages;
 pub mod prefetch;
 pub mod reallib;
+#[cfg(target_os = "linux")]
 pub mod reuse;
+/// Elsewhere glray allocates through the system's allocator, and keeps nothing.
+#[cfg(not(target_os = "linux"))]
+pub mod reuse {
+    pub fn frame_begins() {}
+    pub fn keep_freed(_on: bool) {}
+    pub fn kept_bytes() -> usize {
+        0
+    }
+}
 pub mod threads;
 pub mod trace;
 

@@ -12,6 +12,7 @@
 //! then goes back to the C allocator (`frame_begins`). Otherwise nothing is kept: a program
 //! that loads its data once peaks at the memory it did before.
 //!
+//! On Linux (glibc or musl: `malloc_usable_size`); elsewhere `reuse` keeps nothing (lib.rs).
 //! Every block comes from the C allocator (malloc, calloc, posix_memalign: what std's `System`
 //! uses on Unix) and goes back to it with free; a kept block's size is what
 //! `malloc_usable_size` says it holds. A fresh big block is asked for an eighth bigger than
