@@ -283,6 +283,18 @@ fn osmesa_helper(dir: &Path, name: &str) -> PathBuf {
     osmesa_helper_with(dir, name, &[])
 }
 
+/// The number `key` of each line of a `GLRAY_STATS` file.
+fn stats_field(lines: &str, key: &str) -> Vec<f64> {
+    let key = format!("\"{key}\":");
+    lines
+        .lines()
+        .map(|l| {
+            let v = l.split(key.as_str()).nth(1).and_then(|r| r.trim_end_matches('}').split(',').next());
+            v.and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("{key} in {l}"))
+        })
+        .collect()
+}
+
 /// OSMesa helper `name` built with the C compiler's `flags` too (`-DN=...`).
 fn osmesa_helper_with(dir: &Path, name: &str, flags: &[&str]) -> PathBuf {
     let program = dir.join(name);
@@ -854,14 +866,7 @@ fn big_immediate_mode_runs_are_kept_as_meshes_by_what_they_give() {
     let current = |out: &str| out.lines().find(|l| l.starts_with("current")).map(String::from);
     assert_eq!(current(&traced), current(&plain), "the current values after glEnd");
     assert!(traced.contains("error 0x0"), "glray: {traced}");
-    let builds: Vec<f64> = std::fs::read_to_string(&stats)
-        .unwrap()
-        .lines()
-        .map(|l| {
-            let v = l.split("\"build_ms\":").nth(1).and_then(|r| r.split(',').next());
-            v.and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("build_ms in {l}"))
-        })
-        .collect();
+    let builds = stats_field(&std::fs::read_to_string(&stats).unwrap(), "build_ms");
     assert_eq!(builds.len(), 8, "{builds:?}");
     assert!(builds[1] * 20.0 < builds[0], "frame 1 reuses frame 0's mesh and BVH: build ms {builds:?}");
     assert!(builds[2] * 20.0 > builds[0], "frame 2's mesh is new: build ms {builds:?}");
@@ -898,16 +903,7 @@ fn meshes_replaced_every_frame_get_their_bvhs_built_fast() {
         assert_eq!(t.len(), 7, "glray, bvh {bvh}: {traced}");
         assert_frames_near(&p, &t);
         let lines = std::fs::read_to_string(&stats).unwrap();
-        let field = |key: &str| -> Vec<f64> {
-            let key = format!("\"{key}\":");
-            lines
-                .lines()
-                .map(|l| {
-                    let v = l.split(key.as_str()).nth(1).and_then(|r| r.trim_end_matches('}').split(',').next());
-                    v.and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("{key} in {l}"))
-                })
-                .collect()
-        };
+        let field = |key: &str| stats_field(&lines, key);
         let fast: Vec<u32> = field("fast_builds").into_iter().map(|v| v as u32).collect();
         assert_eq!(fast, want, "bvh {bvh}: BVHs built fast, frame by frame");
         // Frame 5 builds nothing; frame 4 builds the kept step's SAH tree under `auto` only.
@@ -937,13 +933,7 @@ fn memory_a_replaced_mesh_frees_is_kept_for_the_next_step_and_only_then() {
     assert_eq!((p.len(), t.len()), (7, 7), "Mesa: {plain}\nglray: {traced}");
     assert_frames_near(&p, &t);
     let lines = std::fs::read_to_string(&stats).unwrap();
-    let kept: Vec<f64> = lines
-        .lines()
-        .map(|l| {
-            let v = l.split("\"kept_mb\":").nth(1).and_then(|r| r.trim_end_matches('}').split(',').next());
-            v.and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("kept_mb in {l}"))
-        })
-        .collect();
+    let kept = stats_field(&lines, "kept_mb");
     assert_eq!(kept.len(), 7, "{lines}");
     let keeps: Vec<bool> = kept.iter().map(|&mb| mb > 0.0).collect();
     assert_eq!(keeps, [false, true, true, true, false, false, false], "MB kept, frame by frame: {kept:?}");
