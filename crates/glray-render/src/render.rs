@@ -167,8 +167,9 @@ impl Renderer {
         if pass >= converged {
             let a = self.accumulation.as_ref().expect("accumulated");
             let triangles = frame.triangle_count() as u64;
-            self.stats =
-                Stats { samples: a.passes * effects.samples.max(1), reused: true, triangles, ..Stats::default() };
+            let kept_bytes = glray_core::reuse::kept_bytes() as u64;
+            let samples = a.passes * effects.samples.max(1);
+            self.stats = Stats { samples, reused: true, triangles, kept_bytes, ..Stats::default() };
             return a.last.clone();
         }
         let mut job = Job {
