@@ -76,10 +76,7 @@ impl Reusing {
             return;
         }
         let all = std::mem::replace(&mut *self.lock(), [EMPTY; SLOTS]);
-        for b in all.iter().filter(|b| b.at != 0) {
-            // SAFETY: a kept block is the allocator's, and no one else holds it.
-            unsafe { libc::free(b.at as *mut libc::c_void) };
-        }
+        all.iter().for_each(|b| give_back(b.at));
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, [Block; SLOTS]> {
@@ -92,12 +89,16 @@ impl Reusing {
     /// smallest such.
     fn take(&self, layout: Layout) -> Option<*mut u8> {
         let (size, align) = (layout.size(), layout.align());
+        let fits = |b: &Block| b.at % align == 0 && b.size >= size && b.size - size <= size / 2;
+        self.claim(fits, |b| std::cmp::Reverse(b.size))
+    }
+
+    /// Empties the slot of the kept block that `suits` and has the greatest `rank`, and hands
+    /// the block out.
+    fn claim<R: Ord>(&self, suits: impl Fn(&Block) -> bool, rank: impl Fn(&Block) -> R) -> Option<*mut u8> {
         let mut kept = self.lock();
-        let fits = |b: &Block| b.at != 0 && b.at % align == 0 && b.size >= size && b.size - size <= size / 2;
-        let best = kept.iter_mut().filter(|b| fits(b)).min_by_key(|b| b.size)?;
-        let at = best.at;
-        *best = EMPTY;
-        Some(at as *mut u8)
+        let best = kept.iter_mut().filter(|b| b.at != 0 && suits(b)).max_by_key(|b| rank(b))?;
+        Some(std::mem::replace(best, EMPTY).at as *mut u8)
     }
 
     /// The biggest kept block that is too small for `layout` and big enough that the C
@@ -108,31 +109,31 @@ impl Reusing {
         if layout.align() > MALLOC_ALIGN {
             return None;
         }
-        let mut kept = self.lock();
-        let grows = |b: &Block| b.at != 0 && b.size >= MAPPED && b.size < layout.size();
-        let best = kept.iter_mut().filter(|b| grows(b)).max_by_key(|b| b.size)?;
-        let at = best.at;
-        *best = EMPTY;
-        Some(at as *mut u8)
+        self.claim(|b| b.size >= MAPPED && b.size < layout.size(), |b| b.size)
     }
 
-    /// A block for `layout` that no kept block fits: a kept one grown, or a fresh one.
+    /// A big block for `layout`, zeroed if asked: a kept one that fits, else a kept one grown,
+    /// else a fresh one.
     ///
     /// # Safety
     /// `layout` has a non-zero size.
-    unsafe fn grown_or_fresh(&self, layout: Layout, zeroed: bool) -> *mut u8 {
-        if let Some(ptr) = self.take_to_grow(layout) {
+    unsafe fn big(&self, layout: Layout, zeroed: bool) -> *mut u8 {
+        let kept = self.take(layout).or_else(|| {
+            let ptr = self.take_to_grow(layout)?;
             // SAFETY: a kept block is the C allocator's and no one else's.
             let grown: *mut u8 = unsafe { libc::realloc(ptr.cast(), padded(layout.size())) }.cast();
-            if !grown.is_null() {
-                if zeroed {
-                    // SAFETY: the grown block holds at least the layout's size.
-                    unsafe { std::ptr::write_bytes(grown, 0, layout.size()) };
-                }
-                return grown;
+            if grown.is_null() {
+                // A failed realloc leaves the block as it was.
+                give_back(ptr as usize);
             }
-            // SAFETY: a failed realloc leaves the block as it was, the allocator's.
-            unsafe { libc::free(ptr.cast()) };
+            (!grown.is_null()).then_some(grown)
+        });
+        if let Some(ptr) = kept {
+            if zeroed {
+                // SAFETY: a kept or grown block holds at least the layout's size.
+                unsafe { std::ptr::write_bytes(ptr, 0, layout.size()) };
+            }
+            return ptr;
         }
         // SAFETY: the caller's non-zero size.
         unsafe { fresh(layout, zeroed) }
@@ -155,10 +156,7 @@ impl Reusing {
             };
             std::mem::replace(&mut kept[slot], block)
         };
-        if evicted.at != 0 {
-            // SAFETY: a kept block is the allocator's, and no one else holds it.
-            unsafe { libc::free(evicted.at as *mut libc::c_void) };
-        }
+        give_back(evicted.at);
     }
 
     /// A new frame begins: blocks freed before the last frame began, and taken by nothing since,
@@ -175,10 +173,7 @@ impl Reusing {
                 }
             }
         }
-        for at in stale.into_iter().filter(|&at| at != 0) {
-            // SAFETY: a kept block is the allocator's, and no one else holds it.
-            unsafe { libc::free(at as *mut libc::c_void) };
-        }
+        stale.into_iter().for_each(give_back);
     }
 
     /// How many bytes the kept blocks hold.
@@ -189,6 +184,15 @@ impl Reusing {
     /// Whether the block at `ptr` is kept.
     pub fn holds(&self, ptr: *const u8) -> bool {
         self.lock().iter().any(|b| b.at != 0 && b.at == ptr as usize)
+    }
+}
+
+/// Gives the block at `at` (0: none) back to the C allocator.
+fn give_back(at: usize) {
+    if at != 0 {
+        // SAFETY: only blocks the allocator holds and no one else uses come here (kept ones,
+        // or one a failed realloc left as it was).
+        unsafe { libc::free(at as *mut libc::c_void) };
     }
 }
 
@@ -232,11 +236,8 @@ unsafe impl GlobalAlloc for Reusing {
             // SAFETY: the caller's layout, as GlobalAlloc demands.
             return unsafe { System.alloc(layout) };
         }
-        match self.take(layout) {
-            Some(ptr) => ptr,
-            // SAFETY: a big layout's size is not zero.
-            None => unsafe { self.grown_or_fresh(layout, false) },
-        }
+        // SAFETY: a big layout's size is not zero.
+        unsafe { self.big(layout, false) }
     }
 
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
@@ -244,15 +245,8 @@ unsafe impl GlobalAlloc for Reusing {
             // SAFETY: the caller's layout.
             return unsafe { System.alloc_zeroed(layout) };
         }
-        match self.take(layout) {
-            Some(ptr) => {
-                // SAFETY: a kept block holds at least the layout's size.
-                unsafe { std::ptr::write_bytes(ptr, 0, layout.size()) };
-                ptr
-            }
-            // SAFETY: a big layout's size is not zero.
-            None => unsafe { self.grown_or_fresh(layout, true) },
-        }
+        // SAFETY: a big layout's size is not zero.
+        unsafe { self.big(layout, true) }
     }
 
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
