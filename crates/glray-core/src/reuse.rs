@@ -17,7 +17,9 @@
 //! uses on Unix) and goes back to it with free; a kept block's size is what
 //! `malloc_usable_size` says it holds. A fresh big block is asked for an eighth bigger than
 //! needed: the next time step's array is seldom exactly the size of this one's, and pages never
-//! touched cost no memory, only address space.
+//! touched cost no memory, only address space. Where that or the kept blocks do not fit (short
+//! of memory, or of address space under `ulimit -v`), the kept blocks go back and the block is
+//! asked for as it is: keeping never fails an allocation the C allocator would make.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -75,6 +77,11 @@ impl Reusing {
         if !self.keeping.swap(on, Ordering::Relaxed) || on {
             return;
         }
+        self.give_back_all();
+    }
+
+    /// Every kept block back to the C allocator.
+    fn give_back_all(&self) {
         let all = std::mem::replace(&mut *self.lock(), [EMPTY; SLOTS]);
         all.iter().for_each(|b| give_back(b.at));
     }
@@ -113,7 +120,7 @@ impl Reusing {
     }
 
     /// A big block for `layout`, zeroed if asked: a kept one that fits, else a kept one grown,
-    /// else a fresh one.
+    /// else a fresh one. Null only where the C allocator alone would fail too.
     ///
     /// # Safety
     /// `layout` has a non-zero size.
@@ -136,7 +143,16 @@ impl Reusing {
             return ptr;
         }
         // SAFETY: the caller's non-zero size.
-        unsafe { fresh(layout, zeroed) }
+        let ptr = unsafe { fresh(layout, padded(layout.size()), zeroed) };
+        if !ptr.is_null() {
+            return ptr;
+        }
+        // Short of memory, or of address space under `ulimit -v`: the kept blocks go back and
+        // the block is asked for without room to grow, so that keeping never fails an
+        // allocation the C allocator would have made.
+        self.give_back_all();
+        // SAFETY: as above.
+        unsafe { fresh(layout, layout.size(), zeroed) }
     }
 
     /// Keeps the big block at `ptr` for the frames to come, giving back the oldest kept block
@@ -196,13 +212,12 @@ fn give_back(at: usize) {
     }
 }
 
-/// A fresh big block for `layout`, padded, from the C allocator; zeroed if asked (calloc's
-/// fresh pages are zero already).
+/// A fresh block of `size` bytes (at least `layout`'s) for `layout`, from the C allocator;
+/// zeroed if asked (calloc's fresh pages are zero already).
 ///
 /// # Safety
-/// `layout` has a non-zero size.
-unsafe fn fresh(layout: Layout, zeroed: bool) -> *mut u8 {
-    let size = padded(layout.size());
+/// `layout` has a non-zero size, and `size` is at least that.
+unsafe fn fresh(layout: Layout, size: usize, zeroed: bool) -> *mut u8 {
     if layout.align() <= MALLOC_ALIGN {
         // SAFETY: plain C allocations of a non-zero size.
         return unsafe {
@@ -277,9 +292,17 @@ unsafe impl GlobalAlloc for Reusing {
             }
         }
         if layout.align() <= MALLOC_ALIGN {
-            // SAFETY: the block is the C allocator's (`System` uses malloc at this alignment).
             let size = if new_size >= BIG { padded(new_size) } else { new_size };
-            return unsafe { libc::realloc(ptr.cast(), size) }.cast();
+            // SAFETY: the block is the C allocator's (`System` uses malloc at this alignment).
+            let moved: *mut u8 = unsafe { libc::realloc(ptr.cast(), size) }.cast();
+            if !moved.is_null() || size == new_size {
+                return moved;
+            }
+            // As in `big`: a failed realloc leaves the block as it was; without the kept
+            // blocks and the room to grow, it may still be made.
+            self.give_back_all();
+            // SAFETY: as above.
+            return unsafe { libc::realloc(ptr.cast(), new_size) }.cast();
         }
         // SAFETY: GlobalAlloc's own rules for a new layout of the same alignment.
         let new_layout = unsafe { Layout::from_size_align_unchecked(new_size, layout.align()) };
@@ -457,6 +480,68 @@ mod tests {
             let r = a.alloc(layout(20 * MB));
             assert!(a.holds(small));
             a.dealloc(r, layout(20 * MB));
+        }
+    }
+
+    /// Set in the copy of the test binary that runs under an address-space limit.
+    const UNDER_LIMIT: &str = "REUSE_TEST_UNDER_ADDRESS_LIMIT";
+
+    /// The process's address space in bytes (`VmSize`).
+    fn address_space() -> usize {
+        let status = std::fs::read_to_string("/proc/self/status").expect("/proc/self/status");
+        let line = status.lines().find(|l| l.starts_with("VmSize:")).expect("a VmSize line");
+        let kb: usize = line.split_whitespace().nth(1).and_then(|n| n.parse().ok()).expect("VmSize in kB");
+        kb * 1024
+    }
+
+    /// `ulimit -v` at `extra` bytes more than the process holds now.
+    fn limit_address_space(extra: usize) {
+        let limit = (address_space() + extra) as libc::rlim_t;
+        let r = libc::rlimit { rlim_cur: limit, rlim_max: limit };
+        // SAFETY: a plain system call on a valid struct.
+        assert_eq!(unsafe { libc::setrlimit(libc::RLIMIT_AS, &r) }, 0, "setrlimit");
+    }
+
+    /// An allocation the C allocator would make is made: without the eighth of room a fresh
+    /// block is asked for, and with the kept blocks given back, when there is not room for them
+    /// (here an address-space limit, as `ulimit -v` sets on many clusters' login nodes). Run
+    /// in a copy of the test binary, so that the limit binds nothing else.
+    #[test]
+    fn under_a_memory_limit_keeping_fails_no_allocation_the_c_allocator_would_make() {
+        let name = "reuse::tests::under_a_memory_limit_keeping_fails_no_allocation_the_c_allocator_would_make";
+        if std::env::var_os(UNDER_LIMIT).is_none() {
+            let exe = std::env::current_exe().expect("the test binary");
+            let out = std::process::Command::new(exe)
+                .args(["--exact", name, "--test-threads=1"])
+                .env(UNDER_LIMIT, "1")
+                .output()
+                .expect("the test binary runs");
+            let said = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+            assert!(out.status.success() && said.contains("1 passed"), "under the limit: {said}");
+            return;
+        }
+        let a = keeping();
+        unsafe {
+            // A fresh block: its eighth of room does not fit under the limit, the block does.
+            limit_address_space(1700 * MB);
+            let p = a.alloc(layout(1600 * MB));
+            assert!(!p.is_null(), "1600 MB under a limit of 1700 MB more");
+            p.write_bytes(1, MB);
+            a.dealloc(p, layout(1600 * MB));
+            assert!(a.kept_bytes() >= 1600 * MB);
+            // The kept block fills the room a new one needs: it goes back for it.
+            let aligned = Layout::from_size_align(1000 * MB, 4096).expect("layout");
+            let q = a.alloc(aligned);
+            assert!(!q.is_null(), "the kept block given back for it");
+            assert_eq!(a.kept_bytes(), 0);
+            q.write_bytes(2, MB);
+            a.dealloc(q, aligned);
+            a.give_back_all();
+            // A block grown by realloc: the same, without the room.
+            let r = a.alloc(layout(100 * MB));
+            let grown = a.realloc(r, layout(100 * MB), 1600 * MB);
+            assert!(!grown.is_null(), "grown to 1600 MB under a limit of 1700 MB more");
+            a.dealloc(grown, layout(1600 * MB));
         }
     }
 
