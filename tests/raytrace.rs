@@ -873,57 +873,88 @@ fn big_immediate_mode_runs_are_kept_as_meshes_by_what_they_give() {
 }
 
 #[test]
-fn meshes_replaced_every_frame_get_their_bvhs_built_fast() {
+fn meshes_replaced_every_frame_get_their_bvhs_refitted_or_built_fast() {
     // tests/helpers/time_steps.c: a simulation's time steps, a 79,202-triangle surface put into
     // buffer objects anew every frame, then drawn again as it is for two frames, then a new
-    // step. Under `bvh` = `auto` glray builds a replaced mesh's BVH fast (a linear BVH) from the
-    // second step on; the step the program stays on gets an SAH tree in its second frame (4),
-    // and the next step is built by SAH too; `sah` and `fast` build every one their way (no
-    // rebuild). The trees differ, the pictures must not: each is Mesa's.
-    let dir = scratch("rt-time-steps");
-    let program = osmesa_helper(&dir, "time_steps");
-    let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "time_steps plain"));
-    let p = printed_frames(&plain);
-    assert_eq!(p.len(), 7, "Mesa: {plain}");
-    assert!(p.iter().all(|f| f.len() == 3 * 64), "Mesa: {plain}");
-    for (a, b) in [(0, 1), (1, 2), (2, 3), (5, 6)] {
-        assert_ne!(p[a], p[b], "Mesa: step {b} differs from step {a}");
+    // step. Under `bvh` = `auto` each step's mesh (the same triangles, moved) gets the last
+    // step's tree refitted. Built with -DTRIM, each step has two triangles fewer: no tree fits,
+    // and glray builds a replaced mesh's BVH fast (a linear BVH) from the second step on; the
+    // step the program stays on gets an SAH tree in its second frame (4), and the next step is
+    // built by SAH too. `sah` and `fast` build every tree their way (no refit, no rebuild).
+    // The trees differ, the pictures must not: each is Mesa's.
+    struct Want {
+        fast: [u32; 7],
+        refits: [u32; 7],
+        rebuilt_at_4: bool,
     }
-    assert!(p[3] == p[4] && p[4] == p[5], "Mesa: the same step, the same picture");
-    let mut printed = Vec::new();
-    for (bvh, want) in [("auto", [0, 1, 1, 1, 0, 0, 0]), ("sah", [0; 7]), ("fast", [1, 1, 1, 1, 0, 0, 1])] {
-        let stats = dir.join(format!("stats-{bvh}.jsonl"));
-        let mut cmd = command(Way::Preload, &[], &program, 60);
-        cmd.env("GLRAY_PRESET", "gl")
-            .env("GLRAY_PROGRESSIVE", "false")
-            .env("GLRAY_STATS", &stats)
-            .env("GLRAY_BVH", bvh);
-        let traced = stdout(&run_ok(&mut cmd, &format!("time_steps under glray, bvh {bvh}")));
-        let t = printed_frames(&traced);
-        assert_eq!(t.len(), 7, "glray, bvh {bvh}: {traced}");
-        assert_frames_near(&p, &t);
-        let lines = std::fs::read_to_string(&stats).unwrap();
-        let field = |key: &str| stats_field(&lines, key);
-        let fast: Vec<u32> = field("fast_builds").into_iter().map(|v| v as u32).collect();
-        assert_eq!(fast, want, "bvh {bvh}: BVHs built fast, frame by frame");
-        // Frame 5 builds nothing; frame 4 builds the kept step's SAH tree under `auto` only.
-        let build = field("build_ms");
-        assert!(build[5] < 1.0, "bvh {bvh}: frame 5 builds nothing: build ms {build:?}");
-        assert_eq!(build[4] > 1.0, bvh == "auto", "bvh {bvh}: the kept step rebuilt by SAH: build ms {build:?}");
-        printed.push(t);
+    let (none, steps) = ([0; 7], [1, 1, 1, 1, 0, 0, 1]);
+    let refit = [0, 1, 1, 1, 0, 0, 1];
+    for (flags, runs) in [
+        (
+            &[][..],
+            [
+                ("auto", Want { fast: none, refits: refit, rebuilt_at_4: false }),
+                ("sah", Want { fast: none, refits: none, rebuilt_at_4: false }),
+                ("fast", Want { fast: steps, refits: none, rebuilt_at_4: false }),
+            ],
+        ),
+        (
+            &["-DTRIM"][..],
+            [
+                ("auto", Want { fast: [0, 1, 1, 1, 0, 0, 0], refits: none, rebuilt_at_4: true }),
+                ("sah", Want { fast: none, refits: none, rebuilt_at_4: false }),
+                ("fast", Want { fast: steps, refits: none, rebuilt_at_4: false }),
+            ],
+        ),
+    ] {
+        let dir = scratch(&format!("rt-time-steps{}", flags.concat()));
+        let program = osmesa_helper_with(&dir, "time_steps", flags);
+        let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 60), "time_steps plain"));
+        let p = printed_frames(&plain);
+        assert_eq!(p.len(), 7, "Mesa {flags:?}: {plain}");
+        assert!(p.iter().all(|f| f.len() == 3 * 64), "Mesa {flags:?}: {plain}");
+        for (a, b) in [(0, 1), (1, 2), (2, 3), (5, 6)] {
+            assert_ne!(p[a], p[b], "Mesa {flags:?}: step {b} differs from step {a}");
+        }
+        assert!(p[3] == p[4] && p[4] == p[5], "Mesa {flags:?}: the same step, the same picture");
+        let mut printed = Vec::new();
+        for (bvh, want) in runs {
+            let what = format!("{flags:?}, bvh {bvh}");
+            let stats = dir.join(format!("stats-{bvh}.jsonl"));
+            let mut cmd = command(Way::Preload, &[], &program, 60);
+            cmd.env("GLRAY_PRESET", "gl")
+                .env("GLRAY_PROGRESSIVE", "false")
+                .env("GLRAY_STATS", &stats)
+                .env("GLRAY_BVH", bvh);
+            let traced = stdout(&run_ok(&mut cmd, &format!("time_steps under glray, {what}")));
+            let t = printed_frames(&traced);
+            assert_eq!(t.len(), 7, "glray, {what}: {traced}");
+            assert_frames_near(&p, &t);
+            let lines = std::fs::read_to_string(&stats).unwrap();
+            let field = |key: &str| -> Vec<u32> { stats_field(&lines, key).into_iter().map(|v| v as u32).collect() };
+            assert_eq!(field("fast_builds"), want.fast, "{what}: BVHs built fast, frame by frame");
+            assert_eq!(field("refits"), want.refits, "{what}: BVHs refitted, frame by frame");
+            // Frame 5 builds nothing; frame 4 builds the kept step's SAH tree where it had a
+            // fast one under `auto` only.
+            let build = stats_field(&lines, "build_ms");
+            assert!(build[5] < 1.0, "{what}: frame 5 builds nothing: build ms {build:?}");
+            assert_eq!(build[4] > 1.0, want.rebuilt_at_4, "{what}: the kept step rebuilt by SAH: build ms {build:?}");
+            printed.push(t);
+        }
+        assert!(printed.iter().all(|t| *t == printed[0]), "{flags:?}: the trees differ, the pictures must not");
     }
-    assert!(printed.iter().all(|t| *t == printed[0]), "the trees differ, the pictures must not");
 }
 
 #[test]
 fn memory_a_replaced_mesh_frees_is_kept_for_the_next_step_and_only_then() {
     // tests/helpers/time_steps.c with a 640 x 640 grid (816,642 triangles: its arrays and BVH
-    // are big enough to be kept, `glray_core::reuse::BIG`). While the program replaces its mesh
+    // are big enough to be kept, `glray_core::reuse::BIG`), trimmed step by step (each step's
+    // tree built, not refitted: `-DTRIM`). While the program replaces its mesh
     // every frame (frames 1-3), what the last step freed is kept for the next one; once it
     // stays on a step (frame 4) and after (5, 6: the step it stayed on was drawn in three
     // frames), nothing is. The pictures stay Mesa's.
     let dir = scratch("rt-time-steps-kept");
-    let program = osmesa_helper_with(&dir, "time_steps", &["-DN=640"]);
+    let program = osmesa_helper_with(&dir, "time_steps", &["-DN=640", "-DTRIM"]);
     let plain = stdout(&run_ok(&mut command(Way::Plain, &[], &program, 120), "time_steps plain"));
     let stats = dir.join("stats.jsonl");
     let mut cmd = command(Way::Preload, &[], &program, 120);

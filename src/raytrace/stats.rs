@@ -52,7 +52,7 @@ impl Sink {
         let result = match self {
             Sink::Stderr => writeln!(
                 std::io::stderr(),
-                "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms{}, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
+                "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms{}{}, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
                  present {:.2} ms; {} triangles, {} samples per pixel{}{}",
                 s.frame,
                 s.width,
@@ -62,6 +62,10 @@ impl Sink {
                 match r.fast_builds {
                     0 => String::new(),
                     n => format!(" ({n} built fast)"),
+                },
+                match r.refits {
+                    0 => String::new(),
+                    n => format!(" ({n} refitted)"),
                 },
                 ms(r.trace),
                 r.rays,
@@ -78,7 +82,7 @@ impl Sink {
             Sink::File(f) => writeln!(
                 f,
                 "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
-                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"kept_mb\":{:.1}}}",
+                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1}}}",
                 s.frame,
                 s.thread,
                 s.width,
@@ -93,6 +97,7 @@ impl Sink {
                 r.samples,
                 r.reused,
                 r.fast_builds,
+                r.refits,
                 mb(r.kept_bytes)
             ),
         };

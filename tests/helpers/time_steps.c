@@ -5,13 +5,20 @@
  *   0-3: a new step each frame;
  *   4, 5: the program stays on step 3 (its buffers drawn again as they are);
  *   6: a new step again.
- * Under glray a mesh replaced frame after frame gets a BVH built fast (`bvh` setting, `auto`),
- * from the second step on; once the program stays on a step, the next one's is built by SAH
- * again. GLRAY_STATS counts the fast builds (`fast_builds`) and the memory kept for the next
- * step (`kept_mb`). Prints an 8 x 8 grid of pixels per frame. Built by tests/raytrace.rs with
- * cc (-DN=640 for arrays big enough to be kept). */
+ * Under glray (`bvh` setting `auto`) each step's mesh, the same triangles moved, gets the last
+ * step's BVH refitted (`refits`). Built with -DTRIM, each step draws two triangles fewer than
+ * the last: no tree to refit, and a mesh replaced frame after frame gets a BVH built fast from
+ * the second step on; once the program stays on a step, the next one's is built by SAH again
+ * (`fast_builds`). GLRAY_STATS also says what memory is kept for the next step (`kept_mb`).
+ * Prints an 8 x 8 grid of pixels per frame. Built by tests/raytrace.rs with cc (-DN=640 for
+ * arrays big enough to be kept). */
 #ifndef N
 #define N 200
+#endif
+#ifdef TRIM
+#define TRIMMED(step) (6 * 2 * (step))
+#else
+#define TRIMMED(step) 0
 #endif
 #include "gl_functions.h"
 #include "wavy_grid.h"
@@ -55,7 +62,7 @@ int main(void) {
     glBindBuffer(GL_ARRAY_BUFFER, 0);
   draw:
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    glDrawElements(GL_TRIANGLES, n, GL_UNSIGNED_INT, 0);
+    glDrawElements(GL_TRIANGLES, n - TRIMMED(step_of_frame[f]), GL_UNSIGNED_INT, 0);
     glFinish();
     print_frame(f, buf, w, h);
   }

@@ -245,6 +245,29 @@ impl Mesh {
         self.corner_indices(index).map(|i| self.positions[i as usize])
     }
 
+    /// Starts loading what `corners(index)` reads: with `corners` false, the triangle's vertex
+    /// indices (a sequential mesh has none to read: its corners then), with true its corners'
+    /// positions (their indices read, in cache by then if loaded before).
+    #[inline]
+    pub fn load_corners(&self, index: usize, corners: bool) {
+        if index >= self.triangles.len() {
+            return;
+        }
+        if !self.sequential && !corners {
+            glray_core::prefetch::line(&self.triangles[index]);
+            return;
+        }
+        if self.sequential == corners {
+            // A sequential mesh's corners went with the first call.
+            return;
+        }
+        for i in self.corner_indices(index) {
+            if let Some(p) = self.positions.get(i as usize) {
+                glray_core::prefetch::line(p);
+            }
+        }
+    }
+
     /// Position `i` with its w.
     #[inline]
     pub fn position(&self, i: u32) -> DVec4 {

@@ -102,6 +102,9 @@ pub struct Stats {
     pub reused: bool,
     /// BVHs built fast (`bvh_choice`) for the frame.
     pub fast_builds: u32,
+    /// Meshes whose tree was refitted from the last frame's (a time step of the same mesh)
+    /// rather than built.
+    pub refits: u32,
     /// Bytes of freed big arrays kept for the next frame's (`glray_core::reuse`), as the frame
     /// ends: more than none only while the program replaces its meshes.
     pub kept_bytes: u64,
@@ -400,6 +403,7 @@ impl Job<'_> {
         let pixels = u64::from(width) * u64::from(height);
         let scene = Scene::build(frame, meshes, self.options.bvh, ray_work(pixels, &self.options.effects));
         stats.fast_builds = scene.fast_builds;
+        stats.refits = scene.refits;
         stats.build = start.elapsed();
         let start = Instant::now();
         let diagonal = scene.diagonal().max(1e-6);
@@ -517,6 +521,7 @@ impl Job<'_> {
             (stats.build, stats.trace) = (stats.build + s.build, stats.trace + s.trace);
             (stats.rays, stats.triangles) = (stats.rays + s.rays, stats.triangles + s.triangles);
             stats.fast_builds += s.fast_builds;
+            stats.refits += s.refits;
             last = Some((rendered, colors));
         }
         let (rendered, colors) = last.expect("by_viewport gives two views or more");

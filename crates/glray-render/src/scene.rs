@@ -96,7 +96,43 @@ impl MeshBvh {
     fn build(mesh: &Mesh, quality: Quality) -> MeshBvh {
         MeshBvh { bvh: TriBvh::build_as(mesh.triangles.len(), |i| mesh.corners(i), quality) }
     }
+
+    /// This tree refitted to `mesh` (`TriBvh::refit`), and whether any triangle moved.
+    fn refit(self, mesh: &Mesh) -> Option<(MeshBvh, bool)> {
+        let (bvh, moved) = self.bvh.refit(mesh.triangles.len(), |i| mesh.corners(i), |i, c| mesh.load_corners(i, c))?;
+        Some((MeshBvh { bvh }, moved))
+    }
 }
+
+/// A tree for a new mesh: a gone mesh's to refit, or the one made for it (refitted or built),
+/// how it was built, and its cost then once it has been refitted (`Kept::built_cost`).
+struct Tree {
+    bvh: MeshBvh,
+    quality: Quality,
+    built_cost: Option<f32>,
+}
+
+/// What `Meshes::prepare` made: how many trees it built fast (`bvh_choice`), how many it
+/// refitted.
+#[derive(Clone, Copy, Default)]
+pub struct Made {
+    pub fast_builds: u32,
+    pub refits: u32,
+}
+
+/// `bvh` (built at cost `built_cost`, if known) refitted to `mesh`, and the cost it was built
+/// at; None where it cannot be refitted or has grown too costly (`REFIT_LIMIT`).
+fn refitted(bvh: MeshBvh, mesh: &Mesh, built_cost: Option<f32>) -> Option<(MeshBvh, f32)> {
+    let built_cost = built_cost.unwrap_or_else(|| bvh.bvh.cost());
+    let (bvh, moved) = bvh.refit(mesh)?;
+    // Unmoved, the tree is the one that was within the limit already.
+    (!moved || bvh.bvh.cost() <= built_cost * REFIT_LIMIT).then_some((bvh, built_cost))
+}
+
+/// A tree refitted from one time step to the next is built anew once it costs this much more
+/// than when it was built (`TriBvh::cost`: its triangles have moved far): half as much again,
+/// about as much more time per ray (a 10M fast build is ~0.5 s, a GL-look frame ~0.1 s).
+const REFIT_LIMIT: f32 = 1.5;
 
 /// A kept mesh's BVH, how it was built, and in how many frames the mesh has been drawn.
 struct Kept {
@@ -105,6 +141,8 @@ struct Kept {
     quality: Quality,
     triangles: usize,
     frames: u32,
+    /// The tree's cost when it was built (`TriBvh::cost`), once it has been refitted.
+    built_cost: Option<f32>,
 }
 
 /// The BVHs of kept meshes (display lists, buffer objects, big client-array and immediate-mode
@@ -117,6 +155,9 @@ pub struct Meshes {
     /// frames since (smaller meshes, a label or a cursor made anew beside a kept dataset, tell
     /// nothing of it). A new mesh's BVH is then one the next frame builds again (`BvhBuild`).
     replacing: bool,
+    /// The BVHs of meshes gone since the last frame was traced, until it is: a new mesh of
+    /// as many triangles (the next time step of the same mesh, most often) gets one refitted.
+    gone: Vec<(u64, Kept)>,
 }
 
 /// Whether a mesh drawn in its second frame, whose BVH `auto` built fast, gets an SAH tree now:
@@ -130,26 +171,57 @@ fn rebuilt_for_keeps(kept: &Kept, choice: BvhBuild) -> bool {
 impl Meshes {
     /// The BVH of each of the frame's instances' meshes: built (in parallel) for meshes not
     /// seen before, as `choice` says for a tree the next frame builds again when the program
-    /// replaces its meshes (`replacing`); those of meshes capture no longer holds are dropped.
-    /// Also how many were built fast.
-    fn prepare(&mut self, frame: &Frame, choice: BvhBuild, ray_work: f64) -> (Vec<Arc<MeshBvh>>, u32) {
+    /// replaces its meshes (`replacing`); those of meshes capture no longer holds are dropped,
+    /// each handed first to a new mesh of as many triangles to refit (`Made`).
+    fn prepare(&mut self, frame: &Frame, choice: BvhBuild, ray_work: f64) -> (Vec<Arc<MeshBvh>>, Made) {
         self.prune();
         let mut new: Vec<&Arc<Mesh>> =
             frame.instances.iter().map(|i| &i.mesh).filter(|m| !self.built.contains_key(&m.id)).collect();
         new.sort_by_key(|m| m.id);
         new.dedup_by_key(|m| m.id);
-        let replacing = self.replacing;
-        let quality = |m: &Mesh| choice.quality(m.triangles.len(), replacing, ray_work);
-        let bvhs: Vec<(&Arc<Mesh>, Quality, Arc<MeshBvh>)> = new
-            .par_iter()
+        // Under `auto`, each new mesh the oldest gone tree of its size that nothing else holds
+        // (`sah` and `fast` build every tree their way); the trees left go now, before the
+        // builds, which may take their memory (`glray_core::reuse`).
+        let mut gone = std::mem::take(&mut self.gone);
+        let mut donors: Vec<Option<Tree>> = new
+            .iter()
             .map(|m| {
-                let quality = quality(m);
-                (*m, quality, Arc::new(MeshBvh::build(m, quality)))
+                if choice != BvhBuild::Auto {
+                    return None;
+                }
+                let at = gone
+                    .iter()
+                    .position(|(_, k)| k.triangles == m.triangles.len() && Arc::strong_count(&k.bvh) == 1)?;
+                let (_, k) = gone.remove(at);
+                let bvh = Arc::into_inner(k.bvh)?;
+                Some(Tree { bvh, quality: k.quality, built_cost: k.built_cost })
             })
             .collect();
-        let fast_builds = bvhs.iter().filter(|b| b.1 == Quality::Fast).count() as u32;
-        for (m, quality, bvh) in bvhs {
-            let kept = Kept { mesh: Arc::downgrade(m), bvh, quality, triangles: m.triangles.len(), frames: 0 };
+        drop(gone);
+        let replacing = self.replacing;
+        let quality = |m: &Mesh| choice.quality(m.triangles.len(), replacing, ray_work);
+        let bvhs: Vec<(&Arc<Mesh>, Tree)> = new
+            .par_iter()
+            .zip(donors.par_iter_mut())
+            .map(|(m, donor)| {
+                if let Some(Tree { bvh, quality, built_cost }) = donor.take() {
+                    if let Some((bvh, built_cost)) = refitted(bvh, m, built_cost) {
+                        return (*m, Tree { bvh, quality, built_cost: Some(built_cost) });
+                    }
+                }
+                let quality = quality(m);
+                (*m, Tree { bvh: MeshBvh::build(m, quality), quality, built_cost: None })
+            })
+            .collect();
+        // A refitted tree carries the cost it was built at; a tree built now has none yet.
+        let made = Made {
+            fast_builds: bvhs.iter().filter(|(_, t)| t.quality == Quality::Fast && t.built_cost.is_none()).count()
+                as u32,
+            refits: bvhs.iter().filter(|(_, t)| t.built_cost.is_some()).count() as u32,
+        };
+        for (m, Tree { bvh, quality, built_cost }) in bvhs {
+            let triangles = m.triangles.len();
+            let kept = Kept { mesh: Arc::downgrade(m), bvh: Arc::new(bvh), quality, triangles, frames: 0, built_cost };
             self.built.insert(m.id, kept);
         }
         let mut drawn: Vec<&Arc<Mesh>> = frame.instances.iter().map(|i| &i.mesh).collect();
@@ -174,20 +246,21 @@ impl Meshes {
             let kept = self.built.get_mut(&id).expect("drawn above");
             (kept.bvh, kept.quality) = (bvh, Quality::Sah);
         }
-        (frame.instances.iter().map(|i| self.built[&i.mesh.id].bvh.clone()).collect(), fast_builds)
+        (frame.instances.iter().map(|i| self.built[&i.mesh.id].bvh.clone()).collect(), made)
     }
 
-    /// Drops the BVHs of meshes capture no longer holds, noting whether the last big one was
-    /// drawn in one frame only (`replacing`).
+    /// Sets aside the BVHs of meshes capture no longer holds (`gone`, until the next frame is
+    /// traced), noting whether the last big one was drawn in one frame only (`replacing`).
     pub fn prune(&mut self) {
-        let ids: Vec<u64> = self.built.iter().filter(|(_, k)| k.mesh.strong_count() == 0).map(|(&id, _)| id).collect();
+        let mut ids: Vec<u64> =
+            self.built.iter().filter(|(_, k)| k.mesh.strong_count() == 0).map(|(&id, _)| id).collect();
+        ids.sort_unstable();
         let gone: Vec<(u64, Kept)> = ids.into_iter().filter_map(|id| self.built.remove_entry(&id)).collect();
         // The latest mesh first (ids grow as meshes are made).
         if let Some((_, kept)) = gone.iter().filter(|g| g.1.triangles >= BIG_MESH).max_by_key(|g| g.0) {
             self.set_replacing(kept.frames == 1);
         }
-        // Freed only now: their arrays are kept for the new mesh's BVH when it replaces them.
-        drop(gone);
+        self.gone.extend(gone);
     }
 
     /// Notes whether the program replaces its meshes, and has the allocator keep what the
@@ -246,8 +319,10 @@ impl Placed<'_> {
 pub struct Scene<'f> {
     frame: &'f Frame,
     bvh: TriBvh,
-    /// How many of the scene's BVHs were built fast for it (`bvh_choice`).
+    /// How many of the scene's BVHs were built fast for it (`bvh_choice`), and how many
+    /// meshes' trees were refitted rather than built (`Meshes`).
     pub fast_builds: u32,
+    pub refits: u32,
     /// Whether the frame's own triangles' packets test a node once for all their rays (as
     /// `Placed::frustum` for a mesh).
     frustum: bool,
@@ -287,8 +362,8 @@ impl<'f> Scene<'f> {
     pub fn build(frame: &'f Frame, meshes: &mut Meshes, choice: BvhBuild, ray_work: f64) -> Scene<'f> {
         let quality = choice.quality(frame.triangles.len(), true, ray_work);
         let bvh = TriBvh::build_as(frame.triangles.len(), |i| frame.triangles[i].positions, quality);
-        let (bvhs, fast_meshes) = meshes.prepare(frame, choice, ray_work);
-        let fast_builds = fast_meshes + u32::from(quality == Quality::Fast && !frame.triangles.is_empty());
+        let (bvhs, made) = meshes.prepare(frame, choice, ray_work);
+        let fast_builds = made.fast_builds + u32::from(quality == Quality::Fast && !frame.triangles.is_empty());
         let placed: Vec<Placed> = frame
             .instances
             .iter()
@@ -331,6 +406,7 @@ impl<'f> Scene<'f> {
             frame,
             bvh,
             fast_builds,
+            refits: made.refits,
             frustum,
             placed,
             boxes: bounds,
@@ -731,6 +807,57 @@ mod tests {
         }
         assert!(some > 50 && some < 200, "{some} points see the wall");
         assert!(differ <= 2, "{differ} points of 200 differ: {fast} vs {one_by_one}");
+    }
+
+    #[test]
+    fn a_mesh_that_replaces_one_of_as_many_triangles_gets_its_tree_refitted_unless_it_moved_far() {
+        use crate::sampling::hash;
+        let random = |seed: u32| hash(&[seed]) as f32 / u32::MAX as f32;
+        // A grid of 2 x 40 x 40 triangles, its corners each moved by up to `reach`.
+        let grid = |reach: f32, seed: u32| {
+            let n = 41u32;
+            let jitter = |k: u32, a: u32| reach * (2.0 * random(seed * 1_000_000 + 3 * k + a) - 1.0);
+            let positions: Vec<Vec3> = (0..n * n)
+                .map(|k| {
+                    Vec3::new((k % n) as f32, (k / n) as f32, 0.0) / 40.0
+                        + Vec3::new(jitter(k, 0), jitter(k, 1), jitter(k, 2))
+                })
+                .collect();
+            let triangles = (0..(n - 1) * (n - 1))
+                .flat_map(|c| {
+                    let k = c / (n - 1) * n + c % (n - 1);
+                    [[k, k + 1, k + n + 1], [k, k + n + 1, k + n]]
+                })
+                .collect();
+            let normals = vec![Vec3::Z; positions.len()];
+            Arc::new(Mesh::indexed(positions, normals, triangles).unwrap())
+        };
+        let frame_of = |mesh: &Arc<Mesh>| {
+            let instance =
+                Instance::new(mesh.clone(), DMat4::from_translation(glam::DVec3::NEG_Z * 3.0), DMat4::IDENTITY);
+            Frame { instances: vec![instance], ..Frame::default() }
+        };
+        let mut meshes = Meshes::default();
+        let mut step = |mesh: Arc<Mesh>, choice: BvhBuild| {
+            let frame = frame_of(&mesh);
+            let refits = Scene::build(&frame, &mut meshes, choice, 0.0).refits;
+            // The mesh goes, as capture drops a time step's buffers for the next one's.
+            drop(frame);
+            drop(mesh);
+            meshes.prune();
+            refits
+        };
+        assert_eq!(step(grid(0.0, 1), BvhBuild::Auto), 0, "the first mesh is built");
+        assert_eq!(step(grid(0.001, 2), BvhBuild::Auto), 1, "moved a little: refitted");
+        assert_eq!(step(grid(0.001, 2), BvhBuild::Auto), 1, "not moved: refitted");
+        assert_eq!(step(grid(0.5, 3), BvhBuild::Auto), 0, "moved far: built anew");
+        assert_eq!(step(grid(0.001, 4), BvhBuild::Sah), 0, "`sah` builds every tree");
+        assert_eq!(step(grid(0.001, 5), BvhBuild::Auto), 1);
+        // A mesh of other triangles: nothing to refit; its scene's hits are its own.
+        let other =
+            Arc::new(Mesh::indexed(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![Vec3::Z; 3], vec![[0, 1, 2]]).unwrap());
+        assert_eq!(step(other, BvhBuild::Auto), 0);
+        assert_eq!(meshes.gone.len() + meshes.len(), 1, "the gone trees go once the next frame is traced");
     }
 
     #[test]

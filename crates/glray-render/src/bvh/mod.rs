@@ -20,6 +20,7 @@ mod lanes;
 mod morton;
 mod node;
 mod packet;
+mod refit;
 mod stack;
 
 use glam::{Vec2, Vec3, Vec3A, Vec4};
@@ -619,7 +620,7 @@ mod tests {
             .collect()
     }
 
-    fn brute(tris: &[Triangle], ray: &Ray) -> Option<(u32, f32)> {
+    pub(super) fn brute(tris: &[Triangle], ray: &Ray) -> Option<(u32, f32)> {
         let r = Prepared::new(ray);
         let mut best: Option<(u32, f32)> = None;
         for (i, _) in tris.iter().enumerate() {
