@@ -168,6 +168,8 @@ impl Renderer {
         // The GL look has its whole picture after one pass; effects converge over `MAX_PASSES`.
         let converged = if effects.beyond_gl() { MAX_PASSES } else { 1 };
         if pass >= converged {
+            // Nothing traced: the trees set aside for refits go (as after any frame below).
+            self.meshes.forget_gone();
             let a = self.accumulation.as_ref().expect("accumulated");
             let triangles = frame.triangle_count() as u64;
             let kept_bytes = glray_core::reuse::kept_bytes() as u64;
@@ -186,6 +188,9 @@ impl Renderer {
             flatten_below: self.flatten_below,
         };
         let (mut rendered, linear, stats) = job.run(&mut self.meshes, key.is_some() && effects.beyond_gl());
+        // A frame that built its scene took what it could refit; one that did not (no camera)
+        // has no use for the trees either.
+        self.meshes.forget_gone();
         self.stats = Stats { kept_bytes: glray_core::reuse::kept_bytes() as u64, ..stats };
         match (key, linear) {
             (Some(key), Some(linear)) => {
@@ -237,6 +242,12 @@ impl Renderer {
     /// The display-list meshes whose BVHs are kept.
     pub fn kept_meshes(&self) -> usize {
         self.meshes.len()
+    }
+
+    /// How many trees of gone meshes are held for a refit (none between frames).
+    #[cfg(test)]
+    fn set_aside(&self) -> usize {
+        self.meshes.set_aside()
     }
 }
 
@@ -892,6 +903,9 @@ mod tests {
             c.call(op, ty, args);
         }
         drop((frame, flat));
+        // A frame with nothing to trace (no camera) keeps no tree for a refit either.
+        renderer.render(&Frame::default(), 48, 48, None);
+        assert_eq!((renderer.kept_meshes(), renderer.set_aside()), (0, 0));
         renderer.render(&c.take_frame(), 48, 48, None);
         assert_eq!(renderer.kept_meshes(), 0);
     }

@@ -263,11 +263,22 @@ impl Meshes {
         self.gone.extend(gone);
     }
 
+    /// Drops the trees set aside for refits (`gone`): a frame shown again traces nothing,
+    /// and the next new mesh may be many frames away.
+    pub fn forget_gone(&mut self) {
+        self.gone.clear();
+    }
+
     /// Notes whether the program replaces its meshes, and has the allocator keep what the
     /// last frame's meshes free for the next ones as long as it does (`glray_core::reuse`).
     fn set_replacing(&mut self, replacing: bool) {
         self.replacing = replacing;
         glray_core::reuse::keep_freed(replacing);
+    }
+
+    /// How many trees of gone meshes are held for a refit.
+    pub fn set_aside(&self) -> usize {
+        self.gone.len()
     }
 
     /// How many meshes have a BVH.
