@@ -253,17 +253,16 @@ impl Mesh {
         if index >= self.triangles.len() {
             return;
         }
-        if !self.sequential && !corners {
-            glray_core::prefetch::line(&self.triangles[index]);
-            return;
-        }
-        if self.sequential == corners {
-            // A sequential mesh's corners went with the first call.
-            return;
-        }
-        for i in self.corner_indices(index) {
-            if let Some(p) = self.positions.get(i as usize) {
-                glray_core::prefetch::line(p);
+        match (self.sequential, corners) {
+            (false, false) => glray_core::prefetch::line(&self.triangles[index]),
+            // A sequential mesh has no indices to read: its corners go with the first call.
+            (true, true) => {}
+            (false, true) | (true, false) => {
+                for i in self.corner_indices(index) {
+                    if let Some(p) = self.positions.get(i as usize) {
+                        glray_core::prefetch::line(p);
+                    }
+                }
             }
         }
     }

@@ -33,8 +33,7 @@ fn area((lo, hi): Bounds) -> f32 {
     2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
 }
 
-/// A block made again: its triangles' box, how many triangles it holds, whether any moved;
-/// None where a corner is not finite or a triangle is not one of the mesh's.
+/// A block made again: its triangles' box, how many triangles it holds, whether any moved.
 #[derive(Clone, Copy)]
 struct Block {
     bounds: Bounds,
@@ -174,7 +173,8 @@ impl TriBvh {
     }
 }
 
-/// Block `tri` made again from its triangles' corners now (`refit`).
+/// Block `tri` made again from its triangles' corners now (`refit`); None where a corner is
+/// not finite or a triangle is not one of the mesh's `count`.
 fn refit_block(tri: &mut Tri4, count: usize, corners: &(impl Fn(usize) -> [Vec3; 3] + Sync)) -> Option<Block> {
     let id = tri.id;
     let ids = &id[..id.iter().take_while(|&&i| i != EMPTY).count()];
