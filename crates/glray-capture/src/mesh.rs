@@ -245,6 +245,16 @@ impl Mesh {
         self.corner_indices(index).map(|i| self.positions[i as usize])
     }
 
+    /// A hash of what a BVH over the mesh depends on: its positions and its triangles' corners
+    /// (`arrays::content_hash` of each, on glray's threads for a big mesh). Two meshes with the
+    /// same shape have the same tree: a time step that sends the same vertices again (only its
+    /// colours new) keeps the last step's tree as it is.
+    pub fn shape_hash(&self) -> [i64; 4] {
+        let [a, b] = crate::arrays::content_hash(bytemuck::cast_slice(&self.positions));
+        let [c, d] = crate::arrays::content_hash(bytemuck::cast_slice(&self.triangles));
+        [a, b, c, d]
+    }
+
     /// Starts loading what `corners(index)` reads: with `corners` false, the triangle's vertex
     /// indices (a sequential mesh has none to read: its corners then), with true its corners'
     /// positions (their indices read, in cache by then if loaded before).

@@ -105,11 +105,14 @@ impl MeshBvh {
 }
 
 /// A tree for a new mesh: a gone mesh's to refit, or the one made for it (refitted or built),
-/// how it was built, and its cost then once it has been refitted (`Kept::built_cost`).
+/// how it was built, its cost then once it has been refitted (`Kept::built_cost`), the shape
+/// it fits once that has been asked (`Kept::shape`), and whether it came from a gone mesh.
 struct Tree {
     bvh: MeshBvh,
     quality: Quality,
     built_cost: Option<f32>,
+    shape: Option<[i64; 4]>,
+    refitted: bool,
 }
 
 /// What `Meshes::prepare` made: how many trees it built fast (`bvh_choice`), how many it
@@ -143,6 +146,9 @@ struct Kept {
     frames: u32,
     /// The tree's cost when it was built (`TriBvh::cost`), once it has been refitted.
     built_cost: Option<f32>,
+    /// The mesh's `Mesh::shape_hash`, once its tree has been refitted (or kept) for it: the
+    /// next step's mesh of the same shape takes the tree as it is.
+    shape: Option<[i64; 4]>,
 }
 
 /// The BVHs of kept meshes (display lists, buffer objects, big client-array and immediate-mode
@@ -194,7 +200,7 @@ impl Meshes {
                     .position(|(_, k)| k.triangles == m.triangles.len() && Arc::strong_count(&k.bvh) == 1)?;
                 let (_, k) = gone.remove(at);
                 let bvh = Arc::into_inner(k.bvh)?;
-                Some(Tree { bvh, quality: k.quality, built_cost: k.built_cost })
+                Some(Tree { bvh, quality: k.quality, built_cost: k.built_cost, shape: k.shape, refitted: false })
             })
             .collect();
         drop(gone);
@@ -204,24 +210,30 @@ impl Meshes {
             .par_iter()
             .zip(donors.par_iter_mut())
             .map(|(m, donor)| {
-                if let Some(Tree { bvh, quality, built_cost }) = donor.take() {
+                if let Some(Tree { bvh, quality, built_cost, shape, .. }) = donor.take() {
+                    // The same positions and triangles again: the tree as it is. (Reading them
+                    // in order for the hash is a fraction of a refit's reads in tree order.)
+                    let now = m.shape_hash();
+                    if shape == Some(now) {
+                        return (*m, Tree { bvh, quality, built_cost, shape, refitted: true });
+                    }
                     if let Some((bvh, built_cost)) = refitted(bvh, m, built_cost) {
-                        return (*m, Tree { bvh, quality, built_cost: Some(built_cost) });
+                        let shape = Some(now);
+                        return (*m, Tree { bvh, quality, built_cost: Some(built_cost), shape, refitted: true });
                     }
                 }
                 let quality = quality(m);
-                (*m, Tree { bvh: MeshBvh::build(m, quality), quality, built_cost: None })
+                (*m, Tree { bvh: MeshBvh::build(m, quality), quality, built_cost: None, shape: None, refitted: false })
             })
             .collect();
-        // A refitted tree carries the cost it was built at; a tree built now has none yet.
         let made = Made {
-            fast_builds: bvhs.iter().filter(|(_, t)| t.quality == Quality::Fast && t.built_cost.is_none()).count()
-                as u32,
-            refits: bvhs.iter().filter(|(_, t)| t.built_cost.is_some()).count() as u32,
+            fast_builds: bvhs.iter().filter(|(_, t)| t.quality == Quality::Fast && !t.refitted).count() as u32,
+            refits: bvhs.iter().filter(|(_, t)| t.refitted).count() as u32,
         };
-        for (m, Tree { bvh, quality, built_cost }) in bvhs {
+        for (m, Tree { bvh, quality, built_cost, shape, .. }) in bvhs {
             let triangles = m.triangles.len();
-            let kept = Kept { mesh: Arc::downgrade(m), bvh: Arc::new(bvh), quality, triangles, frames: 0, built_cost };
+            let bvh = Arc::new(bvh);
+            let kept = Kept { mesh: Arc::downgrade(m), bvh, quality, triangles, frames: 0, built_cost, shape };
             self.built.insert(m.id, kept);
         }
         let mut drawn: Vec<&Arc<Mesh>> = frame.instances.iter().map(|i| &i.mesh).collect();
@@ -244,7 +256,7 @@ impl Meshes {
             kept_now.par_iter().map(|m| (m.id, Arc::new(MeshBvh::build(m, Quality::Sah)))).collect();
         for (id, bvh) in rebuilt {
             let kept = self.built.get_mut(&id).expect("drawn above");
-            (kept.bvh, kept.quality) = (bvh, Quality::Sah);
+            (kept.bvh, kept.quality, kept.built_cost) = (bvh, Quality::Sah, None);
         }
         (frame.instances.iter().map(|i| self.built[&i.mesh.id].bvh.clone()).collect(), made)
     }
