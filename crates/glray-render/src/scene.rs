@@ -864,6 +864,10 @@ mod tests {
         let mut step = |mesh: Arc<Mesh>, choice: BvhBuild| {
             let frame = frame_of(&mesh);
             let refits = Scene::build(&frame, &mut meshes, choice, 0.0).refits;
+            // A refitted tree knows the shape it fits: the next step of the same shape takes it.
+            let shape = meshes.built[&mesh.id].shape;
+            assert_eq!(shape.is_some(), refits == 1);
+            assert!(shape.is_none_or(|s| s == mesh.shape_hash()));
             // The mesh goes, as capture drops a time step's buffers for the next one's.
             drop(frame);
             drop(mesh);
