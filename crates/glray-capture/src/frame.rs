@@ -388,18 +388,7 @@ impl Frame {
             return;
         }
         let Some(mesh) = self.instances.get(id.instance as usize).map(|i| &i.mesh) else { return };
-        let Some(corners) = mesh.triangles.get(id.index as usize) else { return };
-        // A sequential mesh's corners need no indices: its vertices go on the first call.
-        let corners = match (mesh.is_sequential(), vertices) {
-            (false, false) => {
-                prefetch::line(corners);
-                return;
-            }
-            (false, true) => *corners,
-            (true, false) => mesh.corner_indices(id.index as usize),
-            (true, true) => return,
-        };
-        for v in corners {
+        mesh.load_ahead(id.index as usize, vertices, |v| {
             if let Some(p) = mesh.positions.get(v as usize).filter(|_| positions) {
                 prefetch::line(p);
             }
@@ -409,7 +398,7 @@ impl Frame {
             if let Some(c) = mesh.colors.value(v) {
                 prefetch::line(c);
             }
-        }
+        });
     }
 
     /// Every triangle drawn, instances' made flat: for dumps and tests.

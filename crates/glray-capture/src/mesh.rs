@@ -255,26 +255,28 @@ impl Mesh {
         [a, b, c, d]
     }
 
-    /// Starts loading what `corners(index)` reads: with `corners` false, the triangle's vertex
-    /// indices (a sequential mesh has none to read: its corners then), with true its corners'
-    /// positions (their indices read, in cache by then if loaded before).
+    /// Starts loading what reading triangle `index`'s corners needs, in two calls a few
+    /// triangles apart: with `corners` false, its vertex indices (a sequential mesh has none
+    /// to read: its corners go then, through `vertex`), with true its corners (`vertex` of
+    /// each one's index, in cache by then if loaded before).
+    #[inline]
+    pub fn load_ahead(&self, index: usize, corners: bool, vertex: impl FnMut(u32)) {
+        let Some(indices) = self.triangles.get(index) else { return };
+        match (self.sequential, corners) {
+            (false, false) => glray_core::prefetch::line(indices),
+            (true, true) => {}
+            (false, true) | (true, false) => self.corner_indices(index).into_iter().for_each(vertex),
+        }
+    }
+
+    /// `load_ahead` of what `corners(index)` reads: the indices, then the positions.
     #[inline]
     pub fn load_corners(&self, index: usize, corners: bool) {
-        if index >= self.triangles.len() {
-            return;
-        }
-        match (self.sequential, corners) {
-            (false, false) => glray_core::prefetch::line(&self.triangles[index]),
-            // A sequential mesh has no indices to read: its corners go with the first call.
-            (true, true) => {}
-            (false, true) | (true, false) => {
-                for i in self.corner_indices(index) {
-                    if let Some(p) = self.positions.get(i as usize) {
-                        glray_core::prefetch::line(p);
-                    }
-                }
+        self.load_ahead(index, corners, |v| {
+            if let Some(p) = self.positions.get(v as usize) {
+                glray_core::prefetch::line(p);
             }
-        }
+        });
     }
 
     /// Position `i` with its w.

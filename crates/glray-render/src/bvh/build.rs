@@ -49,8 +49,8 @@ impl Record {
     }
 }
 
-/// A box (grown from records here, from corners in `morton`).
-#[derive(Clone, Copy)]
+/// A box (grown from records here, from corners in `morton` and `refit`).
+#[derive(Clone, Copy, PartialEq)]
 pub(super) struct Bounds {
     pub lo: Vec3A,
     pub hi: Vec3A,
@@ -81,7 +81,7 @@ impl Bounds {
         Bounds { lo: self.lo.min(o.lo), hi: self.hi.max(o.hi) }
     }
 
-    fn half_area(&self) -> f32 {
+    pub fn half_area(&self) -> f32 {
         let d = (self.hi - self.lo).max(Vec3A::ZERO);
         d.x * d.y + d.y * d.z + d.z * d.x
     }

@@ -12,26 +12,13 @@
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
+use super::build::Bounds;
 use super::{leaf_blocks, Node, Tri4, TriBvh, EMPTY, LEAF, WIDTH};
 
 /// Blocks refitted in a run on one thread.
 const RUN: usize = 4096;
 /// How many blocks ahead a block's corners are loaded (its indices twice as far ahead).
 const AHEAD: usize = 8;
-
-/// A box: minimum and maximum corners.
-type Bounds = (Vec3A, Vec3A);
-
-const NOTHING: Bounds = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
-
-fn union(a: Bounds, b: Bounds) -> Bounds {
-    (a.0.min(b.0), a.1.max(b.1))
-}
-
-fn area((lo, hi): Bounds) -> f32 {
-    let d = (hi - lo).max(Vec3A::ZERO);
-    2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
-}
 
 /// A block made again: its triangles' box, how many triangles it holds, whether any moved.
 #[derive(Clone, Copy)]
@@ -87,7 +74,7 @@ impl TriBvh {
         }
         let leaf_bounds = |c: u32| {
             let (first, n) = leaf_blocks(c);
-            blocks[first..first + n].iter().flatten().fold(NOTHING, |b, k| union(b, k.bounds))
+            blocks[first..first + n].iter().flatten().fold(Bounds::EMPTY, |b, k| b.union(k.bounds))
         };
         // The nodes level by level from the root, then their boxes from the deepest level up:
         // each level's in parallel, from the level below's.
@@ -103,7 +90,7 @@ impl TriBvh {
             }
             levels.push(next);
         }
-        let mut node_bounds = vec![NOTHING; self.nodes.len()];
+        let mut node_bounds = vec![Bounds::EMPTY; self.nodes.len()];
         let child_bounds = |node_bounds: &[Bounds], c: u32| {
             if c & LEAF != 0 {
                 leaf_bounds(c)
@@ -116,7 +103,7 @@ impl TriBvh {
                 .par_iter()
                 .map(|&n| {
                     let children = self.nodes[n as usize].child.iter().take_while(|&&c| c != EMPTY);
-                    children.fold(NOTHING, |b, &c| union(b, child_bounds(&node_bounds, c)))
+                    children.fold(Bounds::EMPTY, |b, &c| b.union(child_bounds(&node_bounds, c)))
                 })
                 .collect();
             for (&n, b) in level.iter().zip(made) {
@@ -125,13 +112,13 @@ impl TriBvh {
         }
         // Each node made again over its children's new boxes, its children where they were.
         self.nodes.par_iter_mut().enumerate().for_each(|(n, node)| {
-            if node_bounds[n] == NOTHING {
+            if node_bounds[n] == Bounds::EMPTY {
                 // Not reached from the root: nothing walks it.
                 return;
             }
             let child = node.child;
             let used = child.iter().take_while(|&&c| c != EMPTY);
-            *node = Node::new(used.map(|&c| child_bounds(&node_bounds, c)));
+            *node = Node::new(used.map(|&c| child_bounds(&node_bounds, c)).map(|b| (b.lo, b.hi)));
             node.child = child;
         });
         Some((self, true))
@@ -147,11 +134,11 @@ impl TriBvh {
         }
         let child_box = |node: &Node, k: usize| -> Bounds {
             let corner = |side: usize| Vec3A::from_array(std::array::from_fn(|axis| node.bound(side, axis, k)));
-            (corner(0), corner(1))
+            Bounds { lo: corner(0), hi: corner(1) }
         };
         let root = &self.nodes[self.root as usize];
         let used = |node: &Node| (0..WIDTH).take_while(|&k| node.child[k] != EMPTY).collect::<Vec<_>>();
-        let whole = area(used(root).into_iter().fold(NOTHING, |b, k| union(b, child_box(root, k))));
+        let whole = used(root).into_iter().fold(Bounds::EMPTY, |b, k| b.union(child_box(root, k))).half_area();
         if whole <= 0.0 || !whole.is_finite() {
             return 1.0;
         }
@@ -164,7 +151,7 @@ impl TriBvh {
                     .map(|k| {
                         let c = node.child[k];
                         let weight = if c & LEAF != 0 { leaf_blocks(c).1 as f64 } else { 1.0 };
-                        weight * area(child_box(node, k)) as f64
+                        weight * child_box(node, k).half_area() as f64
                     })
                     .sum::<f64>()
             })
@@ -178,7 +165,7 @@ impl TriBvh {
 fn refit_block(tri: &mut Tri4, count: usize, corners: &(impl Fn(usize) -> [Vec3; 3] + Sync)) -> Option<Block> {
     let id = tri.id;
     let ids = &id[..id.iter().take_while(|&&i| i != EMPTY).count()];
-    let mut bounds = NOTHING;
+    let mut bounds = Bounds::EMPTY;
     for &i in ids {
         if i as usize >= count {
             return None;
@@ -187,7 +174,7 @@ fn refit_block(tri: &mut Tri4, count: usize, corners: &(impl Fn(usize) -> [Vec3;
             if !v.is_finite() {
                 return None;
             }
-            bounds = union(bounds, (v.into(), v.into()));
+            bounds = bounds.with(v);
         }
     }
     let made = Tri4::new(ids, |i| corners(i as usize));
