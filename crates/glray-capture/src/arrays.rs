@@ -3,6 +3,7 @@
 //! vertices for the vertex stage.
 
 use glam::DVec4;
+use glray_core::threads::{collect_pieces, fill_pieces, piece_of, Filler};
 use glray_core::trace::{array_kind, Value};
 
 use xxhash_rust::xxh3::xxh3_128;
@@ -82,28 +83,64 @@ impl<'a> Source<'a> {
 
     /// Elements `lo..=hi` as `fetch` gives them, each made into `T` as it is read (no array of
     /// doubles in between: at 10M triangles that was 160 MB per attribute, and most of an
-    /// indexed draw's capture); None when one is missing.
-    fn fetch_range<T>(&self, lo: u32, hi: u32, normalized: bool, make: impl Fn(DVec4) -> T) -> Option<Vec<T>> {
-        let mut out = Vec::with_capacity((hi - lo) as usize + 1);
-        if self.ty == args::GL_FLOAT && self.size >= 1 {
-            // Floats read as floats: the same values as through doubles, without the type's
-            // dispatch per element (floats are never normalised).
-            let n = self.size.min(4);
-            for i in lo..=hi {
-                let at = usize::try_from(u64::from(i).checked_sub(self.first)?).ok()?.checked_mul(self.stride)?;
-                let b = self.bytes.get(at..at.checked_add(4 * n)?)?;
-                let mut x = [0.0, 0.0, 0.0, 1.0];
-                for (c, v) in x.iter_mut().zip(b.chunks_exact(4)) {
-                    *c = f32::from_ne_bytes([v[0], v[1], v[2], v[3]]) as f64;
+    /// indexed draw's capture), in pieces on glray's threads; None when one is missing.
+    fn fetch_range<T: Send>(
+        &self,
+        lo: u32,
+        hi: u32,
+        normalized: bool,
+        make: impl Fn(DVec4) -> T + Sync,
+    ) -> Option<Vec<T>> {
+        let len = (hi - lo) as usize + 1;
+        let made = collect_pieces(len, piece_of::<T>(), |first, piece| {
+            let from = lo + first as u32;
+            let till = from + piece.room() as u32;
+            if self.ty == args::GL_FLOAT && self.size >= 1 {
+                // Floats read as floats: the same values as through doubles, without the
+                // type's dispatch per element (floats are never normalised).
+                let n = self.size.min(4);
+                for i in from..till {
+                    let Some(b) = self.element(i, 4 * n) else { return };
+                    let mut x = [0.0, 0.0, 0.0, 1.0];
+                    for (c, v) in x.iter_mut().zip(b.chunks_exact(4)) {
+                        *c = f32::from_ne_bytes([v[0], v[1], v[2], v[3]]) as f64;
+                    }
+                    piece.push(make(DVec4::from_array(x)));
                 }
-                out.push(make(DVec4::from_array(x)));
+                return;
             }
-            return Some(out);
+            for i in from..till {
+                let Some(v) = self.fetch(u64::from(i), normalized) else { return };
+                piece.push(make(v));
+            }
+        });
+        made.map(|(out, _)| out)
+    }
+
+    /// Elements `lo..=hi` as three floats each, as `fetch_range` gives them with `make` taking
+    /// x, y and z. Arrays of three or four floats (positions, normals: most big draws) are
+    /// read as floats straight into the vector, with no round trip through doubles (which
+    /// gives the same floats back).
+    fn vec3_range(&self, lo: u32, hi: u32, normalized: bool) -> Option<Vec<glam::Vec3>> {
+        if self.ty != args::GL_FLOAT || self.size < 3 {
+            return self.fetch_range(lo, hi, normalized, |v| v.truncate().as_vec3());
         }
-        for i in lo..=hi {
-            out.push(make(self.fetch(u64::from(i), normalized)?));
-        }
-        Some(out)
+        let made = collect_pieces((hi - lo) as usize + 1, piece_of::<glam::Vec3>(), |first, piece| {
+            let from = lo + first as u32;
+            for i in from..from + piece.room() as u32 {
+                let Some(b) = self.element(i, 12) else { return };
+                let f = |k: usize| f32::from_ne_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]);
+                piece.push(glam::Vec3::new(f(0), f(4), f(8)));
+            }
+        });
+        made.map(|(out, _)| out)
+    }
+
+    /// The `len` bytes of element `i`, if the array holds them.
+    #[inline]
+    fn element(&self, i: u32, len: usize) -> Option<&[u8]> {
+        let at = usize::try_from(u64::from(i).checked_sub(self.first)?).ok()?.checked_mul(self.stride)?;
+        self.bytes.get(at..at.checked_add(len)?)
     }
 }
 
@@ -137,6 +174,42 @@ fn index_args(op: Op) -> (usize, usize, usize) {
     } else {
         (1, 2, 3)
     }
+}
+
+/// The size of an index of GL type `ty`; None for a type that is not one.
+fn index_size(ty: u32) -> Option<usize> {
+    match ty {
+        GL_UNSIGNED_BYTE => Some(1),
+        GL_UNSIGNED_SHORT => Some(2),
+        GL_UNSIGNED_INT => Some(4),
+        _ => None,
+    }
+}
+
+/// The index of `SIZE` bytes (1, 2 or 4) at the start of `b`, which holds it.
+#[inline(always)]
+fn index_at<const SIZE: usize>(b: &[u8]) -> u32 {
+    match SIZE {
+        1 => u32::from(b[0]),
+        2 => u32::from(u16::from_ne_bytes([b[0], b[1]])),
+        _ => u32::from_ne_bytes([b[0], b[1], b[2], b[3]]),
+    }
+}
+
+/// The triangles a piece takes, read from the indices of `SIZE` bytes at the start of `bytes`
+/// (which holds them all), and the lowest and highest index among them.
+fn read_triangles<const SIZE: usize>(bytes: &[u8], triangles: &mut Filler<'_, [u32; 3]>) -> (u32, u32) {
+    // A lowest and highest index per corner: three chains of one comparison a triangle each,
+    // not one chain of three (which left this loop waiting on its own comparisons).
+    let (mut lo, mut hi) = ([u32::MAX; 3], [0; 3]);
+    for b in bytes.chunks_exact(3 * SIZE).take(triangles.room()) {
+        let t = [index_at::<SIZE>(b), index_at::<SIZE>(&b[SIZE..]), index_at::<SIZE>(&b[2 * SIZE..])];
+        for c in 0..3 {
+            (lo[c], hi[c]) = (lo[c].min(t[c]), hi[c].max(t[c]));
+        }
+        triangles.push(t);
+    }
+    (lo[0].min(lo[1]).min(lo[2]), hi[0].max(hi[1]).max(hi[2]))
 }
 
 /// Element `i` of each array (vertex, normal, colour, texture coordinates).
@@ -383,6 +456,19 @@ impl Context {
     /// The first `count` indices of type `ty` (fewer if the memory ends), from client memory or,
     /// with an element buffer bound, from that buffer at offset `v`.
     pub(crate) fn indices(&self, v: &Value, ty: u32, count: usize) -> Vec<u32> {
+        let bytes = self.index_bytes(v);
+        // Read by type, not element by element: an indexed draw of 10M triangles has 30M.
+        match index_size(ty) {
+            Some(1) => bytes.chunks_exact(1).take(count).map(index_at::<1>).collect(),
+            Some(2) => bytes.chunks_exact(2).take(count).map(index_at::<2>).collect(),
+            Some(_) => bytes.chunks_exact(4).take(count).map(index_at::<4>).collect(),
+            None => Vec::new(),
+        }
+    }
+
+    /// The memory a draw's indices `v` are read from: client memory recorded with the draw, or
+    /// the bound element buffer from the offset `v` gives.
+    fn index_bytes<'a>(&'a self, v: &'a Value) -> &'a [u8] {
         let (bytes, start): (&[u8], usize) = match v {
             // With an element buffer bound the pointer is an offset into it; offset 0 is a
             // null pointer, recorded as such.
@@ -396,18 +482,7 @@ impl Context {
             Value::Blob(b) => (b, 0),
             _ => (&[], 0),
         };
-        let bytes = bytes.get(start..).unwrap_or(&[]);
-        // Read by type, not element by element: an indexed draw of 10M triangles has 30M.
-        match ty {
-            GL_UNSIGNED_BYTE => bytes.iter().take(count).map(|&b| u32::from(b)).collect(),
-            GL_UNSIGNED_SHORT => {
-                bytes.chunks_exact(2).take(count).map(|c| u32::from(u16::from_ne_bytes([c[0], c[1]]))).collect()
-            }
-            GL_UNSIGNED_INT => {
-                bytes.chunks_exact(4).take(count).map(|c| u32::from_ne_bytes([c[0], c[1], c[2], c[3]])).collect()
-            }
-            _ => Vec::new(),
-        }
+        bytes.get(start..).unwrap_or(&[])
     }
 
     /// An indexed GL_TRIANGLES draw (glDrawElements, glDrawRangeElements) as an indexed mesh:
@@ -426,11 +501,44 @@ impl Context {
         if args::uint(a, 0) != GL_TRIANGLES || count < 3 {
             return None;
         }
-        let indices = self.indices(a.get(idx).unwrap_or(&Value::Null), args::uint(a, ty), count);
-        let (lo, hi) = indices.iter().fold((u32::MAX, 0), |(lo, hi), &i| (lo.min(i), hi.max(i)));
-        let n = (hi as usize).checked_sub(lo as usize)? + 1;
-        if n > 2 * indices.len() + 1024 {
+        let size = index_size(args::uint(a, ty))?;
+        let bytes = self.index_bytes(a.get(idx).unwrap_or(&Value::Null));
+        let count = count.min(bytes.len() / size);
+        if count == 0 {
             return None;
+        }
+        // The triangles read straight from the indices, with the range they span, in pieces
+        // on glray's threads: at 10M triangles these are 120 MB in and out, on the program's
+        // thread while the tracer's wait.
+        let (mut triangles, spans) = collect_pieces(count / 3, piece_of::<[u32; 3]>(), |first, piece| {
+            let from = &bytes[3 * size * first..];
+            match size {
+                1 => read_triangles::<1>(from, piece),
+                2 => read_triangles::<2>(from, piece),
+                _ => read_triangles::<4>(from, piece),
+            }
+        })?;
+        // A trailing index that makes no whole triangle still counts, as in the general path.
+        let index = |k: usize| match size {
+            1 => index_at::<1>(&bytes[k..]),
+            2 => index_at::<2>(&bytes[2 * k..]),
+            _ => index_at::<4>(&bytes[4 * k..]),
+        };
+        let trailing = (3 * triangles.len()..count).map(index);
+        let (lo, hi) = spans
+            .into_iter()
+            .chain(trailing.map(|i| (i, i)))
+            .fold((u32::MAX, 0), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)));
+        let n = (hi as usize).checked_sub(lo as usize)? + 1;
+        if n > 2 * count + 1024 {
+            return None;
+        }
+        if lo != 0 {
+            fill_pieces(&mut triangles, piece_of::<[u32; 3]>(), |_, piece| {
+                for t in piece {
+                    *t = t.map(|i| i - lo);
+                }
+            });
         }
         let sources = self.sources();
         let range = |k: usize, normalized: bool| -> Option<Option<Vec<glam::Vec4>>> {
@@ -444,20 +552,19 @@ impl Context {
         let (positions, ws) = if position.size >= 4 {
             position.fetch_range(lo, hi, false, |p| (p.truncate().as_vec3(), p.w as f32))?.into_iter().unzip()
         } else {
-            (position.fetch_range(lo, hi, false, |p| p.truncate().as_vec3())?, Vec::new())
+            (position.vec3_range(lo, hi, false)?, Vec::new())
         };
         let normals = match &sources[1] {
-            Some(s) => Some(s.fetch_range(lo, hi, true, |n| n.truncate().as_vec3())?),
+            Some(s) => Some(s.vec3_range(lo, hi, true)?),
             None => None,
         };
         let colors = range(2, true)?;
         let texcoords = range(3, false)?;
         // What the last index leaves current, as the general path's last vertex does (a
         // trailing index that makes no whole triangle included), exactly as given.
-        let last = u64::from(indices[indices.len() - 1]);
+        let last = u64::from(index(count - 1));
         let current = |k: usize, normalized: bool| sources[k].as_ref().and_then(|s| s.fetch(last, normalized));
         let end = (current(1, true).map(|n| n.truncate()), current(2, true), current(3, false));
-        let triangles = indices.chunks_exact(3).map(|t| [t[0] - lo, t[1] - lo, t[2] - lo]).collect();
         Some(Mesh::from_arrays(positions, ws, normals, colors, texcoords, triangles, end))
     }
 

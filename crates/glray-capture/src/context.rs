@@ -8,6 +8,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use glam::{DMat3, DMat4, DVec3, DVec4, Vec4};
+use glray_core::threads::copy_of;
 use glray_core::trace::{ArrayData, Value};
 
 use crate::args::{self, GL_DOUBLE, GL_FLOAT, GL_INT, GL_UNSIGNED_INT};
@@ -878,7 +879,7 @@ impl Context {
             Op::BufferData => {
                 if let Some(name) = self.bound_buffer(args::uint(a, 0)) {
                     let size = args::int(a, 1).max(0) as usize;
-                    let mut data = args::bytes(a, 2).to_vec();
+                    let mut data = copy_of(args::bytes(a, 2));
                     data.resize(size.min(1 << 31), 0);
                     self.shared.buffers.insert(name, data);
                     self.buffer_changed(name);
@@ -1749,6 +1750,66 @@ mod tests {
         // draw here: the last index read, whole triangle or not).
         let last = indices[indices.len() - 1] as usize;
         assert_eq!(c.imm.current.color, Vec4::from_slice(&colors[4 * last..4 * last + 4]).as_dvec4());
+    }
+
+    #[test]
+    fn a_big_indexed_draw_is_read_in_pieces_as_a_small_one_would_be() {
+        // 400,000 triangles over as many vertices from index 7 on (more than one piece of the
+        // threads' share-out each), and a trailing index below them: triangles, positions,
+        // normals, colours, the provoking corners and the box as read one by one, with and
+        // without glray's threads.
+        let check = || {
+            let mut c = context();
+            let (n, first) = (400_000u32, 7u32);
+            let value = |v: u32, k: u32| ((v * 7 + k * 13) % 1000) as f32 / 100.0 - 5.0 + k as f32;
+            let positions: Vec<f32> = (0..n + first).flat_map(|v| [value(v, 0), value(v, 1), value(v, 2)]).collect();
+            let normals: Vec<f32> = (0..n + first).flat_map(|v| [value(v, 3), 0.5, value(v, 4)]).collect();
+            let colors: Vec<f32> = (0..n + first).flat_map(|v| [value(v, 5), value(v, 6), 0.25, 1.0]).collect();
+            let mut indices: Vec<u32> = (0..1_200_000u32).map(|k| first + (k * 7919) % n).collect();
+            indices.push(first - 1); // not a whole triangle, and the lowest index
+            let (p, q, r) = (f32s(&positions), f32s(&normals), f32s(&colors));
+            let index_bytes: Vec<u8> = indices.iter().flat_map(|v| v.to_ne_bytes()).collect();
+            call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(1)]);
+            call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(p.len() as i64), Value::Blob(&p), i(0x88E4)]);
+            call(&mut c, "glVertexPointer", &[i(3), i(0x1406), i(0), Value::Null]);
+            call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(2)]);
+            call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(q.len() as i64), Value::Blob(&q), i(0x88E4)]);
+            call(&mut c, "glNormalPointer", &[i(0x1406), i(0), Value::Null]);
+            call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(4)]);
+            call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(r.len() as i64), Value::Blob(&r), i(0x88E4)]);
+            call(&mut c, "glColorPointer", &[i(4), i(0x1406), i(0), Value::Null]);
+            call(&mut c, "glEnableClientState", &[i(0x8076)]); // GL_COLOR_ARRAY
+            call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+            call(&mut c, "glEnableClientState", &[i(0x8075)]); // GL_NORMAL_ARRAY
+            call(&mut c, "glBindBuffer", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(3)]);
+            let size = index_bytes.len() as i64;
+            call(
+                &mut c,
+                "glBufferData",
+                &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(size), Value::Blob(&index_bytes), i(0x88E4)],
+            );
+            call(&mut c, "glDrawElements", &[i(4), i(indices.len() as i64), i(0x1405), Value::Null]);
+            assert_eq!(c.errors.take(), 0);
+            let frame = c.frame();
+            let mesh = &frame.instances[0].mesh;
+            let base = first - 1;
+            let triangles: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| t[k] - base)).collect();
+            assert!(mesh.triangles == triangles, "triangles, less the lowest index");
+            assert_eq!(mesh.provoking, triangles.iter().map(|t| t[2]).collect::<Vec<_>>());
+            let at = |a: &[f32], v: u32| Vec3::from_slice(&a[3 * (v + base) as usize..]);
+            assert_eq!(mesh.vertex_count(), n + 1);
+            assert!((0..=n).all(|v| mesh.positions[v as usize] == at(&positions, v)), "positions");
+            assert!((0..=n).all(|v| mesh.normals.at(v) == Some(at(&normals, v))), "normals");
+            let color = |v: u32| Vec4::from_slice(&colors[4 * (v + base) as usize..]);
+            assert!((0..=n).all(|v| mesh.colors.at(v) == Some(color(v))), "colours");
+            let (lo, hi) = (0..=n).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(at(&positions, v)), hi.max(at(&positions, v)))
+            });
+            assert_eq!((mesh.min, mesh.max), (lo, hi));
+        };
+        check();
+        glray_core::threads::publish(rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap());
+        check();
     }
 
     #[test]

@@ -12,6 +12,7 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::{DVec3, DVec4, Vec3, Vec4};
+use glray_core::threads::{collect_pieces, map_pieces, piece_of};
 
 use crate::primitive::{assemble, QuadSplit};
 use crate::vertex::Given;
@@ -123,9 +124,26 @@ fn sequential(triangles: &[[u32; 3]]) -> bool {
     })
 }
 
-/// The box around `positions` (empty: min above max).
+/// The box around `positions` (empty: min above max), a big mesh's in pieces on glray's threads.
 fn bounds(positions: &[Vec3]) -> (Vec3, Vec3) {
-    positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
+    let fold =
+        |ps: &[Vec3]| ps.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let piece = piece_of::<Vec3>();
+    if positions.len() <= piece {
+        return fold(positions);
+    }
+    let boxes = map_pieces(positions, piece, fold);
+    boxes.into_iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)))
+}
+
+/// Each triangle's provoking vertex, its last (GL_TRIANGLES), in pieces on glray's threads.
+fn last_corners(triangles: &[[u32; 3]]) -> Vec<u32> {
+    let made = collect_pieces(triangles.len(), piece_of::<[u32; 3]>(), |first, piece| {
+        for t in &triangles[first..first + piece.room()] {
+            piece.push(t[2]);
+        }
+    });
+    made.map_or_else(|| triangles.iter().map(|t| t[2]).collect(), |(provoking, _)| provoking)
 }
 
 /// A new mesh's id.
@@ -165,7 +183,7 @@ impl Mesh {
         Mesh {
             id: next_id(),
             sequential: sequential(&triangles),
-            provoking: triangles.iter().map(|t| t[2]).collect(),
+            provoking: last_corners(&triangles),
             triangles,
             positions,
             normals,
