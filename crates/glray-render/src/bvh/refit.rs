@@ -76,14 +76,14 @@ impl TriBvh {
             let (first, n) = leaf_blocks(c);
             blocks[first..first + n].iter().flatten().fold(Bounds::EMPTY, |b, k| b.union(k.bounds))
         };
-        // The nodes level by level from the root, then their boxes from the deepest level up:
-        // each level's in parallel, from the level below's.
+        // The nodes level by level from the root (each level found in parallel: one thread
+        // took 19 ms at 10M), then their boxes from the deepest level up: each level's in
+        // parallel, from the level below's.
         let mut levels = vec![vec![self.root]];
         loop {
             let next: Vec<u32> = levels[levels.len() - 1]
-                .iter()
-                .flat_map(|&n| self.nodes[n as usize].child)
-                .filter(|&c| c != EMPTY && c & LEAF == 0)
+                .par_iter()
+                .flat_map_iter(|&n| self.nodes[n as usize].child.into_iter().filter(|&c| c != EMPTY && c & LEAF == 0))
                 .collect();
             if next.is_empty() {
                 break;
