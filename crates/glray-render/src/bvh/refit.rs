@@ -77,8 +77,7 @@ impl TriBvh {
             blocks[first..first + n].iter().flatten().fold(Bounds::EMPTY, |b, k| b.union(k.bounds))
         };
         // The nodes level by level from the root (each level found in parallel: one thread
-        // took 19 ms at 10M), then their boxes from the deepest level up: each level's in
-        // parallel, from the level below's.
+        // took 19 ms at 10M).
         let mut levels = vec![vec![self.root]];
         loop {
             let next: Vec<u32> = levels[levels.len() - 1]
@@ -90,37 +89,46 @@ impl TriBvh {
             }
             levels.push(next);
         }
-        let mut node_bounds = vec![Bounds::EMPTY; self.nodes.len()];
-        let child_bounds = |node_bounds: &[Bounds], c: u32| {
-            if c & LEAF != 0 {
-                leaf_bounds(c)
-            } else {
-                node_bounds[c as usize]
-            }
-        };
-        for level in levels.iter().rev() {
-            let made: Vec<Bounds> = level
-                .par_iter()
-                .map(|&n| {
-                    let children = self.nodes[n as usize].child.iter().take_while(|&&c| c != EMPTY);
-                    children.fold(Bounds::EMPTY, |b, &c| b.union(child_bounds(&node_bounds, c)))
-                })
-                .collect();
-            for (&n, b) in level.iter().zip(made) {
-                node_bounds[n as usize] = b;
+        // No node twice among the levels (a tree's nodes each have one parent): each is made by
+        // one thread alone below.
+        let mut seen = vec![false; self.nodes.len()];
+        for &n in levels.iter().flatten() {
+            if std::mem::replace(&mut seen[n as usize], true) {
+                return None;
             }
         }
-        // Each node made again over its children's new boxes, its children where they were.
-        self.nodes.par_iter_mut().enumerate().for_each(|(n, node)| {
-            if node_bounds[n] == Bounds::EMPTY {
-                // Not reached from the root: nothing walks it.
-                return;
-            }
-            let child = node.child;
-            let used = child.iter().take_while(|&&c| c != EMPTY);
-            *node = Node::new(used.map(|&c| child_bounds(&node_bounds, c)).map(|b| (b.lo, b.hi)));
-            node.child = child;
-        });
+        drop(seen);
+        // Each level from the deepest up, in parallel: a node made again over its children's
+        // new boxes (a leaf's from its blocks, an inner child's worked out with the level
+        // below), its children where they were, and its own box kept for the level above.
+        // One pass: a pass for the boxes and then one for the nodes read every leaf's blocks
+        // twice (the two were ~45% of a deformed 10M step's refit).
+        let mut node_bounds = vec![Bounds::EMPTY; self.nodes.len()];
+        let nodes = Slots::new(&mut self.nodes);
+        let boxes = Slots::new(&mut node_bounds);
+        for level in levels.iter().rev() {
+            level.par_iter().for_each(|&n| {
+                let n = n as usize;
+                // SAFETY (the three blocks below): node n is this level's once (checked
+                // above), so this thread alone reads and writes its slots now; its children's
+                // boxes were written by the level below, whose threads have all finished
+                // (rayon's `for_each` returns after they have), and nothing writes them now.
+                let child = unsafe { nodes.get(n) }.child;
+                let used = child.iter().take_while(|&&c| c != EMPTY);
+                let child_box = |c: u32| if c & LEAF != 0 { leaf_bounds(c) } else { unsafe { boxes.get(c as usize) } };
+                let mut whole = Bounds::EMPTY;
+                let mut node = Node::new(used.map(|&c| {
+                    let b = child_box(c);
+                    whole = whole.union(b);
+                    (b.lo, b.hi)
+                }));
+                node.child = child;
+                unsafe {
+                    nodes.set(n, node);
+                    boxes.set(n, whole);
+                }
+            });
+        }
         Some((self, true))
     }
 
@@ -157,6 +165,46 @@ impl TriBvh {
             })
             .sum();
         (sum / whole as f64) as f32
+    }
+}
+
+/// The slots of a slice that the threads of one refit level read and write at once, each
+/// thread only its own nodes' (the levels hold each node once) and the level below's, which
+/// nobody writes any more. A slice cannot be lent to threads in pieces that are not ranges:
+/// a level's nodes lie anywhere in the tree's array.
+struct Slots<'a, T> {
+    at: *mut T,
+    len: usize,
+    _lent: std::marker::PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: the slots are `T`s sent between threads; who touches which is `get`'s and `set`'s
+// callers' promise.
+unsafe impl<T: Send> Sync for Slots<'_, T> {}
+
+impl<'a, T: Copy> Slots<'a, T> {
+    fn new(slice: &'a mut [T]) -> Slots<'a, T> {
+        Slots { at: slice.as_mut_ptr(), len: slice.len(), _lent: std::marker::PhantomData }
+    }
+
+    /// Slot `i`. Panics past the end.
+    ///
+    /// # Safety
+    /// No other thread writes slot `i` meanwhile.
+    unsafe fn get(&self, i: usize) -> T {
+        assert!(i < self.len);
+        // SAFETY: within the slice, which `'a` keeps lent; no write races this read (above).
+        unsafe { self.at.add(i).read() }
+    }
+
+    /// Puts `value` in slot `i`. Panics past the end.
+    ///
+    /// # Safety
+    /// No other thread reads or writes slot `i` meanwhile.
+    unsafe fn set(&self, i: usize, value: T) {
+        assert!(i < self.len);
+        // SAFETY: within the slice; this thread alone touches slot `i` now (above).
+        unsafe { self.at.add(i).write(value) }
     }
 }
 
