@@ -197,19 +197,11 @@ fn index_at<const SIZE: usize>(b: &[u8]) -> u32 {
 }
 
 /// The triangles a piece takes, read from the indices of `SIZE` bytes at the start of `bytes`
-/// (which holds them all), and the lowest and highest index among them.
-fn read_triangles<const SIZE: usize>(bytes: &[u8], triangles: &mut Filler<'_, [u32; 3]>) -> (u32, u32) {
-    // A lowest and highest index per corner: three chains of one comparison a triangle each,
-    // not one chain of three (which left this loop waiting on its own comparisons).
-    let (mut lo, mut hi) = ([u32::MAX; 3], [0; 3]);
+/// (which holds them all).
+fn read_triangles<const SIZE: usize>(bytes: &[u8], triangles: &mut Filler<'_, [u32; 3]>) {
     for b in bytes.chunks_exact(3 * SIZE).take(triangles.room()) {
-        let t = [index_at::<SIZE>(b), index_at::<SIZE>(&b[SIZE..]), index_at::<SIZE>(&b[2 * SIZE..])];
-        for c in 0..3 {
-            (lo[c], hi[c]) = (lo[c].min(t[c]), hi[c].max(t[c]));
-        }
-        triangles.push(t);
+        triangles.push([index_at::<SIZE>(b), index_at::<SIZE>(&b[SIZE..]), index_at::<SIZE>(&b[2 * SIZE..])]);
     }
-    (lo[0].min(lo[1]).min(lo[2]), hi[0].max(hi[1]).max(hi[2]))
 }
 
 /// Element `i` of each array (vertex, normal, colour, texture coordinates).
@@ -507,10 +499,12 @@ impl Context {
         if count == 0 {
             return None;
         }
-        // The triangles read straight from the indices, with the range they span, in pieces
-        // on glray's threads: at 10M triangles these are 120 MB in and out, on the program's
-        // thread while the tracer's wait.
-        let (mut triangles, spans) = collect_pieces(count / 3, piece_of::<[u32; 3]>(), |first, piece| {
+        // The indices' range (every one of them, a trailing index that makes no whole triangle
+        // included, as in the general path), then the triangles read straight from them, both
+        // in pieces on glray's threads: at 10M triangles these are 120 MB in and out, on the
+        // program's thread while the tracer's wait.
+        let (lo, hi) = glray_core::indices::min_max(&bytes[..count * size], size)?;
+        let (mut triangles, _) = collect_pieces(count / 3, piece_of::<[u32; 3]>(), |first, piece| {
             let from = &bytes[3 * size * first..];
             match size {
                 1 => read_triangles::<1>(from, piece),
@@ -518,17 +512,6 @@ impl Context {
                 _ => read_triangles::<4>(from, piece),
             }
         })?;
-        // A trailing index that makes no whole triangle still counts, as in the general path.
-        let index = |k: usize| match size {
-            1 => index_at::<1>(&bytes[k..]),
-            2 => index_at::<2>(&bytes[2 * k..]),
-            _ => index_at::<4>(&bytes[4 * k..]),
-        };
-        let trailing = (3 * triangles.len()..count).map(index);
-        let (lo, hi) = spans
-            .into_iter()
-            .chain(trailing.map(|i| (i, i)))
-            .fold((u32::MAX, 0), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)));
         let n = (hi as usize).checked_sub(lo as usize)? + 1;
         if n > 2 * count + 1024 {
             return None;
@@ -562,7 +545,12 @@ impl Context {
         let texcoords = range(3, false)?;
         // What the last index leaves current, as the general path's last vertex does (a
         // trailing index that makes no whole triangle included), exactly as given.
-        let last = u64::from(index(count - 1));
+        let last_at = &bytes[(count - 1) * size..];
+        let last = u64::from(match size {
+            1 => index_at::<1>(last_at),
+            2 => index_at::<2>(last_at),
+            _ => index_at::<4>(last_at),
+        });
         let current = |k: usize, normalized: bool| sources[k].as_ref().and_then(|s| s.fetch(last, normalized));
         let end = (current(1, true).map(|n| n.truncate()), current(2, true), current(3, false));
         Some(Mesh::from_arrays(positions, ws, normals, colors, texcoords, triangles, end))
