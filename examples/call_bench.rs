@@ -12,6 +12,7 @@ mod gl;
 mod osmesa;
 
 use gl::*;
+use glray_gl::{GL_COMPILE, GL_DEPTH_TEST, GL_POINTS, GL_VIEWPORT};
 use std::time::Instant;
 
 extern "C" {

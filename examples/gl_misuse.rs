@@ -16,6 +16,10 @@ mod osmesa;
 
 use egl::{eglGetError, eglGetProcAddress, eglMakeCurrent};
 use gl::*;
+use glray_gl::{
+    GL_COLOR_BUFFER_BIT, GL_COMPILE, GL_DEPTH_BUFFER_BIT, GL_FLOAT, GL_MODELVIEW, GL_TRIANGLES, GL_UNSIGNED_BYTE,
+    GL_VERSION, GL_VIEWPORT,
+};
 use osmesa::{OSMesaGetCurrentContext, OSMesaGetProcAddress, OSMesaMakeCurrent};
 use std::ffi::CStr;
 

@@ -9,6 +9,7 @@ mod gl;
 #[path = "common/scene.rs"]
 mod scene;
 
+use glray_gl::{GLX_DEPTH_SIZE, GLX_DOUBLEBUFFER, GLX_RED_SIZE, GLX_RGBA};
 use std::ffi::c_void;
 use x11::{glx, xlib};
 
@@ -24,7 +25,7 @@ fn main() {
             std::process::exit(1);
         }
         let screen = xlib::XDefaultScreen(dpy);
-        let mut attrs = [glx::GLX_RGBA, glx::GLX_DOUBLEBUFFER, glx::GLX_DEPTH_SIZE, 16, glx::GLX_RED_SIZE, 8, 0];
+        let mut attrs = [GLX_RGBA, GLX_DOUBLEBUFFER, GLX_DEPTH_SIZE, 16, GLX_RED_SIZE, 8, 0];
         let vi = glx::glXChooseVisual(dpy, screen, attrs.as_mut_ptr());
         if vi.is_null() {
             eprintln!("glx_scene: no RGBA double-buffered visual");

@@ -37,6 +37,18 @@ pub enum ListRule {
     NotGl,
 }
 
+/// Where a command ends a frame, or draws over it or reads it (classes.txt's `ends=`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ends {
+    No,
+    Swap,
+    Finish,
+    Flush,
+    ReadPixels,
+    /// Draws over the frame or reads it (glBitmap, glDrawPixels, copies into a texture).
+    Raster,
+}
+
 #[derive(Debug)]
 pub struct CommandInfo {
     pub name: &'static CStr,
@@ -45,6 +57,9 @@ pub struct CommandInfo {
     pub list: ListRule,
     /// The export calls a glray handler rather than the real function directly.
     pub handled: bool,
+    /// Geometry glray takes from the real GL while it ray traces (classes.txt's `taken`).
+    pub taken: bool,
+    pub ends: Ends,
 }
 
 include!(concat!(env!("OUT_DIR"), "/commands.rs"));

@@ -2,6 +2,7 @@
 //! profile), asked once when it is made current. Capture and recording follow fixed-function GL,
 //! which core profiles do not have; presenting a frame needs a way the context supports.
 
+use glray_gl::{GL_CONTEXT_CORE_PROFILE_BIT, GL_CONTEXT_PROFILE_MASK, GL_EXTENSIONS, GL_NUM_EXTENSIONS, GL_VERSION};
 use std::cell::Cell;
 use std::ffi::CStr;
 
@@ -40,12 +41,6 @@ fn parse_version(version: &str) -> Option<(u32, u32, bool)> {
     Some((major, minor, es))
 }
 
-const GL_VERSION: u32 = 0x1F02;
-const GL_EXTENSIONS: u32 = 0x1F03;
-const GL_NUM_EXTENSIONS: u32 = 0x821D;
-const GL_CONTEXT_PROFILE_MASK: u32 = 0x9126;
-const GL_CONTEXT_CORE_PROFILE_BIT: i32 = 0x1;
-
 /// # Safety
 /// A GL context must be current on this thread.
 unsafe fn string(name: *mut std::ffi::c_void) -> Option<String> {
@@ -62,7 +57,7 @@ unsafe fn query() -> Option<Kind> {
     let core = if es {
         false
     } else if (major, minor) >= (3, 2) {
-        get_int(GL_CONTEXT_PROFILE_MASK) & GL_CONTEXT_CORE_PROFILE_BIT != 0
+        get_int(GL_CONTEXT_PROFILE_MASK) as u32 & GL_CONTEXT_CORE_PROFILE_BIT != 0
     } else if (major, minor) == (3, 1) {
         let n = get_int(GL_NUM_EXTENSIONS).max(0) as u32;
         !(0..n).any(|i| string(real::glGetStringi(GL_EXTENSIONS, i)).as_deref() == Some("GL_ARB_compatibility"))

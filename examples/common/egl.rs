@@ -3,6 +3,10 @@
 //! xscreensaver does).
 #![allow(dead_code)]
 
+use glray_gl::{
+    EGL_DEPTH_SIZE, EGL_HEIGHT, EGL_NONE, EGL_OPENGL_API, EGL_OPENGL_BIT, EGL_PBUFFER_BIT,
+    EGL_PLATFORM_SURFACELESS_MESA, EGL_RED_SIZE, EGL_RENDERABLE_TYPE, EGL_SURFACE_TYPE, EGL_WIDTH,
+};
 use std::ffi::c_void;
 
 #[link(name = "EGL")]
@@ -22,18 +26,6 @@ extern "C" {
     pub fn eglGetError() -> i32;
 }
 
-const EGL_PLATFORM_SURFACELESS_MESA: u32 = 0x31DD;
-const EGL_OPENGL_API: u32 = 0x30A2;
-const EGL_NONE: i32 = 0x3038;
-const EGL_SURFACE_TYPE: i32 = 0x3033;
-const EGL_PBUFFER_BIT: i32 = 0x0001;
-const EGL_RENDERABLE_TYPE: i32 = 0x3040;
-const EGL_OPENGL_BIT: i32 = 0x0008;
-const EGL_RED_SIZE: i32 = 0x3024;
-const EGL_DEPTH_SIZE: i32 = 0x3025;
-const EGL_WIDTH: i32 = 0x3057;
-const EGL_HEIGHT: i32 = 0x3056;
-
 pub struct Egl {
     pub dpy: *mut c_void,
     pub surface: *mut c_void,
@@ -48,12 +40,12 @@ impl Egl {
     /// Creates the context and makes it current on this thread.
     pub unsafe fn new(width: i32, height: i32) -> Result<Egl, String> {
         let fail = |what: &str| format!("{what} failed (eglGetError {:#x})", eglGetError());
-        let dpy = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, std::ptr::null_mut(), std::ptr::null());
+        let dpy = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA as u32, std::ptr::null_mut(), std::ptr::null());
         let (mut major, mut minor) = (0, 0);
         if dpy.is_null() || eglInitialize(dpy, &mut major, &mut minor) == 0 {
             return Err(fail("eglInitialize"));
         }
-        eglBindAPI(EGL_OPENGL_API);
+        eglBindAPI(EGL_OPENGL_API as u32);
         let attribs = [
             EGL_SURFACE_TYPE,
             EGL_PBUFFER_BIT,

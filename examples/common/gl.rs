@@ -4,53 +4,6 @@
 
 use std::ffi::c_void;
 
-pub const GL_POINTS: u32 = 0x0000;
-pub const GL_TRIANGLES: u32 = 0x0004;
-pub const GL_TRIANGLE_FAN: u32 = 0x0006;
-pub const GL_QUADS: u32 = 0x0007;
-pub const GL_QUAD_STRIP: u32 = 0x0008;
-pub const GL_COMPILE: u32 = 0x1300;
-pub const GL_COLOR_BUFFER_BIT: u32 = 0x4000;
-pub const GL_DEPTH_BUFFER_BIT: u32 = 0x0100;
-pub const GL_DEPTH_TEST: u32 = 0x0B71;
-pub const GL_LIGHTING: u32 = 0x0B50;
-pub const GL_LIGHT0: u32 = 0x4000;
-pub const GL_POSITION: u32 = 0x1203;
-pub const GL_DIFFUSE: u32 = 0x1201;
-pub const GL_AMBIENT_AND_DIFFUSE: u32 = 0x1602;
-pub const GL_FRONT: u32 = 0x0404;
-pub const GL_BACK: u32 = 0x0405;
-pub const GL_FRONT_AND_BACK: u32 = 0x0408;
-pub const GL_COLOR_MATERIAL: u32 = 0x0B57;
-pub const GL_NORMALIZE: u32 = 0x0BA1;
-pub const GL_MODELVIEW: u32 = 0x1700;
-pub const GL_PROJECTION: u32 = 0x1701;
-pub const GL_VERTEX_ARRAY: u32 = 0x8074;
-pub const GL_COLOR_ARRAY: u32 = 0x8076;
-pub const GL_FLOAT: u32 = 0x1406;
-pub const GL_UNSIGNED_SHORT: u32 = 0x1403;
-pub const GL_RGB: u32 = 0x1907;
-pub const GL_RGBA: u32 = 0x1908;
-pub const GL_UNSIGNED_BYTE: u32 = 0x1401;
-pub const GL_VIEWPORT: u32 = 0x0BA2;
-pub const GL_VERSION: u32 = 0x1F02;
-pub const GL_RENDERER: u32 = 0x1F01;
-pub const GL_PACK_ALIGNMENT: u32 = 0x0D05;
-pub const GL_ARRAY_BUFFER: u32 = 0x8892;
-pub const GL_STATIC_DRAW: u32 = 0x88E4;
-pub const GL_NO_ERROR: u32 = 0;
-pub const GL_SPECULAR: u32 = 0x1202;
-pub const GL_SHININESS: u32 = 0x1601;
-pub const GL_TEXTURE_2D: u32 = 0x0DE1;
-pub const GL_TEXTURE_MIN_FILTER: u32 = 0x2801;
-pub const GL_TEXTURE_MAG_FILTER: u32 = 0x2800;
-pub const GL_NEAREST: i32 = 0x2600;
-pub const GL_LINEAR: i32 = 0x2601;
-pub const GL_TEXTURE_ENV: u32 = 0x2300;
-pub const GL_TEXTURE_ENV_MODE: u32 = 0x2200;
-pub const GL_MODULATE: i32 = 0x2100;
-pub const GL_UNPACK_ALIGNMENT: u32 = 0x0CF5;
-
 extern "C" {
     pub fn glClearColor(r: f32, g: f32, b: f32, a: f32);
     pub fn glClear(mask: u32);

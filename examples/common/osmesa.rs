@@ -1,6 +1,7 @@
 //! An OSMesa context drawing into a buffer the program owns (RGBA, bottom-up).
 #![allow(dead_code)]
 
+use glray_gl::{GL_UNSIGNED_BYTE, OSMESA_RGBA};
 use std::ffi::c_void;
 
 #[link(name = "OSMesa")]
@@ -11,9 +12,6 @@ extern "C" {
     pub fn OSMesaGetCurrentContext() -> *mut c_void;
     fn OSMesaDestroyContext(ctx: *mut c_void);
 }
-
-const OSMESA_RGBA: u32 = 0x1908;
-const GL_UNSIGNED_BYTE: u32 = 0x1401;
 
 pub struct OSMesa {
     pub ctx: *mut c_void,

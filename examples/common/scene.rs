@@ -6,6 +6,14 @@
 #![allow(dead_code)]
 
 use super::gl::*;
+use glray_gl::{
+    GL_AMBIENT_AND_DIFFUSE, GL_ARRAY_BUFFER, GL_COLOR_ARRAY, GL_COLOR_BUFFER_BIT, GL_COLOR_MATERIAL, GL_COMPILE,
+    GL_DEPTH_BUFFER_BIT, GL_DEPTH_TEST, GL_FLOAT, GL_FRONT_AND_BACK, GL_LIGHT0, GL_LIGHTING, GL_MAP_WRITE_BIT,
+    GL_MODELVIEW, GL_MODULATE, GL_NEAREST, GL_NORMALIZE, GL_PACK_ALIGNMENT, GL_POSITION, GL_PROJECTION, GL_QUADS,
+    GL_QUAD_STRIP, GL_RGB, GL_SHININESS, GL_SPECULAR, GL_STATIC_DRAW, GL_TEXTURE_2D, GL_TEXTURE_ENV,
+    GL_TEXTURE_ENV_MODE, GL_TEXTURE_MAG_FILTER, GL_TEXTURE_MIN_FILTER, GL_TRIANGLES, GL_TRIANGLE_FAN,
+    GL_UNPACK_ALIGNMENT, GL_UNSIGNED_BYTE, GL_UNSIGNED_SHORT, GL_VERTEX_ARRAY,
+};
 use std::ffi::c_void;
 
 /// Buffer-object entry points, fetched at run time as GLEW and VTK do.
@@ -126,7 +134,6 @@ impl Scene {
             (b.gen)(1, &mut id);
             (b.bind)(GL_ARRAY_BUFFER, id);
             (b.data)(GL_ARRAY_BUFFER, bytes as isize, std::ptr::null(), GL_STATIC_DRAW);
-            const GL_MAP_WRITE_BIT: u32 = 0x0002;
             let p = (b.map_range)(GL_ARRAY_BUFFER, 0, bytes as isize, GL_MAP_WRITE_BIT);
             if !p.is_null() {
                 std::ptr::copy_nonoverlapping(tri.as_ptr().cast::<u8>(), p.cast::<u8>(), bytes);
@@ -147,8 +154,8 @@ impl Scene {
         glBindTexture(GL_TEXTURE_2D, texture);
         glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
         glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB as i32, 8, 8, 0, GL_RGB, GL_UNSIGNED_BYTE, texels.as_ptr().cast());
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST as i32);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST as i32);
         glBindTexture(GL_TEXTURE_2D, 0);
         Scene { cube, vbo, texture, parts }
     }
@@ -213,7 +220,7 @@ impl Scene {
             glRotatef(-25.0, 0.0, 1.0, 0.0);
             glEnable(GL_TEXTURE_2D);
             glBindTexture(GL_TEXTURE_2D, self.texture);
-            glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE);
+            glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE as i32);
             glColor3f(1.0, 1.0, 1.0);
             glBegin(GL_QUADS);
             glNormal3f(0.0, 0.0, 1.0);

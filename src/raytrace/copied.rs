@@ -1,9 +1,14 @@
 //! Textures a program fills from its framebuffer (glCopyTexImage2D, glCopyTexSubImage2D: a blur,
 //! a reflection or a picture-in-picture rendered first and then drawn as a texture). The frame
-//! drawn so far is presented before the copy (`reads_framebuffer`, as for glReadPixels), so
+//! drawn so far is presented before the copy (classes.txt's `ends=raster`, as for glReadPixels), so
 //! the real GL copies the ray-traced picture; capture cannot see what the copy took, so the
 //! texture level is read back from the real GL afterwards (`follow`) and handed to capture.
 
+use glray_gl::{
+    GL_CLIENT_PIXEL_STORE_BIT, GL_FLOAT, GL_PACK_ALIGNMENT, GL_PACK_LSB_FIRST, GL_PACK_ROW_LENGTH, GL_PACK_SKIP_PIXELS,
+    GL_PACK_SKIP_ROWS, GL_PACK_SWAP_BYTES, GL_PIXEL_PACK_BUFFER, GL_PIXEL_PACK_BUFFER_BINDING, GL_RGBA, GL_TEXTURE_2D,
+    GL_TEXTURE_HEIGHT, GL_TEXTURE_INTERNAL_FORMAT, GL_TEXTURE_WIDTH,
+};
 use std::ffi::c_void;
 
 use glam::Vec4;
@@ -11,48 +16,19 @@ use glray_capture::args;
 use glray_capture::events::Capture;
 use glray_core::trace::Value;
 
-use crate::commands::cmd;
 use crate::real::{self, get_int};
 
-const GL_TEXTURE_2D: u32 = 0x0DE1;
-const GL_TEXTURE_WIDTH: u32 = 0x1000;
-const GL_TEXTURE_HEIGHT: u32 = 0x1001;
-const GL_TEXTURE_INTERNAL_FORMAT: u32 = 0x1003;
-const GL_RGBA: u32 = 0x1908;
-const GL_FLOAT: u32 = 0x1406;
-const GL_CLIENT_PIXEL_STORE_BIT: u32 = 0x0000_0001;
-const GL_PIXEL_PACK_BUFFER: u32 = 0x88EB;
-const GL_PIXEL_PACK_BUFFER_BINDING: u32 = 0x88ED;
 /// glPixelStore's pack state, and what a read into a tight float array wants of it.
 const PACK: &[(u32, i32)] = &[
-    (0x0D05, 4), // PACK_ALIGNMENT
-    (0x0D02, 0), // PACK_ROW_LENGTH
-    (0x0D03, 0), // PACK_SKIP_ROWS
-    (0x0D04, 0), // PACK_SKIP_PIXELS
-    (0x0D00, 0), // PACK_SWAP_BYTES
-    (0x0D01, 0), // PACK_LSB_FIRST
+    (GL_PACK_ALIGNMENT, 4),   // PACK_ALIGNMENT
+    (GL_PACK_ROW_LENGTH, 0),  // PACK_ROW_LENGTH
+    (GL_PACK_SKIP_ROWS, 0),   // PACK_SKIP_ROWS
+    (GL_PACK_SKIP_PIXELS, 0), // PACK_SKIP_PIXELS
+    (GL_PACK_SWAP_BYTES, 0),  // PACK_SWAP_BYTES
+    (GL_PACK_LSB_FIRST, 0),   // PACK_LSB_FIRST
 ];
 /// The largest texture level read back (GL implementations stop at 16K).
 const MOST_TEXELS: usize = 16384 * 16384;
-
-/// Whether command `c` reads the framebuffer into a texture or the accumulation buffer: the
-/// frame drawn so far is put in place first.
-pub fn reads_framebuffer(c: usize) -> bool {
-    matches!(
-        c,
-        cmd::glCopyTexImage1D
-            | cmd::glCopyTexImage1DEXT
-            | cmd::glCopyTexImage2D
-            | cmd::glCopyTexImage2DEXT
-            | cmd::glCopyTexSubImage1D
-            | cmd::glCopyTexSubImage1DEXT
-            | cmd::glCopyTexSubImage2D
-            | cmd::glCopyTexSubImage2DEXT
-            | cmd::glCopyTexSubImage3D
-            | cmd::glCopyTexSubImage3DEXT
-            | cmd::glAccum
-    )
-}
 
 /// After the real GL made call number `c` (the recorder's numbering) with `a` on `thread`: a copy
 /// into a 2D texture is read back into capture's texture. Every call a program makes comes

@@ -10,10 +10,16 @@
 //! and materials...).
 
 use glray_capture::events::Capture;
-use glray_capture::gl::*;
 use glray_capture::lighting::{Light, LightModel, Material};
 use glray_capture::list_effects::StateSeen;
 use glray_capture::matrix::Seen;
+use glray_gl::{
+    GL_AMBIENT, GL_BACK, GL_CONSTANT_ATTENUATION, GL_DIFFUSE, GL_EMISSION, GL_FRONT, GL_LIGHT0, GL_LIGHT_MODEL_AMBIENT,
+    GL_LIGHT_MODEL_COLOR_CONTROL, GL_LIGHT_MODEL_LOCAL_VIEWER, GL_LIGHT_MODEL_TWO_SIDE, GL_LINEAR_ATTENUATION,
+    GL_MATRIX_MODE, GL_MODELVIEW, GL_MODELVIEW_MATRIX, GL_POSITION, GL_QUADRATIC_ATTENUATION,
+    GL_SEPARATE_SPECULAR_COLOR, GL_SHININESS, GL_SINGLE_COLOR, GL_SPECULAR, GL_SPOT_CUTOFF, GL_SPOT_DIRECTION,
+    GL_SPOT_EXPONENT, GL_TEXTURE_2D,
+};
 
 use crate::real;
 
@@ -85,7 +91,7 @@ fn put_state(was: &StateSeen, now: &StateSeen) {
         if now.shade_model != was.shade_model {
             real::glShadeModel(now.shade_model);
         }
-        const FACES: [u32; 2] = [0x0404, 0x0405]; // GL_FRONT, GL_BACK
+        const FACES: [u32; 2] = [GL_FRONT, GL_BACK]; // GL_FRONT, GL_BACK
         for ((face, mode), was_mode) in FACES.iter().zip(now.polygon_mode).zip(was.polygon_mode) {
             if mode != was_mode {
                 real::glPolygonMode(*face, mode);
@@ -110,7 +116,7 @@ fn put_state(was: &StateSeen, now: &StateSeen) {
             real::glPointSize(now.point_size as f32);
         }
         if now.bound_texture != was.bound_texture {
-            real::glBindTexture(0x0DE1, now.bound_texture); // GL_TEXTURE_2D
+            real::glBindTexture(GL_TEXTURE_2D, now.bound_texture); // GL_TEXTURE_2D
         }
         if now.color != was.color {
             let c = now.color;

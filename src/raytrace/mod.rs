@@ -21,7 +21,7 @@ use glray_capture::events::{Capture, LiveCall};
 use glray_core::config::Config;
 use glray_core::trace::{Event, Reader, Value};
 
-use crate::commands::cmd;
+use crate::commands::{cmd, Ends, COMMANDS};
 use crate::dispatch::{self, Backend};
 use crate::record::given::Given;
 
@@ -263,40 +263,18 @@ fn skips(c: usize, _args: &[u64]) -> bool {
     if matches!(c, cmd::glArrayElement | cmd::glArrayElementEXT) {
         return in_skipped_begin();
     }
-    let geometry = matches!(
-        c,
-        cmd::glBegin
-            | cmd::glRects
-            | cmd::glRectsv
-            | cmd::glRecti
-            | cmd::glRectiv
-            | cmd::glRectf
-            | cmd::glRectfv
-            | cmd::glRectd
-            | cmd::glRectdv
-            | cmd::glDrawArrays
-            | cmd::glDrawArraysEXT
-            | cmd::glDrawElements
-            | cmd::glDrawRangeElements
-            | cmd::glDrawRangeElementsEXT
-            | cmd::glMultiDrawArrays
-            | cmd::glMultiDrawArraysEXT
-            | cmd::glMultiDrawElements
-            | cmd::glMultiDrawElementsEXT
-            | cmd::glCallList
-            | cmd::glCallLists
-    );
-    let at = match c {
-        cmd::glXSwapBuffers
-        | cmd::eglSwapBuffers
-        | cmd::eglSwapBuffersWithDamageKHR
-        | cmd::eglSwapBuffersWithDamageEXT => Some(Trigger::Swap),
-        cmd::glFinish => Some(Trigger::Finish),
-        cmd::glFlush => Some(Trigger::Flush),
-        cmd::glReadPixels | cmd::glReadnPixels => Some(Trigger::ReadPixels),
-        _ => None,
+    // What gl-spec/classes.txt says of the command: geometry glray takes (`taken`), and where
+    // it ends a frame or draws over it (`ends=`).
+    let info = &COMMANDS[c];
+    let geometry = info.taken;
+    let at = match info.ends {
+        Ends::Swap => Some(Trigger::Swap),
+        Ends::Finish => Some(Trigger::Finish),
+        Ends::Flush => Some(Trigger::Flush),
+        Ends::ReadPixels => Some(Trigger::ReadPixels),
+        Ends::Raster | Ends::No => None,
     };
-    let raster = matches!(c, cmd::glBitmap | cmd::glDrawPixels | cmd::glCopyPixels) || copied::reads_framebuffer(c);
+    let raster = info.ends == Ends::Raster;
     if !geometry && at.is_none() && !raster {
         return false;
     }

@@ -2,19 +2,19 @@
 //! the calls, since glArrayElement inside glBegin/glEnd forbids asking GL), and, at each draw,
 //! the range of elements the draw reads, whose memory goes into the trace before the call.
 
+use glray_gl::{
+    GL_ARRAY_BUFFER_BINDING, GL_CLIENT_ACTIVE_TEXTURE, GL_ELEMENT_ARRAY_BUFFER, GL_ELEMENT_ARRAY_BUFFER_BINDING,
+    GL_FLOAT, GL_MAX_TEXTURE_COORDS, GL_MAX_VERTEX_ATTRIBS, GL_TEXTURE0, GL_UNSIGNED_BYTE,
+};
 use std::ffi::c_void;
 
 use glray_core::gltypes::{array_element_bytes, value_bytes};
 use glray_core::trace::{array_kind, ArrayData};
 
-use super::{bound_buffer, GL_ARRAY_BUFFER_BINDING, GL_ELEMENT_ARRAY_BUFFER_BINDING};
+use super::bound_buffer;
 use crate::commands::cmd;
 use crate::real;
 
-const GL_ELEMENT_ARRAY_BUFFER: u32 = 0x8893;
-const GL_TEXTURE0: u64 = 0x84C0;
-const GL_FLOAT: u32 = 0x1406;
-const GL_UNSIGNED_BYTE: u32 = 0x1401;
 const MAX_UNITS: usize = 32;
 
 #[derive(Debug, Clone, Copy)]
@@ -173,7 +173,7 @@ impl ClientArrays {
                 }
             }
             cmd::glClientActiveTexture | cmd::glClientActiveTextureARB => {
-                self.client_active = (a[0].wrapping_sub(GL_TEXTURE0) as usize).min(MAX_UNITS - 1);
+                self.client_active = (a[0].wrapping_sub(GL_TEXTURE0 as u64) as usize).min(MAX_UNITS - 1);
             }
             // Calls that set many arrays at once: read the state back from GL.
             cmd::glInterleavedArrays | cmd::glPopClientAttrib | cmd::glBindVertexArray => self.sync_from_gl(),
@@ -267,10 +267,10 @@ impl ClientArrays {
                 a.buffer = geti(q.5);
             }
             let q = Q[array_kind::TEXCOORD as usize];
-            let active = if fixed { geti(0x84E1) } else { GL_TEXTURE0 as i32 }; // GL_CLIENT_ACTIVE_TEXTURE
-            let units = if fixed { (geti(0x8871) as usize).clamp(1, MAX_UNITS) } else { 0 }; // GL_MAX_TEXTURE_COORDS
+            let active = if fixed { geti(GL_CLIENT_ACTIVE_TEXTURE) } else { GL_TEXTURE0 as i32 }; // GL_CLIENT_ACTIVE_TEXTURE
+            let units = if fixed { (geti(GL_MAX_TEXTURE_COORDS) as usize).clamp(1, MAX_UNITS) } else { 0 }; // GL_MAX_TEXTURE_COORDS
             for u in 0..units {
-                real::glClientActiveTexture(GL_TEXTURE0 as u32 + u as u32);
+                real::glClientActiveTexture(GL_TEXTURE0 + u as u32);
                 let a = &mut self.texcoords[u];
                 a.enabled = real::glIsEnabled(q.0) != 0;
                 (a.size, a.ty, a.stride, a.ptr, a.buffer) =
@@ -279,8 +279,8 @@ impl ClientArrays {
             if fixed {
                 real::glClientActiveTexture(active as u32);
             }
-            self.client_active = (active as u32).wrapping_sub(GL_TEXTURE0 as u32) as usize % MAX_UNITS;
-            let attribs = (geti(0x8869) as usize).min(MAX_UNITS); // GL_MAX_VERTEX_ATTRIBS
+            self.client_active = (active as u32).wrapping_sub(GL_TEXTURE0) as usize % MAX_UNITS;
+            let attribs = (geti(GL_MAX_VERTEX_ATTRIBS) as usize).min(MAX_UNITS); // GL_MAX_VERTEX_ATTRIBS
             for i in 0..attribs {
                 let attr = |pname: u32| {
                     let mut v = 0i32;

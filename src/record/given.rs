@@ -185,6 +185,7 @@ fn follow(rec: &mut Recorder, b: &mut Batch) {
 mod tests {
     use super::*;
     use crate::commands::{cmd, lookup};
+    use glray_gl::GL_UNSIGNED_BYTE;
 
     #[test]
     fn every_command_an_export_hands_over_typed_has_a_form_in_capture() {
@@ -196,7 +197,7 @@ mod tests {
         }
         let named = |name: &str| form(lookup(name.as_bytes()).unwrap());
         let f = named("glColor4ubv").unwrap();
-        assert!(f.vector && f.n == 4 && f.ty == glray_capture::args::GL_UNSIGNED_BYTE);
+        assert!(f.vector && f.n == 4 && f.ty == GL_UNSIGNED_BYTE);
         assert!(named("glMultiTexCoord2fARB").is_some_and(|f| f.n == 2 && !f.vector));
         assert_eq!(form(cmd::glMaterialfv), None);
         assert!(!crate::exports::TYPED.contains(&cmd::glEdgeFlag), "edge flags are recorded");

@@ -14,6 +14,10 @@ pub mod given;
 mod out;
 pub mod sizes;
 
+use glray_gl::{
+    EGL_HEIGHT, EGL_WIDTH, GLX_HEIGHT, GLX_WIDTH, GL_ARRAY_BUFFER_BINDING, GL_BUFFER_SIZE,
+    GL_ELEMENT_ARRAY_BUFFER_BINDING, GL_MAP_WRITE_BIT, GL_READ_ONLY,
+};
 use std::collections::{HashMap, HashSet};
 use std::ffi::{c_void, CStr};
 use std::io::Write;
@@ -545,24 +549,15 @@ impl Recorder {
     pub fn after(&mut self, cmd: usize, args: &[u64], ret: u64) {
         self.state().arrays.track(cmd, args);
         match cmd {
-            cmd::glMapBuffer | cmd::glMapBufferARB if ret != 0 => {
-                const GL_READ_ONLY: u64 = 0x88B8;
-                const GL_BUFFER_SIZE: u32 = 0x8764;
-                if args[1] != GL_READ_ONLY {
-                    let mut size = 0i32;
-                    // SAFETY: the size of the buffer bound to the target just mapped.
-                    unsafe {
-                        real::glGetBufferParameteriv(args[0] as u32, GL_BUFFER_SIZE, (&mut size as *mut i32).cast())
-                    };
-                    self.state().mappings.insert(args[0] as u32, Mapping { ptr: ret, offset: 0, length: size as i64 });
-                }
+            cmd::glMapBuffer | cmd::glMapBufferARB if ret != 0 && args[1] != u64::from(GL_READ_ONLY) => {
+                let mut size = 0i32;
+                // SAFETY: the size of the buffer bound to the target just mapped.
+                unsafe { real::glGetBufferParameteriv(args[0] as u32, GL_BUFFER_SIZE, (&mut size as *mut i32).cast()) };
+                self.state().mappings.insert(args[0] as u32, Mapping { ptr: ret, offset: 0, length: size as i64 });
             }
-            cmd::glMapBufferRange if ret != 0 => {
-                const GL_MAP_WRITE_BIT: u64 = 0x0002;
-                if args[3] & GL_MAP_WRITE_BIT != 0 {
-                    let m = Mapping { ptr: ret, offset: args[1] as i64, length: args[2] as i64 };
-                    self.state().mappings.insert(args[0] as u32, m);
-                }
+            cmd::glMapBufferRange if ret != 0 && args[3] & u64::from(GL_MAP_WRITE_BIT) != 0 => {
+                let m = Mapping { ptr: ret, offset: args[1] as i64, length: args[2] as i64 };
+                self.state().mappings.insert(args[0] as u32, m);
             }
             cmd::glUnmapBuffer | cmd::glUnmapBufferARB => {
                 // The trace gets the data as a glBufferSubData after the unmap (a mapped buffer
@@ -634,10 +629,6 @@ impl Recorder {
     }
 }
 
-pub(crate) const GL_ARRAY_BUFFER_BINDING: u32 = 0x8894;
-pub(crate) const GL_ELEMENT_ARRAY_BUFFER_BINDING: u32 = 0x8895;
-pub(crate) const GL_PIXEL_UNPACK_BUFFER_BINDING: u32 = 0x88EF;
-
 /// The buffer object bound to a binding point, from the real GL.
 pub(crate) fn bound_buffer(binding: u32) -> i32 {
     real::get_int(binding)
@@ -650,8 +641,6 @@ fn surface_size(kind: Kind, dpy: u64, drawable: u64) -> (u32, u32) {
     unsafe {
         match kind {
             Kind::Glx => {
-                const GLX_WIDTH: i32 = 0x801D;
-                const GLX_HEIGHT: i32 = 0x801E;
                 real::glXQueryDrawable(
                     dpy as usize as *mut c_void,
                     drawable as _,
@@ -666,8 +655,6 @@ fn surface_size(kind: Kind, dpy: u64, drawable: u64) -> (u32, u32) {
                 );
             }
             Kind::Egl => {
-                const EGL_WIDTH: i32 = 0x3057;
-                const EGL_HEIGHT: i32 = 0x3056;
                 let (mut ew, mut eh) = (0i32, 0i32);
                 let surface = drawable as usize as *mut c_void;
                 real::eglQuerySurface(dpy as usize as *mut c_void, surface, EGL_WIDTH, (&mut ew as *mut i32).cast());

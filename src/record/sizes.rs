@@ -1,7 +1,9 @@
 //! Size rules for pointer arguments whose size the registry gives as COMPSIZE(...): each is named
 //! in gl-spec/sizes.txt and called by the generated recorder with those arguments.
 
-use super::{bound_buffer, Recorder, GL_ELEMENT_ARRAY_BUFFER_BINDING, GL_PIXEL_UNPACK_BUFFER_BINDING};
+use glray_gl::*;
+
+use super::{bound_buffer, Recorder};
 use crate::real;
 
 /// How much memory a pointer argument reads.
@@ -25,11 +27,17 @@ pub fn elements(_: &mut Recorder, a: &[i64]) -> Mem {
 /// Values a glLight/glMaterial/glFog/glTexEnv/glTexGen/glTexParameter/glLightModel/
 /// glPointParameter pname takes.
 fn pname_values(pname: i64) -> usize {
-    match pname {
-        0x1200 | 0x1201 | 0x1202 | 0x1203 | 0x1600 | 0x1602 => 4, // AMBIENT..POSITION, EMISSION, AMBIENT_AND_DIFFUSE
-        0x1204 | 0x1603 => 3,                                     // SPOT_DIRECTION, COLOR_INDEXES
-        0x0B53 | 0x0B66 | 0x2201 | 0x1004 | 0x2501 | 0x2502 | 0x8E46 => 4, // LIGHT_MODEL_AMBIENT, FOG_COLOR, TEXTURE_ENV_COLOR, BORDER_COLOR, OBJECT/EYE_PLANE, SWIZZLE_RGBA
-        0x8129 => 3,                                                       // POINT_DISTANCE_ATTENUATION
+    match pname as u32 {
+        GL_AMBIENT | GL_DIFFUSE | GL_SPECULAR | GL_POSITION | GL_EMISSION | GL_AMBIENT_AND_DIFFUSE => 4,
+        GL_SPOT_DIRECTION | GL_COLOR_INDEXES => 3,
+        GL_LIGHT_MODEL_AMBIENT
+        | GL_FOG_COLOR
+        | GL_TEXTURE_ENV_COLOR
+        | GL_TEXTURE_BORDER_COLOR
+        | GL_OBJECT_PLANE
+        | GL_EYE_PLANE
+        | GL_TEXTURE_SWIZZLE_RGBA => 4,
+        GL_POINT_DISTANCE_ATTENUATION => 3,
         _ => 1,
     }
 }
@@ -57,21 +65,34 @@ pub fn call_lists(_: &mut Recorder, a: &[i64]) -> Mem {
 
 /// Bytes per pixel of a format/type pair (packed types count once per pixel).
 fn pixel_bytes(format: i64, ty: i64) -> usize {
-    let comps = match format {
-        0x1907 | 0x80E0 | 0x8D98 | 0x8D9A => 3, // RGB, BGR, RGB_INTEGER, BGR_INTEGER
-        0x1908 | 0x80E1 | 0x8D99 | 0x8D9B | 0x8000 | 0x8001 => 4, // RGBA, BGRA, *_INTEGER, ABGR/CMYK
-        0x190A | 0x8227 | 0x84F9 | 0x8228 => 2, // LUMINANCE_ALPHA, RG, DEPTH_STENCIL, RG_INTEGER
+    let comps = match format as u32 {
+        GL_RGB | GL_BGR | GL_RGB_INTEGER | GL_BGR_INTEGER => 3,
+        GL_RGBA | GL_BGRA | GL_RGBA_INTEGER | GL_BGRA_INTEGER | GL_ABGR_EXT | GL_CMYK_EXT => 4,
+        GL_LUMINANCE_ALPHA | GL_RG | GL_DEPTH_STENCIL | GL_RG_INTEGER => 2,
         _ => 1,
     };
-    match ty {
-        0x1400 | 0x1401 => comps,
-        0x1402 | 0x1403 | 0x140B => comps * 2,
-        0x8032 | 0x8362 | 0x8033 | 0x8365 | 0x8034 | 0x8366 | 0x8363 | 0x8364 => {
-            2 - (ty == 0x8032 || ty == 0x8362) as usize
-        } // packed 8/16-bit
-        0x8035 | 0x8367 | 0x8036 | 0x8368 | 0x84FA | 0x8C3B | 0x8C3E => 4, // packed 32-bit, 24_8, 10F_11F_11F, 5_9_9_9
-        0x8DAD => 8,                                                       // FLOAT_32_UNSIGNED_INT_24_8_REV
-        0x1A00 => 1,                                                       // BITMAP (rounded up below)
+    match ty as u32 {
+        GL_BYTE | GL_UNSIGNED_BYTE => comps,
+        GL_SHORT | GL_UNSIGNED_SHORT | GL_HALF_FLOAT => comps * 2,
+        // Packed into 8 bits.
+        GL_UNSIGNED_BYTE_3_3_2 | GL_UNSIGNED_BYTE_2_3_3_REV => 1,
+        // Packed into 16 bits.
+        GL_UNSIGNED_SHORT_4_4_4_4
+        | GL_UNSIGNED_SHORT_4_4_4_4_REV
+        | GL_UNSIGNED_SHORT_5_5_5_1
+        | GL_UNSIGNED_SHORT_1_5_5_5_REV
+        | GL_UNSIGNED_SHORT_5_6_5
+        | GL_UNSIGNED_SHORT_5_6_5_REV => 2,
+        // Packed into 32 bits.
+        GL_UNSIGNED_INT_8_8_8_8
+        | GL_UNSIGNED_INT_8_8_8_8_REV
+        | GL_UNSIGNED_INT_10_10_10_2
+        | GL_UNSIGNED_INT_2_10_10_10_REV
+        | GL_UNSIGNED_INT_24_8
+        | GL_UNSIGNED_INT_10F_11F_11F_REV
+        | GL_UNSIGNED_INT_5_9_9_9_REV => 4,
+        GL_FLOAT_32_UNSIGNED_INT_24_8_REV => 8,
+        GL_BITMAP => 1, // rounded up below
         _ => comps * 4,
     }
 }
@@ -90,16 +111,16 @@ fn image(a_format: i64, ty: i64, w: i64, h: i64, d: i64) -> Mem {
         return Mem::Bytes(0);
     }
     let (row_length, alignment, skip_rows, skip_pixels, image_height, skip_images) = (
-        unpack(0x0CF2),        // UNPACK_ROW_LENGTH
-        unpack(0x0CF5).max(1), // UNPACK_ALIGNMENT
-        unpack(0x0CF3),        // UNPACK_SKIP_ROWS
-        unpack(0x0CF4),        // UNPACK_SKIP_PIXELS
-        unpack(0x806E),        // UNPACK_IMAGE_HEIGHT
-        unpack(0x806D),        // UNPACK_SKIP_IMAGES
+        unpack(GL_UNPACK_ROW_LENGTH),
+        unpack(GL_UNPACK_ALIGNMENT).max(1),
+        unpack(GL_UNPACK_SKIP_ROWS),
+        unpack(GL_UNPACK_SKIP_PIXELS),
+        unpack(GL_UNPACK_IMAGE_HEIGHT),
+        unpack(GL_UNPACK_SKIP_IMAGES),
     );
     let px = pixel_bytes(a_format, ty) as i64;
     let width = if row_length > 0 { row_length } else { w };
-    let row = if ty == 0x1A00 { (width + 7) / 8 } else { width * px };
+    let row = if ty as u32 == GL_BITMAP { (width + 7) / 8 } else { width * px };
     let row = (row + alignment - 1) / alignment * alignment;
     let rows_per_image = if image_height > 0 { image_height } else { h };
     let total =
@@ -120,7 +141,7 @@ pub fn image_3d(_: &mut Recorder, a: &[i64]) -> Mem {
 }
 
 pub fn bitmap(_: &mut Recorder, a: &[i64]) -> Mem {
-    image(0x1900 /* COLOR_INDEX */, 0x1A00 /* BITMAP */, a[0], a[1], 1)
+    image(GL_COLOR_INDEX.into(), GL_BITMAP.into(), a[0], a[1], 1)
 }
 
 pub fn pixel(_: &mut Recorder, a: &[i64]) -> Mem {
@@ -128,19 +149,18 @@ pub fn pixel(_: &mut Recorder, a: &[i64]) -> Mem {
 }
 
 pub fn polygon_stipple(_: &mut Recorder, _: &[i64]) -> Mem {
-    image(0x1900, 0x1A00, 32, 32, 1)
+    image(GL_COLOR_INDEX.into(), GL_BITMAP.into(), 32, 32, 1)
 }
 
 /// Components of one control point of an evaluator target.
 fn map_components(target: i64) -> i64 {
-    match target {
-        0x0D93 | 0x0DB3 => 1,                   // MAP1/2_INDEX
-        0x0D92 | 0x0DB2 | 0x0D94 | 0x0DB4 => 1, // TEXTURE_COORD_1
-        0x0D95 | 0x0DB5 => 2,                   // TEXTURE_COORD_2
-        0x0D96 | 0x0DB6 | 0x0D97 | 0x0DB7 => 3, // TEXTURE_COORD_3, VERTEX_3
-        0x0D98 | 0x0DB8 => 4,                   // TEXTURE_COORD_4 / VERTEX_4
-        0x0D90 | 0x0DB0 => 4,                   // COLOR_4
-        0x0D91 | 0x0DB1 => 3,                   // NORMAL
+    match target as u32 {
+        GL_MAP1_INDEX | GL_MAP2_INDEX | GL_MAP1_TEXTURE_COORD_1 | GL_MAP2_TEXTURE_COORD_1 => 1,
+        GL_MAP1_TEXTURE_COORD_2 | GL_MAP2_TEXTURE_COORD_2 => 2,
+        GL_MAP1_TEXTURE_COORD_3 | GL_MAP2_TEXTURE_COORD_3 | GL_MAP1_VERTEX_3 | GL_MAP2_VERTEX_3 => 3,
+        GL_MAP1_TEXTURE_COORD_4 | GL_MAP2_TEXTURE_COORD_4 | GL_MAP1_VERTEX_4 | GL_MAP2_VERTEX_4 => 4,
+        GL_MAP1_COLOR_4 | GL_MAP2_COLOR_4 => 4,
+        GL_MAP1_NORMAL | GL_MAP2_NORMAL => 3,
         _ => 4,
     }
 }

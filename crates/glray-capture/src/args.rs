@@ -4,16 +4,9 @@
 //! itself would take garbage; capture must never panic on a bad trace.
 
 use glray_core::trace::Value;
-
-pub const GL_BYTE: u32 = 0x1400;
-pub const GL_UNSIGNED_BYTE: u32 = 0x1401;
-pub const GL_SHORT: u32 = 0x1402;
-pub const GL_UNSIGNED_SHORT: u32 = 0x1403;
-pub const GL_INT: u32 = 0x1404;
-pub const GL_UNSIGNED_INT: u32 = 0x1405;
-pub const GL_FLOAT: u32 = 0x1406;
-pub const GL_DOUBLE: u32 = 0x140A;
-pub const GL_HALF_FLOAT: u32 = 0x140B;
+use glray_gl::{
+    GL_BYTE, GL_DOUBLE, GL_FLOAT, GL_HALF_FLOAT, GL_INT, GL_SHORT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT,
+};
 
 pub fn int(a: &[Value], i: usize) -> i64 {
     a.get(i).map_or(0, Value::as_int)

@@ -5,18 +5,21 @@
 use glam::DVec4;
 use glray_core::threads::{collect_pieces, fill_pieces, piece_of, Filler};
 use glray_core::trace::{array_kind, Value};
+use glray_gl::{
+    GL_ARRAY_BUFFER, GL_COLOR_ARRAY, GL_ELEMENT_ARRAY_BUFFER, GL_FLOAT, GL_INT, GL_NORMAL_ARRAY, GL_POLYGON,
+    GL_TEXTURE_COORD_ARRAY, GL_TRIANGLES, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT, GL_VERTEX_ARRAY,
+};
 
 use xxhash_rust::xxh3::xxh3_128;
 
-use crate::args::{self, GL_INT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT};
+use crate::args;
 use crate::client_draws::KEEP_FROM_ELEMENTS;
 use crate::context::{Context, Fetched};
 use crate::error::{GlError, GlResult};
-use crate::gl::*;
 use crate::immediate::TEXCOORD_UNITS;
 use crate::mesh::Mesh;
 use crate::ops::Op;
-use crate::primitive::{QuadSplit, GL_POLYGON, GL_TRIANGLES};
+use crate::primitive::QuadSplit;
 use crate::texture::Unpack;
 
 /// An array draw of buffer objects: its arguments and pointer state, and the buffers it reads.
@@ -95,7 +98,7 @@ impl<'a> Source<'a> {
         let made = collect_pieces(len, piece_of::<T>(), |first, piece| {
             let from = lo + first as u32;
             let till = from + piece.room() as u32;
-            if self.ty == args::GL_FLOAT && self.size >= 1 {
+            if self.ty == GL_FLOAT && self.size >= 1 {
                 // Floats read as floats: the same values as through doubles, without the
                 // type's dispatch per element (floats are never normalised).
                 let n = self.size.min(4);
@@ -122,7 +125,7 @@ impl<'a> Source<'a> {
     /// read as floats straight into the vector, with no round trip through doubles (which
     /// gives the same floats back).
     fn vec3_range(&self, lo: u32, hi: u32, normalized: bool) -> Option<Vec<glam::Vec3>> {
-        if self.ty != args::GL_FLOAT || self.size < 3 {
+        if self.ty != GL_FLOAT || self.size < 3 {
             return self.fetch_range(lo, hi, normalized, |v| v.truncate().as_vec3());
         }
         let made = collect_pieces((hi - lo) as usize + 1, piece_of::<glam::Vec3>(), |first, piece| {
@@ -614,7 +617,7 @@ impl Context {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::args::{GL_BYTE, GL_DOUBLE, GL_FLOAT, GL_SHORT};
+    use glray_gl::{GL_BYTE, GL_DOUBLE, GL_SHORT};
 
     #[test]
     fn a_big_blocks_hash_in_pieces_sees_every_byte() {

@@ -4,6 +4,21 @@
 //! recorded calls (an `Op` and its `Value`s), the same from a trace file as from the live
 //! library, so the two paths cannot drift apart.
 
+use glray_gl::{
+    GL_ALPHA_TEST, GL_AMBIENT, GL_AMBIENT_AND_DIFFUSE, GL_ARRAY_BUFFER, GL_BACK, GL_BLEND, GL_CCW, GL_CLIP_PLANE0,
+    GL_COLOR_ARRAY, GL_COLOR_BUFFER_BIT, GL_COLOR_INDEXES, GL_COLOR_LOGIC_OP, GL_COLOR_MATERIAL,
+    GL_CONSTANT_ATTENUATION, GL_CULL_FACE, GL_CURRENT_BIT, GL_CW, GL_DEPTH_BUFFER_BIT, GL_DEPTH_TEST, GL_DIFFUSE,
+    GL_DOUBLE, GL_ELEMENT_ARRAY_BUFFER, GL_EMISSION, GL_EYE_PLANE, GL_FILL, GL_FLAT, GL_FLOAT, GL_FOG, GL_FOG_COLOR,
+    GL_FOG_DENSITY, GL_FOG_END, GL_FOG_MODE, GL_FOG_START, GL_FRONT, GL_FRONT_AND_BACK, GL_INT, GL_LIGHT0, GL_LIGHTING,
+    GL_LIGHT_MODEL_AMBIENT, GL_LIGHT_MODEL_COLOR_CONTROL, GL_LIGHT_MODEL_LOCAL_VIEWER, GL_LIGHT_MODEL_TWO_SIDE,
+    GL_LINE, GL_LINEAR_ATTENUATION, GL_LINE_SMOOTH, GL_NORMALIZE, GL_NORMAL_ARRAY, GL_OBJECT_PLANE, GL_POINT,
+    GL_POINT_SMOOTH, GL_POLYGON, GL_POLYGON_OFFSET_FILL, GL_POSITION, GL_QUADRATIC_ATTENUATION, GL_RESCALE_NORMAL,
+    GL_S, GL_SCISSOR_TEST, GL_SEPARATE_SPECULAR_COLOR, GL_SHININESS, GL_SMOOTH, GL_SPECULAR, GL_SPOT_CUTOFF,
+    GL_SPOT_DIRECTION, GL_SPOT_EXPONENT, GL_T, GL_TEXTURE0, GL_TEXTURE_1D, GL_TEXTURE_2D, GL_TEXTURE_COORD_ARRAY,
+    GL_TEXTURE_ENV_COLOR, GL_TEXTURE_ENV_MODE, GL_TEXTURE_GEN_MODE, GL_TEXTURE_GEN_S, GL_TEXTURE_GEN_T, GL_TRIANGLES,
+    GL_UNPACK_ALIGNMENT, GL_UNPACK_ROW_LENGTH, GL_UNPACK_SKIP_PIXELS, GL_UNPACK_SKIP_ROWS, GL_UNSIGNED_INT,
+    GL_VERTEX_ARRAY,
+};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -11,20 +26,19 @@ use glam::{DMat3, DMat4, DVec3, DVec4, Vec4};
 use glray_core::threads::copy_of;
 use glray_core::trace::{ArrayData, Value};
 
-use crate::args::{self, GL_DOUBLE, GL_FLOAT, GL_INT, GL_UNSIGNED_INT};
+use crate::args;
 use crate::arrays::{quad_split, BufferDraw, Client};
 use crate::camera::Viewport;
 use crate::client_draws::ClientDraws;
 use crate::error::{ErrorFlag, GlError, GlResult};
 use crate::frame::{DepthClear, Frame, ScissoredClear};
-use crate::gl::*;
 use crate::immediate::{Immediate, TEXCOORD_UNITS};
 use crate::lists::{DisplayLists, MAX_NESTING};
 use crate::matrix::{from_gl, Matrices};
 use crate::mesh::{Mesh, MeshBuilder};
 use crate::ops::{Attr, AttrForm, Op};
-use crate::primitive::{QuadSplit, GL_POLYGON, GL_TRIANGLES};
-use crate::state::State;
+use crate::primitive::QuadSplit;
+use crate::state::{State, MAX_ATTRIB_DEPTH};
 use crate::texture::{self, Level, LodRange, Texture, Unpack};
 use crate::vertex::{decode_attribute, Given};
 
@@ -575,12 +589,8 @@ impl Context {
     }
 
     fn execute(&mut self, op: Op, ty: u32, a: &[Value]) -> GlResult {
-        // Commands allowed between glBegin and glEnd (GL 2.1 section 2.6.3).
-        let inside_ok = matches!(
-            op,
-            Op::Attr(_) | Op::Material | Op::End | Op::CallList | Op::CallLists | Op::ArrayElement | Op::GetError
-        );
-        if !inside_ok && self.imm.inside() {
+        // Commands allowed between glBegin and glEnd (GL 2.1 section 2.6.3; gl-spec/classes.txt).
+        if !op.inside_begin() && self.imm.inside() {
             self.unseen_error.record::<()>(Err(GlError::InvalidOperation));
             return Err(GlError::InvalidOperation);
         }
@@ -1067,7 +1077,7 @@ impl Context {
                 if i >= 6 {
                     return Err(GlError::InvalidEnum);
                 }
-                if let Ok(p) = <[f64; 4]>::try_from(self.floats(a, 1, args::GL_DOUBLE, 4)) {
+                if let Ok(p) = <[f64; 4]>::try_from(self.floats(a, 1, GL_DOUBLE, 4)) {
                     let mv = *self.matrices.modelview.top();
                     self.s.clip_planes[i].1 = mv.inverse().transpose() * DVec4::from_array(p);
                 }
@@ -1233,7 +1243,7 @@ impl Context {
                     }
                     m.shininess = first
                 }
-                0x1603 => {} // GL_COLOR_INDEXES
+                GL_COLOR_INDEXES => {} // GL_COLOR_INDEXES
                 _ => return Err(GlError::InvalidEnum),
             }
         }
@@ -1292,6 +1302,11 @@ mod tests {
     use crate::frame::{Triangle, TriangleId};
     use crate::ops::op_for;
     use glam::Vec3;
+    use glray_gl::GL_ENABLE_BIT;
+    use glray_gl::{
+        GL_CLAMP_TO_EDGE, GL_COMPILE, GL_COMPILE_AND_EXECUTE, GL_LINEAR, GL_NEAREST, GL_REPEAT, GL_RGBA, GL_TEXTURE,
+        GL_TEXTURE_LOD_BIAS, GL_TEXTURE_MAX_LEVEL, GL_TEXTURE_MAX_LOD, GL_TEXTURE_MIN_LOD,
+    };
 
     /// Calls a command by name with scalar arguments (floats as F64, the rest as Int).
     pub(crate) fn call(c: &mut Context, name: &str, args: &[Value]) {
@@ -1389,11 +1404,11 @@ mod tests {
     #[test]
     pub(crate) fn lists_compile_execute_and_nest() {
         let mut c = context();
-        call(&mut c, "glNewList", &[i(1), i(0x1300)]); // GL_COMPILE
+        call(&mut c, "glNewList", &[i(1), i(GL_COMPILE as i64)]); // GL_COMPILE
         triangle(&mut c, true);
         call(&mut c, "glEndList", &[]);
         assert_eq!(c.frame().triangles.len(), 0, "GL_COMPILE draws nothing");
-        call(&mut c, "glNewList", &[i(2), i(0x1301)]); // COMPILE_AND_EXECUTE, calling list 1
+        call(&mut c, "glNewList", &[i(2), i(GL_COMPILE_AND_EXECUTE as i64)]); // COMPILE_AND_EXECUTE, calling list 1
         call(&mut c, "glTranslatef", &[f(0.5), f(0.0), f(0.0)]);
         call(&mut c, "glCallList", &[i(1)]);
         call(&mut c, "glEndList", &[]);
@@ -1419,7 +1434,7 @@ mod tests {
         }
         call(c, "glLightModeli", &[i(GL_LIGHT_MODEL_TWO_SIDE as i64), i(1)]);
         call(c, "glLightfv", &[i(GL_LIGHT0 as i64), i(0x1203), Value::Blob(&f32s(&[0.3, 0.4, 1.0, 0.0]))]);
-        call(c, "glMatrixMode", &[i(0x1702)]); // GL_TEXTURE
+        call(c, "glMatrixMode", &[i(GL_TEXTURE as i64)]); // GL_TEXTURE
         call(c, "glScalef", &[f(2.0), f(1.0), f(1.0)]);
         call(c, "glMatrixMode", &[i(0x1700)]);
         call(c, "glRotatef", &[f(30.0), f(1.0), f(1.0), f(0.0)]);
@@ -1728,7 +1743,7 @@ mod tests {
         call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(q.len() as i64), Value::Blob(&q), i(0x88E4)]);
         call(&mut c, "glColorPointer", &[i(4), i(0x1406), i(0), Value::Null]);
         call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
-        call(&mut c, "glEnableClientState", &[i(0x8076)]); // GL_COLOR_ARRAY
+        call(&mut c, "glEnableClientState", &[i(GL_COLOR_ARRAY as i64)]); // GL_COLOR_ARRAY
         call(&mut c, "glBindBuffer", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(3)]);
         let n = index_bytes.len() as i64;
         call(&mut c, "glBufferData", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(n), Value::Blob(&index_bytes), i(0x88E4)]);
@@ -1778,9 +1793,9 @@ mod tests {
             call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(4)]);
             call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(r.len() as i64), Value::Blob(&r), i(0x88E4)]);
             call(&mut c, "glColorPointer", &[i(4), i(0x1406), i(0), Value::Null]);
-            call(&mut c, "glEnableClientState", &[i(0x8076)]); // GL_COLOR_ARRAY
+            call(&mut c, "glEnableClientState", &[i(GL_COLOR_ARRAY as i64)]); // GL_COLOR_ARRAY
             call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
-            call(&mut c, "glEnableClientState", &[i(0x8075)]); // GL_NORMAL_ARRAY
+            call(&mut c, "glEnableClientState", &[i(GL_NORMAL_ARRAY as i64)]); // GL_NORMAL_ARRAY
             call(&mut c, "glBindBuffer", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(3)]);
             let size = index_bytes.len() as i64;
             call(
@@ -1819,7 +1834,7 @@ mod tests {
         // coordinates generated: a state no instance can be drawn with, so the vertex stage
         // keeps the run (below, without it, the run is taken as a mesh).
         let mut c = context();
-        call(&mut c, "glEnable", &[i(0x0C60)]); // GL_TEXTURE_GEN_S
+        call(&mut c, "glEnable", &[i(GL_TEXTURE_GEN_S as i64)]); // GL_TEXTURE_GEN_S
         let n = 39_999;
         let give = |c: &mut Context, mode: i64| {
             call(c, "glBegin", &[i(mode)]);
@@ -2144,7 +2159,7 @@ mod tests {
     fn a_new_image_leaves_a_held_texture_alone_and_keeps_the_other_levels() {
         let mut c = context();
         call(&mut c, "glBindTexture", &[i(GL_TEXTURE_2D as i64), i(7)]);
-        call(&mut c, "glTexParameteri", &[i(GL_TEXTURE_2D as i64), i(0x2801), i(0x2600)]); // MIN_FILTER NEAREST
+        call(&mut c, "glTexParameteri", &[i(GL_TEXTURE_2D as i64), i(0x2801), i(GL_NEAREST as i64)]); // MIN_FILTER NEAREST
         tex_image(&mut c, 0, 2, 0x1908, [255, 0, 0, 255]);
         tex_image(&mut c, 1, 1, 0x1908, [0, 255, 0, 255]);
         // A frame still holds the texture when the program uploads level 0 again.
@@ -2166,7 +2181,7 @@ mod tests {
         let mut c = context();
         let tex = i(GL_TEXTURE_2D as i64);
         call(&mut c, "glBindTexture", &[tex.clone(), i(5)]);
-        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2801), i(0x2600)]); // MIN_FILTER NEAREST
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2801), i(GL_NEAREST as i64)]); // MIN_FILTER NEAREST
         tex_image(&mut c, 0, 2, 0x1908, [255, 0, 0, 255]);
         call(&mut c, "glEnable", std::slice::from_ref(&tex));
         let sub = |c: &mut Context, texel: [u8; 4]| {
@@ -2223,23 +2238,23 @@ mod tests {
         let mut c = context();
         let tex = i(GL_TEXTURE_2D as i64);
         call(&mut c, "glBindTexture", &[tex.clone(), i(3)]);
-        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2801), i(0x2601)]); // MIN_FILTER LINEAR
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2801), i(GL_LINEAR as i64)]); // MIN_FILTER LINEAR
         let held = c.shared.textures[&3].clone();
         // The same value again, and a parameter glray does not follow: the same texture (no
         // copy; the renderer sees the frame unchanged).
         call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2801), i(0x2601)]);
         call(&mut c, "glTexParameterf", &[tex.clone(), i(0x2801), f(f64::from(0x2601))]);
-        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x813D), i(4)]); // GL_TEXTURE_MAX_LEVEL
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(GL_TEXTURE_MAX_LEVEL as i64), i(4)]); // GL_TEXTURE_MAX_LEVEL
         assert!(Arc::ptr_eq(&held, &c.shared.textures[&3]));
         // A new value: a new texture with it, the held one as it was.
-        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2803), i(0x812F)]); // WRAP_T CLAMP_TO_EDGE
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2803), i(GL_CLAMP_TO_EDGE as i64)]); // WRAP_T CLAMP_TO_EDGE
         let now = &c.shared.textures[&3];
         assert!(!Arc::ptr_eq(&held, now));
-        assert_eq!((now.wrap_t, held.wrap_t), (0x812F, 0x2901)); // GL_REPEAT held
+        assert_eq!((now.wrap_t, held.wrap_t), (0x812F, GL_REPEAT)); // GL_REPEAT held
         assert_eq!((now.min_filter, now.parameter(0x2801)), (0x2601, Some(0x2601)));
         // A texture not made yet takes a value that is not its default.
         call(&mut c, "glBindTexture", &[tex.clone(), i(4)]);
-        call(&mut c, "glTexParameteri", &[tex, i(0x2800), i(0x2600)]); // MAG_FILTER NEAREST
+        call(&mut c, "glTexParameteri", &[tex, i(0x2800), i(GL_NEAREST as i64)]); // MAG_FILTER NEAREST
         assert_eq!(c.shared.textures[&4].mag_filter, 0x2600);
     }
 
@@ -2251,9 +2266,9 @@ mod tests {
         triangle(&mut c, true);
         triangle(&mut c, true);
         // Each change below makes the next draw's lighting a new one.
-        call(&mut c, "glLightf", &[i(GL_LIGHT0 as i64), i(0x1207), f(2.0)]); // GL_CONSTANT_ATTENUATION
+        call(&mut c, "glLightf", &[i(GL_LIGHT0 as i64), i(GL_CONSTANT_ATTENUATION as i64), f(2.0)]); // GL_CONSTANT_ATTENUATION
         triangle(&mut c, true);
-        call(&mut c, "glMaterialf", &[i(0x0408), i(0x1601), f(50.0)]); // GL_FRONT_AND_BACK, GL_SHININESS
+        call(&mut c, "glMaterialf", &[i(GL_FRONT_AND_BACK as i64), i(GL_SHININESS as i64), f(50.0)]); // GL_FRONT_AND_BACK, GL_SHININESS
         triangle(&mut c, true);
         call(&mut c, "glEnable", &[i(GL_LIGHT0 as i64 + 1)]);
         triangle(&mut c, true);
@@ -2282,15 +2297,15 @@ mod tests {
         let mut c = context();
         let tex = i(GL_TEXTURE_2D as i64);
         call(&mut c, "glBindTexture", &[tex.clone(), i(1)]);
-        tex_image(&mut c, 0, 2, 0x1908, [255; 4]); // GL_RGBA
-        call(&mut c, "glTexParameterf", &[tex.clone(), i(0x8501), f(0.25)]); // GL_TEXTURE_LOD_BIAS
-        call(&mut c, "glTexParameteri", &[tex.clone(), i(0x813B), i(3)]); // GL_TEXTURE_MAX_LOD
+        tex_image(&mut c, 0, 2, GL_RGBA as i64, [255; 4]);
+        call(&mut c, "glTexParameterf", &[tex.clone(), i(GL_TEXTURE_LOD_BIAS as i64), f(0.25)]); // GL_TEXTURE_LOD_BIAS
+        call(&mut c, "glTexParameteri", &[tex.clone(), i(GL_TEXTURE_MAX_LOD as i64), i(3)]); // GL_TEXTURE_MAX_LOD
         let t = c.shared.textures[&1].clone();
         assert_eq!((t.lod.bias, t.lod.min, t.lod.max), (0.25, -1000.0, 3.0));
         // The same value again leaves the same texture.
         call(&mut c, "glTexParameterf", &[tex.clone(), i(0x8501), f(0.25)]);
         assert_eq!(c.shared.textures[&1].version, t.version);
-        call(&mut c, "glTexParameterf", &[tex, i(0x813A), f(-2.0)]); // GL_TEXTURE_MIN_LOD
+        call(&mut c, "glTexParameterf", &[tex, i(GL_TEXTURE_MIN_LOD as i64), f(-2.0)]); // GL_TEXTURE_MIN_LOD
         assert_eq!(c.shared.textures[&1].lod.min, -2.0);
         assert_ne!(c.shared.textures[&1].version, t.version);
     }

@@ -2,6 +2,7 @@
 //! assembly, facing from the clip-space winding, culling, polygon modes, flat shading, and
 //! lines and points as the screen-aligned quads a rasterizer fills.
 
+use glray_gl::{GL_FILL, GL_FRONT, GL_FRONT_AND_BACK, GL_LINE, GL_POINT, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
 use std::sync::Arc;
 
 use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
@@ -9,10 +10,9 @@ use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
 use crate::camera::Viewport;
 use crate::context::{vec4, Context, Out};
 use crate::frame::{Coverage, Solid, Surface, Texturing, Triangle, View, NO_LIGHTING};
-use crate::gl::*;
 use crate::instance::{facing_flip, Instance};
 use crate::mesh::Mesh;
-use crate::primitive::{assemble, QuadSplit, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
+use crate::primitive::{assemble, QuadSplit};
 
 /// What `draw_setup` decided for a draw.
 struct Setup {

@@ -11,7 +11,7 @@ use glray_core::trace::{Event, Value};
 
 use crate::context::Context;
 use crate::frame::Frame;
-use crate::ops::{op_for, AttrForm, Op};
+use crate::ops::{context_call, op_for, AttrForm, ContextCall, Op};
 
 /// Every call looks its thread's context up (four maps, twice per call): a 10M-vertex display
 /// list is 60M calls, and SipHash on these small integer keys was a fifth of compiling it.
@@ -21,29 +21,14 @@ type HashMap<K, V> = rustc_hash::FxHashMap<K, V>;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {
     Gl(Op, u32),
-    /// Creates a context; the argument at this index is the context to share with.
-    Create(usize),
-    /// Makes the context at this argument index current on the calling thread.
-    MakeCurrent(usize),
-    /// Copies the framebuffer into a 2D texture (glCopyTexImage2D, glCopyTexSubImage2D): what
-    /// it took is the real GL's to say (`Capture::copies_texture`).
-    CopiesTexture,
+    Context(ContextCall),
 }
 
 fn kind_of(name: &str) -> Option<Kind> {
-    Some(match name {
-        "glXCreateContext" | "glXCreateContextAttribsARB" | "eglCreateContext" => Kind::Create(2),
-        "glXCreateNewContext" | "glXCreateContextWithConfigSGIX" => Kind::Create(3),
-        "OSMesaCreateContext" | "OSMesaCreateContextAttribs" => Kind::Create(1),
-        "OSMesaCreateContextExt" => Kind::Create(4),
-        "glXMakeCurrent" => Kind::MakeCurrent(2),
-        "glXMakeContextCurrent" | "glXMakeCurrentReadSGI" | "eglMakeCurrent" => Kind::MakeCurrent(3),
-        "OSMesaMakeCurrent" => Kind::MakeCurrent(0),
-        "glCopyTexImage2D" | "glCopyTexImage2DEXT" | "glCopyTexSubImage2D" | "glCopyTexSubImage2DEXT" => {
-            Kind::CopiesTexture
-        }
-        _ => return op_for(name).map(|(op, ty)| Kind::Gl(op, ty)),
-    })
+    match context_call(name) {
+        Some(c) => Some(Kind::Context(c)),
+        None => op_for(name).map(|(op, ty)| Kind::Gl(op, ty)),
+    }
 }
 
 /// What the live library knows of a call that a trace does not say.
@@ -118,7 +103,7 @@ impl Capture {
     /// caller reads back from the real GL (`Context::copied_texture`). Asked after every call.
     #[inline]
     pub fn copies_texture(&self, cmd: usize) -> bool {
-        matches!(self.kinds.get(cmd), Some(Some(Kind::CopiesTexture)))
+        matches!(self.kinds.get(cmd), Some(Some(Kind::Context(ContextCall::CopiesTexture))))
     }
 
     /// Whether call number `cmd` runs display lists (glCallList, glCallLists), whose state
@@ -146,7 +131,7 @@ impl Capture {
             l.give(self.context(thread));
         }
         match kind {
-            Some(Kind::Create(share)) => {
+            Some(Kind::Context(ContextCall::Create(share))) => {
                 self.resolved = None;
                 let created = ret.map_or(0, Value::as_int) as u64;
                 let share = args.get(share).map_or(0, Value::as_int) as u64;
@@ -155,7 +140,7 @@ impl Capture {
                     self.groups.insert(created, group);
                 }
             }
-            Some(Kind::MakeCurrent(at)) => {
+            Some(Kind::Context(ContextCall::MakeCurrent(at))) => {
                 self.resolved = None;
                 let ok = ret.is_none_or(|r| r.as_int() != 0);
                 if ok {
@@ -165,7 +150,7 @@ impl Capture {
                     };
                 }
             }
-            Some(Kind::Gl(..) | Kind::CopiesTexture) | None => {}
+            Some(Kind::Gl(..) | Kind::Context(ContextCall::CopiesTexture)) | None => {}
         }
     }
 

@@ -8,9 +8,9 @@
 //! glVertex/glTexCoord values are taken as they are.
 
 use glam::{DVec3, DVec4};
+use glray_gl::GL_POLYGON;
 
 use crate::error::{GlError, GlResult};
-use crate::primitive::GL_POLYGON;
 
 /// Texture units with their own current texture coordinate.
 pub const TEXCOORD_UNITS: usize = 8;
@@ -129,7 +129,7 @@ impl Immediate {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::primitive::{GL_QUADS, GL_TRIANGLES};
+    use glray_gl::{GL_QUADS, GL_TRIANGLES};
 
     #[test]
     fn the_current_attributes_outlive_glend() {

@@ -21,6 +21,7 @@
 //! not 1) ends the watch; after the run was taken, what was given so far goes back through the
 //! vertex stage and the rest of the run follows it there.
 
+use glray_gl::{GL_POLYGON, GL_QUADS, GL_TRIANGLES};
 use std::sync::Arc;
 
 use glam::{DVec3, DVec4, Vec3, Vec4};
@@ -28,7 +29,7 @@ use glam::{DVec3, DVec4, Vec3, Vec4};
 use crate::arrays::{content_hash, BufferDraw};
 use crate::context::Context;
 use crate::mesh::{Attribute, Mesh, MeshBuilder};
-use crate::primitive::{QuadSplit, GL_POLYGON, GL_QUADS, GL_TRIANGLES};
+use crate::primitive::QuadSplit;
 use crate::vertex::Given;
 
 /// How many vertices a run reaches before it is taken from the vertex stage and kept as a mesh

@@ -26,7 +26,6 @@
 //! - `lists`: display lists with Mesa's rules (generic over what a list holds);
 //! - `primitive`: assembling vertex streams into points, lines and triangles, with the provoking
 //!   vertex flat shading uses;
-//! - `gl`: the GL enums capture reads.
 
 pub mod args;
 mod arrays;
@@ -37,7 +36,6 @@ mod draw;
 pub mod error;
 pub mod events;
 pub mod frame;
-pub mod gl;
 pub mod immediate;
 mod immediate_meshes;
 pub mod instance;

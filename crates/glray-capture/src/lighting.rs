@@ -6,6 +6,7 @@
 //! are the caller's choice of `Material` and normal.
 
 use glam::{DVec3, DVec4};
+use glray_gl::{GL_AMBIENT, GL_BACK, GL_DIFFUSE, GL_EMISSION, GL_FRONT, GL_SPECULAR};
 
 /// One light's parameters, with GL's initial values (`Light::new(0)` is GL_LIGHT0).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -102,20 +103,20 @@ pub struct ColorTarget {
 pub fn color_target(mode: u32) -> ColorTarget {
     let only = |ambient, diffuse, specular, emission| ColorTarget { ambient, diffuse, specular, emission };
     match mode {
-        0x1200 => only(true, false, false, false), // GL_AMBIENT
-        0x1201 => only(false, true, false, false), // GL_DIFFUSE
-        0x1202 => only(false, false, true, false), // GL_SPECULAR
-        0x1600 => only(false, false, false, true), // GL_EMISSION
-        _ => only(true, true, false, false),       // GL_AMBIENT_AND_DIFFUSE
+        GL_AMBIENT => only(true, false, false, false),  // GL_AMBIENT
+        GL_DIFFUSE => only(false, true, false, false),  // GL_DIFFUSE
+        GL_SPECULAR => only(false, false, true, false), // GL_SPECULAR
+        GL_EMISSION => only(false, false, false, true), // GL_EMISSION
+        _ => only(true, true, false, false),            // GL_AMBIENT_AND_DIFFUSE
     }
 }
 
 /// Which faces (front, back) glColorMaterial's `face` applies to.
 pub fn color_faces(face: u32) -> [bool; 2] {
     match face {
-        0x0404 => [true, false], // GL_FRONT
-        0x0405 => [false, true], // GL_BACK
-        _ => [true, true],       // GL_FRONT_AND_BACK
+        GL_FRONT => [true, false], // GL_FRONT
+        GL_BACK => [false, true],  // GL_BACK
+        _ => [true, true],         // GL_FRONT_AND_BACK
     }
 }
 

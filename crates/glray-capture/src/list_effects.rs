@@ -7,9 +7,13 @@
 //! by the lights a set-up list gave), gets what the list did.
 
 use glam::{DVec3, DVec4};
+use glray_gl::{
+    GL_ALPHA_TEST, GL_BLEND, GL_CCW, GL_CLIP_PLANE0, GL_COLOR_LOGIC_OP, GL_COLOR_MATERIAL, GL_CULL_FACE, GL_CW,
+    GL_DEPTH_TEST, GL_FLAT, GL_FOG, GL_LIGHT0, GL_LIGHTING, GL_LINE_SMOOTH, GL_NORMALIZE, GL_POINT_SMOOTH,
+    GL_POLYGON_OFFSET_FILL, GL_RESCALE_NORMAL, GL_SCISSOR_TEST, GL_SMOOTH, GL_TEXTURE_1D, GL_TEXTURE_2D,
+};
 
 use crate::context::Context;
-use crate::gl::*;
 use crate::lighting::{Light, LightModel, Material};
 
 /// The state a list can leave changed that the real GL answers queries with and draws with.

@@ -7,13 +7,15 @@
 //! - a nested glCallList is resolved when called (late binding), to a depth of 64;
 //! - glCallLists adds glListBase to names decoded from BYTE..FLOAT and 2/3/4_BYTES.
 
+use glray_gl::{
+    GL_BYTE, GL_COMPILE, GL_COMPILE_AND_EXECUTE, GL_FLOAT, GL_INT, GL_SHORT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT,
+    GL_UNSIGNED_SHORT,
+};
 use std::collections::HashMap;
 use std::sync::Arc;
 
 use crate::error::{GlError, GlResult};
 
-pub const GL_COMPILE: u32 = 0x1300;
-pub const GL_COMPILE_AND_EXECUTE: u32 = 0x1301;
 /// How deep glCallList may nest (Mesa's MAX_LIST_NESTING).
 pub const MAX_NESTING: usize = 64;
 
@@ -43,10 +45,10 @@ impl<T> Default for DisplayLists<T> {
 /// type glCallLists does not accept. The recorder sizes the array with it too.
 pub fn name_size(ty: u32) -> Option<usize> {
     Some(match ty {
-        0x1400 | 0x1401 => 1,                   // BYTE, UNSIGNED_BYTE
-        0x1402 | 0x1403 | 0x1407 => 2,          // SHORT, UNSIGNED_SHORT, 2_BYTES
-        0x1408 => 3,                            // 3_BYTES
-        0x1404 | 0x1405 | 0x1406 | 0x1409 => 4, // INT, UNSIGNED_INT, FLOAT, 4_BYTES
+        GL_BYTE | GL_UNSIGNED_BYTE => 1,                   // BYTE, UNSIGNED_BYTE
+        GL_SHORT | GL_UNSIGNED_SHORT | 0x1407 => 2,        // SHORT, UNSIGNED_SHORT, 2_BYTES
+        0x1408 => 3,                                       // 3_BYTES
+        GL_INT | GL_UNSIGNED_INT | GL_FLOAT | 0x1409 => 4, // INT, UNSIGNED_INT, FLOAT, 4_BYTES
         _ => return None,
     })
 }

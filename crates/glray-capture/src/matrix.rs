@@ -4,13 +4,9 @@
 //! it; the float entry points convert on the way in.
 
 use glam::{DMat4, DVec3, DVec4};
+use glray_gl::{GL_COLOR, GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE};
 
 use crate::error::{GlError, GlResult};
-
-pub const GL_MODELVIEW: u32 = 0x1700;
-pub const GL_PROJECTION: u32 = 0x1701;
-pub const GL_TEXTURE: u32 = 0x1702;
-pub const GL_COLOR: u32 = 0x1800;
 
 /// Mesa's stack depths (MAX_MODELVIEW_STACK_DEPTH and friends), as glGet reports them.
 pub const MODELVIEW_DEPTH: usize = 32;

@@ -511,7 +511,7 @@ impl MeshBuilder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::primitive::{GL_LINES, GL_QUADS, GL_TRIANGLES, GL_TRIANGLE_STRIP};
+    use glray_gl::{GL_LINES, GL_QUADS, GL_TRIANGLES, GL_TRIANGLE_STRIP};
 
     #[test]
     fn a_meshs_bytes_count_its_vertices_values_and_triangles() {

@@ -1,11 +1,10 @@
 //! Which GL commands capture follows, by name: each recorded command name maps once to an `Op`
 //! (a trace names a command at its first call), so that a call costs a table look-up, not a
-//! string comparison. The per-vertex attribute commands (glVertex3f, glColor4ubv,
-//! glMultiTexCoord2fARB, ...: about 200 names) are parsed from their name's suffix, the way the
-//! GL spec builds those names, instead of being listed.
-
-use crate::args::GL_UNSIGNED_SHORT;
-use crate::args::{GL_BYTE, GL_DOUBLE, GL_FLOAT, GL_INT, GL_SHORT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT};
+//! string comparison. The table is generated at build time (glray-spec's `gen::ops`) from
+//! gl-spec/capture.txt, classes.txt and the Khronos registry: the per-vertex attribute commands'
+//! forms (glVertex3f, glColor4ubv, glMultiTexCoord2fARB, ...: about 200 names) are read off their
+//! prototypes, and whether an op is compiled into display lists or allowed between glBegin and
+//! glEnd is classes.txt's word, the same the exports and the recorder go by.
 
 /// A per-vertex attribute.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -33,232 +32,76 @@ pub struct AttrForm {
     pub vector: bool,
 }
 
-macro_rules! ops {
-    ($($op:ident = $($name:literal)|+;)*) => {
-        /// The commands capture follows, other than vertex attributes.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-        pub enum Op {
-            Attr(AttrForm),
-            $($op,)*
-        }
+include!(concat!(env!("OUT_DIR"), "/ops.rs"));
 
-        /// The op of a command name and the GL type its pointer parameters point to (from the
-        /// name's f/d/i/s suffix: glLightfv's are floats, glLoadMatrixd's doubles); None for
-        /// commands capture does not follow.
-        pub fn op_for(name: &str) -> Option<(Op, u32)> {
-            if let Some(form) = attr_form(name) {
-                return Some((Op::Attr(form), form.ty));
-            }
-            let op = match name {
-                $($($name)|+ => Op::$op,)*
-                _ => return None,
-            };
-            Some((op, param_type(name)))
-        }
-    };
-}
-
-ops! {
-    Begin = "glBegin";
-    End = "glEnd";
-    MatrixMode = "glMatrixMode";
-    LoadIdentity = "glLoadIdentity";
-    LoadMatrix = "glLoadMatrixf" | "glLoadMatrixd";
-    MultMatrix = "glMultMatrixf" | "glMultMatrixd";
-    LoadTransposeMatrix = "glLoadTransposeMatrixf" | "glLoadTransposeMatrixd" | "glLoadTransposeMatrixfARB"
-        | "glLoadTransposeMatrixdARB";
-    MultTransposeMatrix = "glMultTransposeMatrixf" | "glMultTransposeMatrixd" | "glMultTransposeMatrixfARB"
-        | "glMultTransposeMatrixdARB";
-    Rotate = "glRotatef" | "glRotated";
-    Translate = "glTranslatef" | "glTranslated";
-    Scale = "glScalef" | "glScaled";
-    Frustum = "glFrustum" | "glFrustumf";
-    Ortho = "glOrtho" | "glOrthof";
-    PushMatrix = "glPushMatrix";
-    PopMatrix = "glPopMatrix";
-    Viewport = "glViewport";
-    DepthRange = "glDepthRange" | "glDepthRangef";
-    ActiveTexture = "glActiveTexture" | "glActiveTextureARB";
-    ClientActiveTexture = "glClientActiveTexture" | "glClientActiveTextureARB";
-    Enable = "glEnable";
-    Disable = "glDisable";
-    EnableClientState = "glEnableClientState";
-    DisableClientState = "glDisableClientState";
-    Material = "glMaterialf" | "glMaterialfv" | "glMateriali" | "glMaterialiv";
-    ColorMaterial = "glColorMaterial";
-    Light = "glLightf" | "glLightfv" | "glLighti" | "glLightiv";
-    LightModel = "glLightModelf" | "glLightModelfv" | "glLightModeli" | "glLightModeliv";
-    ShadeModel = "glShadeModel";
-    FrontFace = "glFrontFace";
-    CullFace = "glCullFace";
-    ClearColor = "glClearColor";
-    ClearDepth = "glClearDepth" | "glClearDepthf";
-    Clear = "glClear";
-    Rect = "glRectf" | "glRectd" | "glRecti" | "glRects" | "glRectfv" | "glRectdv" | "glRectiv" | "glRectsv";
-    NewList = "glNewList";
-    EndList = "glEndList";
-    CallList = "glCallList";
-    CallLists = "glCallLists";
-    ListBase = "glListBase";
-    GenLists = "glGenLists";
-    DeleteLists = "glDeleteLists";
-    PushAttrib = "glPushAttrib";
-    PopAttrib = "glPopAttrib";
-    VertexPointer = "glVertexPointer" | "glVertexPointerEXT";
-    NormalPointer = "glNormalPointer" | "glNormalPointerEXT";
-    ColorPointer = "glColorPointer" | "glColorPointerEXT";
-    TexCoordPointer = "glTexCoordPointer" | "glTexCoordPointerEXT";
-    InterleavedArrays = "glInterleavedArrays";
-    DrawArrays = "glDrawArrays" | "glDrawArraysEXT";
-    DrawElements = "glDrawElements";
-    DrawRangeElements = "glDrawRangeElements" | "glDrawRangeElementsEXT";
-    MultiDrawArrays = "glMultiDrawArrays" | "glMultiDrawArraysEXT";
-    MultiDrawElements = "glMultiDrawElements" | "glMultiDrawElementsEXT";
-    ArrayElement = "glArrayElement" | "glArrayElementEXT";
-    BindBuffer = "glBindBuffer" | "glBindBufferARB";
-    BufferData = "glBufferData" | "glBufferDataARB";
-    BufferSubData = "glBufferSubData" | "glBufferSubDataARB";
-    DeleteBuffers = "glDeleteBuffers" | "glDeleteBuffersARB";
-    BindTexture = "glBindTexture" | "glBindTextureEXT";
-    DeleteTextures = "glDeleteTextures" | "glDeleteTexturesEXT";
-    TexImage1D = "glTexImage1D";
-    TexImage2D = "glTexImage2D";
-    TexSubImage1D = "glTexSubImage1D";
-    TexSubImage2D = "glTexSubImage2D";
-    TexParameter = "glTexParameteri" | "glTexParameterf" | "glTexParameteriv" | "glTexParameterfv";
-    TexEnv = "glTexEnvi" | "glTexEnvf" | "glTexEnviv" | "glTexEnvfv";
-    TexGen = "glTexGeni" | "glTexGenf" | "glTexGend" | "glTexGeniv" | "glTexGenfv" | "glTexGendv";
-    PixelStore = "glPixelStorei" | "glPixelStoref";
-    Fog = "glFogf" | "glFogi" | "glFogfv" | "glFogiv";
-    BlendFunc = "glBlendFunc";
-    LogicOp = "glLogicOp";
-    AlphaFunc = "glAlphaFunc";
-    DepthFunc = "glDepthFunc";
-    DepthMask = "glDepthMask";
-    ColorMask = "glColorMask";
-    Scissor = "glScissor";
-    PolygonMode = "glPolygonMode";
-    PolygonOffset = "glPolygonOffset" | "glPolygonOffsetEXT";
-    LineWidth = "glLineWidth";
-    PointSize = "glPointSize";
-    ClipPlane = "glClipPlane";
-    GetError = "glGetError";
-    UseProgram = "glUseProgram" | "glUseProgramObjectARB";
-    BindFramebuffer = "glBindFramebuffer" | "glBindFramebufferEXT";
-    VertexAttribPointer = "glVertexAttribPointer" | "glVertexAttribPointerARB" | "glVertexAttribIPointer";
-}
-
-/// The parameter type a command name's suffix gives (GL_FLOAT when it gives none).
-fn param_type(name: &str) -> u32 {
-    let name = name.strip_suffix("ARB").or_else(|| name.strip_suffix("EXT")).unwrap_or(name);
-    let name = name.strip_suffix('v').unwrap_or(name);
-    match name.as_bytes().last() {
-        Some(b'd') => GL_DOUBLE,
-        Some(b'i') => GL_INT,
-        Some(b's') => GL_SHORT,
-        _ => GL_FLOAT,
-    }
-}
-
-/// Parses glVertex2f, glColor4ubv, glMultiTexCoord3dARB, glEdgeFlagv, ...
+/// The form of an attribute command, by name (None for any other command).
 pub fn attr_form(name: &str) -> Option<AttrForm> {
-    let name = name.strip_prefix("gl")?;
-    let name = name.strip_suffix("ARB").or_else(|| name.strip_suffix("EXT")).unwrap_or(name);
-    let (attr, rest) = [
-        ("Vertex", Attr::Vertex),
-        ("Normal", Attr::Normal),
-        ("SecondaryColor", Attr::SecondaryColor),
-        ("Color", Attr::Color),
-        ("MultiTexCoord", Attr::MultiTexCoord),
-        ("TexCoord", Attr::TexCoord),
-        ("EdgeFlag", Attr::EdgeFlag),
-    ]
-    .iter()
-    .find_map(|(prefix, attr)| name.strip_prefix(prefix).map(|rest| (*attr, rest)))?;
-    if attr == Attr::EdgeFlag {
-        return match rest {
-            "" => Some(AttrForm { attr, n: 1, ty: GL_UNSIGNED_BYTE, vector: false }),
-            "v" => Some(AttrForm { attr, n: 1, ty: GL_UNSIGNED_BYTE, vector: true }),
-            _ => None,
-        };
-    }
-    let n = rest.chars().next()?.to_digit(10)? as usize;
-    if !(1..=4).contains(&n) {
-        return None;
-    }
-    let rest = &rest[1..];
-    let (ty, rest) = [
-        ("ub", GL_UNSIGNED_BYTE),
-        ("us", GL_UNSIGNED_SHORT),
-        ("ui", GL_UNSIGNED_INT),
-        ("b", GL_BYTE),
-        ("s", GL_SHORT),
-        ("i", GL_INT),
-        ("f", GL_FLOAT),
-        ("d", GL_DOUBLE),
-    ]
-    .iter()
-    .find_map(|(suffix, ty)| rest.strip_prefix(suffix).map(|rest| (*ty, rest)))?;
-    let vector = match rest {
-        "" => false,
-        "v" => true,
-        _ => return None,
-    };
-    Some(AttrForm { attr, n, ty, vector })
-}
-
-impl Op {
-    /// Whether glNewList compiles the command into the list (GL 2.1 section 5.4: commands that
-    /// return values, create or delete objects, or set client state run at once instead).
-    pub fn compiled(self) -> bool {
-        !matches!(
-            self,
-            Op::NewList
-                | Op::EndList
-                | Op::GenLists
-                | Op::DeleteLists
-                | Op::EnableClientState
-                | Op::DisableClientState
-                | Op::ClientActiveTexture
-                | Op::VertexPointer
-                | Op::NormalPointer
-                | Op::ColorPointer
-                | Op::TexCoordPointer
-                | Op::InterleavedArrays
-                | Op::BindBuffer
-                | Op::BufferData
-                | Op::BufferSubData
-                | Op::DeleteBuffers
-                | Op::DeleteTextures
-                | Op::PixelStore
-                | Op::GetError
-                | Op::VertexAttribPointer
-                | Op::BindFramebuffer
-        )
+    match op_for(name)? {
+        (Op::Attr(form), _) => Some(form),
+        _ => None,
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glray_gl::{GL_BYTE, GL_DOUBLE, GL_FLOAT, GL_INT, GL_SHORT, GL_UNSIGNED_BYTE, GL_UNSIGNED_SHORT};
 
     #[test]
-    fn attribute_names_parse_from_their_suffix() {
+    fn attribute_forms_come_from_the_prototypes() {
         let f = |n| attr_form(n).map(|f| (f.attr, f.n, f.ty, f.vector));
         assert_eq!(f("glVertex3f"), Some((Attr::Vertex, 3, GL_FLOAT, false)));
         assert_eq!(f("glColor4ubv"), Some((Attr::Color, 4, GL_UNSIGNED_BYTE, true)));
         assert_eq!(f("glMultiTexCoord2dARB"), Some((Attr::MultiTexCoord, 2, GL_DOUBLE, false)));
         assert_eq!(f("glSecondaryColor3usEXT"), Some((Attr::SecondaryColor, 3, GL_UNSIGNED_SHORT, false)));
         assert_eq!(f("glEdgeFlagv"), Some((Attr::EdgeFlag, 1, GL_UNSIGNED_BYTE, true)));
+        assert_eq!(f("glNormal3b"), Some((Attr::Normal, 3, GL_BYTE, false)));
         assert_eq!(f("glVertexPointer"), None);
         assert_eq!(f("glVertex3hNV"), None);
         assert_eq!(f("glColorMaterial"), None);
-        assert_eq!(f("glVertex5f"), None);
+        assert_eq!(f("glColor4ubVertex2fSUN"), None);
         assert_eq!(op_for("glCallLists").map(|o| o.0), Some(Op::CallLists));
         assert_eq!(op_for("glLoadMatrixd"), Some((Op::LoadMatrix, GL_DOUBLE)));
         assert_eq!(op_for("glLightiv"), Some((Op::Light, GL_INT)));
         assert_eq!(op_for("glLoadTransposeMatrixfARB"), Some((Op::LoadTransposeMatrix, GL_FLOAT)));
         assert_eq!(op_for("glVertexAttrib3f"), None);
         assert!(!Op::GenLists.compiled() && Op::Rotate.compiled());
+        assert!(Op::Material.inside_begin() && Op::End.inside_begin() && !Op::Rotate.inside_begin());
+    }
+
+    #[test]
+    fn the_type_a_command_carries_is_its_name_suffixs() {
+        // The ops that read values by the type their command carries (`Context::floats`): the
+        // type from the prototype is the one GL's naming gives (f floats, d doubles, i ints, s
+        // shorts).
+        for family in ["Light", "LightModel", "Material", "TexParameter", "TexEnv", "TexGen", "Fog", "Rect"] {
+            for suffix in ["f", "fv", "i", "iv", "d", "dv", "s", "sv"] {
+                let name = format!("gl{family}{suffix}");
+                let Some((_, ty)) = op_for(&name) else { continue };
+                let want = match suffix.trim_end_matches('v') {
+                    "d" => GL_DOUBLE,
+                    "i" => GL_INT,
+                    "s" => GL_SHORT,
+                    _ => GL_FLOAT,
+                };
+                assert_eq!(ty, want, "{name}");
+            }
+        }
+        for name in ["glLoadMatrixf", "glMultMatrixd", "glLoadTransposeMatrixdARB", "glMultTransposeMatrixf"] {
+            let want = if name.ends_with('d') || name.ends_with("dARB") { GL_DOUBLE } else { GL_FLOAT };
+            assert_eq!(op_for(name).unwrap().1, want, "{name}");
+        }
+    }
+
+    #[test]
+    fn context_calls_name_their_arguments() {
+        assert_eq!(context_call("glXCreateContext"), Some(ContextCall::Create(2)));
+        assert_eq!(context_call("glXCreateNewContext"), Some(ContextCall::Create(3)));
+        assert_eq!(context_call("OSMesaCreateContextExt"), Some(ContextCall::Create(4)));
+        assert_eq!(context_call("eglMakeCurrent"), Some(ContextCall::MakeCurrent(3)));
+        assert_eq!(context_call("OSMesaMakeCurrent"), Some(ContextCall::MakeCurrent(0)));
+        assert_eq!(context_call("glCopyTexSubImage2D"), Some(ContextCall::CopiesTexture));
+        assert_eq!(context_call("glCopyTexImage1D"), None);
+        assert_eq!(context_call("glBegin"), None);
     }
 }

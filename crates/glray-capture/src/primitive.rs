@@ -10,17 +10,10 @@
 //! (`QuadSplit`), so that the GL look matches what programs were written against.
 
 use crate::error::{GlError, GlResult};
-
-pub const GL_POINTS: u32 = 0x0000;
-pub const GL_LINES: u32 = 0x0001;
-pub const GL_LINE_LOOP: u32 = 0x0002;
-pub const GL_LINE_STRIP: u32 = 0x0003;
-pub const GL_TRIANGLES: u32 = 0x0004;
-pub const GL_TRIANGLE_STRIP: u32 = 0x0005;
-pub const GL_TRIANGLE_FAN: u32 = 0x0006;
-pub const GL_QUADS: u32 = 0x0007;
-pub const GL_QUAD_STRIP: u32 = 0x0008;
-pub const GL_POLYGON: u32 = 0x0009;
+use glray_gl::{
+    GL_LINES, GL_LINE_LOOP, GL_LINE_STRIP, GL_POINTS, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP, GL_TRIANGLES,
+    GL_TRIANGLE_FAN, GL_TRIANGLE_STRIP,
+};
 
 /// The diagonal a GL_QUADS quad (corners 0, 1, 2, 3) is cut along. Mesa (llvmpipe, 22.3) cuts
 /// quads drawn directly (glBegin/glEnd, glDrawArrays) from corner 0 to 2, and quads drawn

@@ -2,11 +2,18 @@
 //! initial values, and glPopAttrib's restore by mask.
 
 use glam::{DVec4, Vec4};
+use glray_gl::{
+    GL_ALWAYS, GL_AMBIENT_AND_DIFFUSE, GL_BACK, GL_COLOR_BUFFER_BIT, GL_COPY, GL_DEPTH_BUFFER_BIT, GL_ENABLE_BIT,
+    GL_EXP, GL_EYE_LINEAR, GL_FILL, GL_FOG_BIT, GL_FRONT_AND_BACK, GL_LESS, GL_LIGHTING_BIT, GL_LINE_BIT, GL_MODULATE,
+    GL_POINT_BIT, GL_POLYGON_BIT, GL_SCISSOR_BIT, GL_TEXTURE_BIT, GL_TRANSFORM_BIT, GL_VIEWPORT_BIT,
+};
 
 use crate::camera::Viewport;
 use crate::frame::Fog;
-use crate::gl::*;
 use crate::lighting::{Light, LightModel, Material};
+
+/// How deep glPushAttrib's stack goes (GL_MAX_ATTRIB_STACK_DEPTH, 16 in Mesa).
+pub(crate) const MAX_ATTRIB_DEPTH: usize = 16;
 
 /// Texture coordinate generation of one coordinate (s or t).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -4,28 +4,18 @@
 //! because the texture environment treats LUMINANCE, ALPHA and INTENSITY differently.
 
 use glam::{Vec2, Vec4};
+use glray_gl::{
+    GL_ALPHA, GL_BGR, GL_BGRA, GL_FLOAT, GL_INTENSITY, GL_LINEAR, GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR_MIPMAP_NEAREST,
+    GL_LUMINANCE, GL_LUMINANCE_ALPHA, GL_MIRRORED_REPEAT, GL_NEAREST, GL_NEAREST_MIPMAP_LINEAR,
+    GL_NEAREST_MIPMAP_NEAREST, GL_RED, GL_REPEAT, GL_RGB, GL_RGBA, GL_TEXTURE_LOD_BIAS, GL_TEXTURE_MAG_FILTER,
+    GL_TEXTURE_MAX_LOD, GL_TEXTURE_MIN_FILTER, GL_TEXTURE_MIN_LOD, GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T,
+    GL_UNSIGNED_BYTE, GL_UNSIGNED_BYTE_2_3_3_REV, GL_UNSIGNED_BYTE_3_3_2, GL_UNSIGNED_INT_10_10_10_2,
+    GL_UNSIGNED_INT_2_10_10_10_REV, GL_UNSIGNED_INT_8_8_8_8, GL_UNSIGNED_INT_8_8_8_8_REV,
+    GL_UNSIGNED_SHORT_1_5_5_5_REV, GL_UNSIGNED_SHORT_4_4_4_4, GL_UNSIGNED_SHORT_4_4_4_4_REV, GL_UNSIGNED_SHORT_5_5_5_1,
+    GL_UNSIGNED_SHORT_5_6_5, GL_UNSIGNED_SHORT_5_6_5_REV,
+};
 
-use crate::args::{self, GL_UNSIGNED_BYTE};
-use crate::gl::{GL_TEXTURE_MAG_FILTER, GL_TEXTURE_MIN_FILTER, GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T};
-
-pub const GL_NEAREST: u32 = 0x2600;
-pub const GL_LINEAR: u32 = 0x2601;
-pub const GL_NEAREST_MIPMAP_NEAREST: u32 = 0x2700;
-pub const GL_LINEAR_MIPMAP_NEAREST: u32 = 0x2701;
-pub const GL_NEAREST_MIPMAP_LINEAR: u32 = 0x2702;
-pub const GL_LINEAR_MIPMAP_LINEAR: u32 = 0x2703;
-pub const GL_REPEAT: u32 = 0x2901;
-pub const GL_MIRRORED_REPEAT: u32 = 0x8370;
-
-pub const GL_ALPHA: u32 = 0x1906;
-pub const GL_RGB: u32 = 0x1907;
-pub const GL_RGBA: u32 = 0x1908;
-pub const GL_LUMINANCE: u32 = 0x1909;
-pub const GL_LUMINANCE_ALPHA: u32 = 0x190A;
-pub const GL_INTENSITY: u32 = 0x8049;
-pub const GL_BGR: u32 = 0x80E0;
-pub const GL_BGRA: u32 = 0x80E1;
-pub const GL_RED: u32 = 0x1903;
+use crate::args;
 
 /// glPixelStore's unpack state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -70,10 +60,6 @@ pub struct Texture {
     /// and a texture no frame holds is changed in place).
     pub version: u64,
 }
-
-pub const GL_TEXTURE_MIN_LOD: u32 = 0x813A;
-pub const GL_TEXTURE_MAX_LOD: u32 = 0x813B;
-pub const GL_TEXTURE_LOD_BIAS: u32 = 0x8501;
 
 /// A texture's level-of-detail parameters. GL adds the bias to the level of detail worked out
 /// from the pixel's footprint, then clamps the sum to [min, max] (OpenGL 2.1, 3.8.8); the
@@ -191,18 +177,18 @@ struct PackedType {
 impl PackedType {
     fn of(ty: u32) -> Option<PackedType> {
         let (bytes, widths, reversed): (usize, &'static [u32], bool) = match ty {
-            0x8032 => (1, &[3, 3, 2], false),       // GL_UNSIGNED_BYTE_3_3_2
-            0x8362 => (1, &[3, 3, 2], true),        // GL_UNSIGNED_BYTE_2_3_3_REV
-            0x8363 => (2, &[5, 6, 5], false),       // GL_UNSIGNED_SHORT_5_6_5
-            0x8364 => (2, &[5, 6, 5], true),        // GL_UNSIGNED_SHORT_5_6_5_REV
-            0x8033 => (2, &[4, 4, 4, 4], false),    // GL_UNSIGNED_SHORT_4_4_4_4
-            0x8365 => (2, &[4, 4, 4, 4], true),     // GL_UNSIGNED_SHORT_4_4_4_4_REV
-            0x8034 => (2, &[5, 5, 5, 1], false),    // GL_UNSIGNED_SHORT_5_5_5_1
-            0x8366 => (2, &[5, 5, 5, 1], true),     // GL_UNSIGNED_SHORT_1_5_5_5_REV
-            0x8035 => (4, &[8, 8, 8, 8], false),    // GL_UNSIGNED_INT_8_8_8_8
-            0x8367 => (4, &[8, 8, 8, 8], true),     // GL_UNSIGNED_INT_8_8_8_8_REV
-            0x8036 => (4, &[10, 10, 10, 2], false), // GL_UNSIGNED_INT_10_10_10_2
-            0x8368 => (4, &[10, 10, 10, 2], true),  // GL_UNSIGNED_INT_2_10_10_10_REV
+            GL_UNSIGNED_BYTE_3_3_2 => (1, &[3, 3, 2], false), // GL_UNSIGNED_BYTE_3_3_2
+            GL_UNSIGNED_BYTE_2_3_3_REV => (1, &[3, 3, 2], true), // GL_UNSIGNED_BYTE_2_3_3_REV
+            GL_UNSIGNED_SHORT_5_6_5 => (2, &[5, 6, 5], false), // GL_UNSIGNED_SHORT_5_6_5
+            GL_UNSIGNED_SHORT_5_6_5_REV => (2, &[5, 6, 5], true), // GL_UNSIGNED_SHORT_5_6_5_REV
+            GL_UNSIGNED_SHORT_4_4_4_4 => (2, &[4, 4, 4, 4], false), // GL_UNSIGNED_SHORT_4_4_4_4
+            GL_UNSIGNED_SHORT_4_4_4_4_REV => (2, &[4, 4, 4, 4], true), // GL_UNSIGNED_SHORT_4_4_4_4_REV
+            GL_UNSIGNED_SHORT_5_5_5_1 => (2, &[5, 5, 5, 1], false), // GL_UNSIGNED_SHORT_5_5_5_1
+            GL_UNSIGNED_SHORT_1_5_5_5_REV => (2, &[5, 5, 5, 1], true), // GL_UNSIGNED_SHORT_1_5_5_5_REV
+            GL_UNSIGNED_INT_8_8_8_8 => (4, &[8, 8, 8, 8], false), // GL_UNSIGNED_INT_8_8_8_8
+            GL_UNSIGNED_INT_8_8_8_8_REV => (4, &[8, 8, 8, 8], true), // GL_UNSIGNED_INT_8_8_8_8_REV
+            GL_UNSIGNED_INT_10_10_10_2 => (4, &[10, 10, 10, 2], false), // GL_UNSIGNED_INT_10_10_10_2
+            GL_UNSIGNED_INT_2_10_10_10_REV => (4, &[10, 10, 10, 2], true), // GL_UNSIGNED_INT_2_10_10_10_REV
             _ => return None,
         };
         Some(PackedType { bytes, widths, reversed })
@@ -264,7 +250,7 @@ pub fn decode_into(
     // Bytes, the type of nearly every image, read a row at a time through a table of the
     // values `args::normalize` gives (the same floats): element by element through the type's
     // dispatch, a 2048x2048 texture took ~270 ms, every frame a program uploads one.
-    let bytes = (packed.is_none() && ty == args::GL_UNSIGNED_BYTE).then(|| {
+    let bytes = (packed.is_none() && ty == GL_UNSIGNED_BYTE).then(|| {
         let mut table = [0.0f32; 256];
         for (v, t) in table.iter_mut().enumerate() {
             *t = args::normalize(v as f64, ty).clamp(0.0, 1.0) as f32;
@@ -272,7 +258,7 @@ pub fn decode_into(
         table
     });
     // Floats (scientific data) likewise, each clamped as it is read.
-    let floats = packed.is_none() && ty == args::GL_FLOAT;
+    let floats = packed.is_none() && ty == GL_FLOAT;
     for y in 0..height {
         let row = (y + unpack.skip_rows) * row_bytes + unpack.skip_pixels * pixel_bytes;
         if floats || bytes.is_some() {

@@ -4,16 +4,18 @@
 
 use glam::{DMat3, DMat4, DVec3, DVec4};
 use glray_core::trace::Value;
+use glray_gl::{
+    GL_EYE_LINEAR, GL_LINES, GL_OBJECT_LINEAR, GL_POINTS, GL_QUADS, GL_SPHERE_MAP, GL_TEXTURE0, GL_TRIANGLES,
+};
 
 use crate::args;
 use crate::context::{Context, Out};
 use crate::error::{GlError, GlResult};
 use crate::frame::{color_materials, Lighting};
-use crate::gl::*;
 use crate::immediate::TEXCOORD_UNITS;
 use crate::lighting::light_face;
 use crate::ops::{Attr, AttrForm, Op};
-use crate::primitive::{QuadSplit, GL_LINES, GL_POINTS, GL_QUADS, GL_TRIANGLES};
+use crate::primitive::QuadSplit;
 
 /// How many vertices of a glBegin of separate primitives are drawn at once (a multiple of 1,
 /// 2, 3 and 4, so that no primitive is cut; 3 MB of vertices).

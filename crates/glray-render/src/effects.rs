@@ -128,6 +128,7 @@ mod tests {
     use glray_capture::context::Context;
     use glray_capture::frame::Frame;
     use glray_core::trace::Value::{self, Int, F64};
+    use glray_gl::{GL_ALPHA_TEST, GL_BLEND, GL_COLOR_MATERIAL, GL_DEPTH_TEST, GL_GREATER, GL_LIGHT0, GL_LIGHTING};
 
     const SIZE: u32 = 64;
 
@@ -138,7 +139,7 @@ mod tests {
         call(&mut c, "glMatrixMode", &[Int(0x1701)]);
         call(&mut c, "glFrustum", &[-0.5, 0.5, -0.5, 0.5, 1.0, 30.0].map(F64));
         call(&mut c, "glMatrixMode", &[Int(0x1700)]);
-        call(&mut c, "glEnable", &[Int(0x0B71)]); // GL_DEPTH_TEST
+        call(&mut c, "glEnable", &[Int(GL_DEPTH_TEST as i64)]); // GL_DEPTH_TEST
         call(&mut c, "glClear", &[Int(0x4100)]); // colour and depth
         c
     }
@@ -162,9 +163,9 @@ mod tests {
     /// A grey floor at y = -1, lit from straight above by GL_LIGHT0, with colour material.
     fn lit_floor() -> Context {
         let mut c = context();
-        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
-        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
-        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
+        call(&mut c, "glEnable", &[Int(GL_LIGHTING as i64)]); // GL_LIGHTING
+        call(&mut c, "glEnable", &[Int(GL_LIGHT0 as i64)]); // GL_LIGHT0
+        call(&mut c, "glEnable", &[Int(GL_COLOR_MATERIAL as i64)]); // GL_COLOR_MATERIAL
         let up: Vec<u8> = [0.0f32, 1.0, 0.0, 0.0].iter().flat_map(|x| x.to_ne_bytes()).collect();
         call(&mut c, "glLightfv", &[Int(0x4000), Int(0x1203), Value::Blob(&up)]);
         let grey = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, -1.0, -12.0], [-4.0, -1.0, -12.0]];
@@ -239,9 +240,9 @@ mod tests {
     /// each vertex with its own normal (smooth shading), lit by GL_LIGHT0 from `light`.
     fn smooth_sphere(center: [f64; 3], segments: u32, rings: u32, light: [f32; 3]) -> Frame {
         let mut c = context();
-        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
-        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
-        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
+        call(&mut c, "glEnable", &[Int(GL_LIGHTING as i64)]); // GL_LIGHTING
+        call(&mut c, "glEnable", &[Int(GL_LIGHT0 as i64)]); // GL_LIGHT0
+        call(&mut c, "glEnable", &[Int(GL_COLOR_MATERIAL as i64)]); // GL_COLOR_MATERIAL
         let at: Vec<u8> = [light[0], light[1], light[2], 0.0].iter().flat_map(|x| x.to_ne_bytes()).collect();
         call(&mut c, "glLightfv", &[Int(0x4000), Int(0x1203), Value::Blob(&at)]);
         call(&mut c, "glColor3f", &[1.0, 1.0, 1.0].map(F64));
@@ -285,14 +286,14 @@ mod tests {
     fn translucent_surfaces_let_their_share_of_light_through() {
         let mut c = lit_floor();
         // Left: a half-transparent board, blended. Right: a board the alpha test discards.
-        call(&mut c, "glEnable", &[Int(0x0BE2)]); // GL_BLEND
+        call(&mut c, "glEnable", &[Int(GL_BLEND as i64)]); // GL_BLEND
         call(&mut c, "glBlendFunc", &[Int(0x0302), Int(0x0303)]);
         call(&mut c, "glColor4f", &[F64(0.5), F64(0.5), F64(0.5), F64(0.5)]);
         let left = [[-2.0, 0.5, -4.0], [-0.5, 0.5, -4.0], [-0.5, 0.5, -6.0], [-2.0, 0.5, -6.0]];
         corners_only(&mut c, left);
         call(&mut c, "glDisable", &[Int(0x0BE2)]);
-        call(&mut c, "glEnable", &[Int(0x0BC0)]); // GL_ALPHA_TEST
-        call(&mut c, "glAlphaFunc", &[Int(0x0204), F64(0.5)]); // GL_GREATER 0.5
+        call(&mut c, "glEnable", &[Int(GL_ALPHA_TEST as i64)]); // GL_ALPHA_TEST
+        call(&mut c, "glAlphaFunc", &[Int(GL_GREATER as i64), F64(0.5)]); // GL_GREATER 0.5
         call(&mut c, "glColor4f", &[F64(0.5), F64(0.5), F64(0.5), F64(0.2)]);
         let right = [[0.5, 0.5, -4.0], [2.0, 0.5, -4.0], [2.0, 0.5, -6.0], [0.5, 0.5, -6.0]];
         corners_only(&mut c, right);
@@ -367,9 +368,9 @@ mod tests {
         // own normal, the ray to the quad's centre would come straight back and see the black
         // background; about the shading normal it goes up to the board.
         let mut c = context();
-        call(&mut c, "glEnable", &[Int(0x0B50)]); // GL_LIGHTING
-        call(&mut c, "glEnable", &[Int(0x4000)]); // GL_LIGHT0
-        call(&mut c, "glEnable", &[Int(0x0B57)]); // GL_COLOR_MATERIAL
+        call(&mut c, "glEnable", &[Int(GL_LIGHTING as i64)]); // GL_LIGHTING
+        call(&mut c, "glEnable", &[Int(GL_LIGHT0 as i64)]); // GL_LIGHT0
+        call(&mut c, "glEnable", &[Int(GL_COLOR_MATERIAL as i64)]); // GL_COLOR_MATERIAL
         let facing = [[-1.0, -1.0, -5.0], [1.0, -1.0, -5.0], [1.0, 1.0, -5.0], [-1.0, 1.0, -5.0]];
         quad(&mut c, facing, [1.0, 1.0, 1.0], [0.0, 0.5, 0.75f64.sqrt()]);
         call(&mut c, "glDisable", &[Int(0x0B50)]);

@@ -8,16 +8,9 @@ use glam::{DVec2, DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
 use glray_capture::camera::Camera;
 use glray_capture::frame::{Coverage, Frame, Triangle, NO_LIGHTING};
 use glray_capture::lighting::{light_vertex_prepared, Light};
-use glray_capture::texture::{GL_ALPHA, GL_RGB};
-
-const GL_REPLACE: u32 = 0x1E01;
-const GL_MODULATE: u32 = 0x2100;
-const GL_DECAL: u32 = 0x2101;
-const GL_BLEND: u32 = 0x0BE2;
-const GL_ADD: u32 = 0x0104;
-const GL_LINEAR: u32 = 0x2601;
-const GL_EXP: u32 = 0x0800;
-const GL_EXP2: u32 = 0x0801;
+use glray_gl::{
+    GL_ADD, GL_ALPHA, GL_BLEND, GL_DECAL, GL_EXP, GL_EXP2, GL_LINEAR, GL_LUMINANCE, GL_MODULATE, GL_REPLACE, GL_RGB,
+};
 
 /// A fragment: its colour (before blending) and window depth.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -169,7 +162,7 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
         c = match tx.env_mode {
             GL_REPLACE => match base {
                 GL_ALPHA => cf.extend(at),
-                GL_RGB | 0x1909 => ct.extend(af), // RGB, LUMINANCE
+                GL_RGB | GL_LUMINANCE => ct.extend(af), // RGB, LUMINANCE
                 _ => s,
             },
             GL_DECAL => match base {

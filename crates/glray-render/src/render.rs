@@ -546,6 +546,7 @@ mod tests {
     use glam::{DMat4, Vec2, Vec3};
     use glray_capture::camera::Viewport;
     use glray_capture::frame::{Fog, Surface, Triangle};
+    use glray_gl::{GL_COLOR_MATERIAL, GL_DEPTH_TEST, GL_LIGHT0, GL_LIGHTING};
 
     fn surface() -> Surface {
         Surface::depth_tested()
@@ -752,10 +753,10 @@ mod tests {
             ("glMatrixMode", vec![Value::Int(0x1701)]),
             ("glFrustum", [-0.5, 0.5, -0.5, 0.5, 1.0, 20.0].map(Value::F64).to_vec()),
             ("glMatrixMode", vec![Value::Int(0x1700)]),
-            ("glEnable", vec![Value::Int(0x0B50)]), // GL_LIGHTING
-            ("glEnable", vec![Value::Int(0x4000)]), // GL_LIGHT0
-            ("glEnable", vec![Value::Int(0x0B57)]), // GL_COLOR_MATERIAL
-            ("glEnable", vec![Value::Int(0x0B71)]), // GL_DEPTH_TEST
+            ("glEnable", vec![Value::Int(GL_LIGHTING as i64)]), // GL_LIGHTING
+            ("glEnable", vec![Value::Int(GL_LIGHT0 as i64)]),   // GL_LIGHT0
+            ("glEnable", vec![Value::Int(GL_COLOR_MATERIAL as i64)]), // GL_COLOR_MATERIAL
+            ("glEnable", vec![Value::Int(GL_DEPTH_TEST as i64)]), // GL_DEPTH_TEST
         ];
         for (name, args) in setup.iter().chain(calls) {
             let (op, ty) = glray_capture::ops::op_for(name).unwrap();

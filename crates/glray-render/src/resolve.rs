@@ -7,17 +7,10 @@
 use glam::{BVec4A, DVec3, Vec3, Vec4, Vec4Swizzles};
 use glray_capture::camera::Camera;
 use glray_capture::frame::{Frame, Surface, Triangle};
+use glray_gl::{GL_EQUAL, GL_GEQUAL, GL_GREATER, GL_LEQUAL, GL_LESS, GL_NEVER, GL_NOTEQUAL};
 
 use crate::fragment::Fragment;
 use crate::scene::Hit;
-
-const GL_NEVER: u32 = 0x0200;
-const GL_LESS: u32 = 0x0201;
-const GL_EQUAL: u32 = 0x0202;
-const GL_LEQUAL: u32 = 0x0203;
-const GL_GREATER: u32 = 0x0204;
-const GL_NOTEQUAL: u32 = 0x0205;
-const GL_GEQUAL: u32 = 0x0206;
 
 /// Whether the closest hit decides every pixel of the frame.
 pub fn closest_hit_suffices(frame: &Frame) -> bool {

@@ -7,6 +7,7 @@
 //! them, and a frame end writes the drawable's buffer. Object names (textures, lists, buffers)
 //! are not remapped: Mesa hands them out in the same order on replay.
 
+use glray_gl::{GL_ARRAY_BUFFER_BINDING, GL_CLIENT_ACTIVE_TEXTURE, GL_RGB, GL_RGBA, GL_TEXTURE0, GL_UNSIGNED_BYTE};
 use std::collections::{HashMap, HashSet};
 use std::ffi::{c_char, c_void, CString};
 use std::path::{Path, PathBuf};
@@ -25,10 +26,6 @@ mod generated {
     include!(concat!(env!("OUT_DIR"), "/replay.rs"));
 }
 
-const GL_RGBA: u32 = 0x1908;
-const GL_RGB: u32 = 0x1907;
-const GL_UNSIGNED_BYTE: u32 = 0x1401;
-const GL_TEXTURE0: u32 = 0x84C0;
 /// The most memory one output argument of a replayed call may need.
 const MAX_OUTPUT: usize = 1 << 30;
 
@@ -475,7 +472,7 @@ impl Replayer {
             let get_i: GetI = std::mem::transmute(self.gl(cmd::glGetIntegerv)?);
             let bind: BindBuffer = std::mem::transmute(self.gl(cmd::glBindBuffer)?);
             let mut array_buffer = 0i32;
-            get_i(0x8894, &mut array_buffer); // GL_ARRAY_BUFFER_BINDING
+            get_i(GL_ARRAY_BUFFER_BINDING, &mut array_buffer); // GL_ARRAY_BUFFER_BINDING
             if array_buffer != 0 {
                 bind(0x8892, 0); // client memory: no buffer bound while pointing
             }
@@ -515,7 +512,7 @@ impl Replayer {
                     array_kind::TEXCOORD => {
                         let active: Active = std::mem::transmute(self.gl(cmd::glClientActiveTexture)?);
                         let mut previous = 0i32;
-                        get_i(0x84E1, &mut previous); // GL_CLIENT_ACTIVE_TEXTURE
+                        get_i(GL_CLIENT_ACTIVE_TEXTURE, &mut previous); // GL_CLIENT_ACTIVE_TEXTURE
                         active(GL_TEXTURE0 + a.index);
                         std::mem::transmute::<*mut c_void, Ptr>(self.gl(cmd::glTexCoordPointer)?)(
                             a.size, a.gl_type, a.stride, ptr,

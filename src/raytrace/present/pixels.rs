@@ -2,45 +2,36 @@
 //! then depth, with every piece of state that affects pixel drawing saved and restored around it
 //! (glPushAttrib), so that the program's GL state is as it left it.
 
+use glray_gl::{
+    GL_ALL_ATTRIB_BITS, GL_ALPHA_TEST, GL_ALWAYS, GL_BLEND, GL_CLIENT_ALL_ATTRIB_BITS, GL_COLOR_LOGIC_OP, GL_CULL_FACE,
+    GL_CURRENT_PROGRAM, GL_DEPTH_COMPONENT, GL_DEPTH_TEST, GL_FLOAT, GL_FOG, GL_FRAGMENT_PROGRAM_ARB, GL_LIGHTING,
+    GL_PIXEL_UNPACK_BUFFER, GL_PIXEL_UNPACK_BUFFER_BINDING, GL_RGBA, GL_SCISSOR_TEST, GL_STENCIL_TEST, GL_TEXTURE_1D,
+    GL_TEXTURE_2D, GL_TEXTURE_3D, GL_TEXTURE_CUBE_MAP, GL_UNPACK_ALIGNMENT, GL_UNPACK_LSB_FIRST, GL_UNPACK_ROW_LENGTH,
+    GL_UNPACK_SKIP_PIXELS, GL_UNPACK_SKIP_ROWS, GL_UNPACK_SWAP_BYTES, GL_UNSIGNED_BYTE, GL_VERTEX_PROGRAM_ARB,
+};
 use std::ffi::c_void;
 
 use glray_render::Rendered;
 
 use crate::real::{self, get_int};
 
-const GL_ALL_ATTRIB_BITS: u32 = 0x000F_FFFF;
-const GL_CLIENT_ALL_ATTRIB_BITS: u32 = 0xFFFF_FFFF;
-const GL_PIXEL_UNPACK_BUFFER: u32 = 0x88EC;
-const GL_PIXEL_UNPACK_BUFFER_BINDING: u32 = 0x88EF;
-const GL_CURRENT_PROGRAM: u32 = 0x8B8D;
-const GL_RGBA: u32 = 0x1908;
-const GL_UNSIGNED_BYTE: u32 = 0x1401;
-const GL_FLOAT: u32 = 0x1406;
-const GL_DEPTH_COMPONENT: u32 = 0x1902;
-const GL_ALWAYS: u32 = 0x0207;
-const GL_UNPACK_ALIGNMENT: u32 = 0x0CF5;
-const GL_UNPACK_ROW_LENGTH: u32 = 0x0CF2;
-const GL_UNPACK_SKIP_ROWS: u32 = 0x0CF3;
-const GL_UNPACK_SKIP_PIXELS: u32 = 0x0CF4;
-const GL_UNPACK_SWAP_BYTES: u32 = 0x0CF0;
-const GL_UNPACK_LSB_FIRST: u32 = 0x0CF1;
 /// Per-fragment and pixel-path state glDrawPixels fragments pass through.
 const OFF: &[u32] = &[
-    0x0B71, // DEPTH_TEST (turned on again for the depth pass)
-    0x0BE2, // BLEND
-    0x0BC0, // ALPHA_TEST
-    0x0DE1, // TEXTURE_2D
-    0x0DE0, // TEXTURE_1D
-    0x806F, // TEXTURE_3D
-    0x8513, // TEXTURE_CUBE_MAP
-    0x0B50, // LIGHTING
-    0x0B60, // FOG
-    0x0B90, // STENCIL_TEST
-    0x0C11, // SCISSOR_TEST
-    0x0BF2, // COLOR_LOGIC_OP
-    0x0B44, // CULL_FACE
-    0x8620, // VERTEX_PROGRAM_ARB
-    0x8804, // FRAGMENT_PROGRAM_ARB
+    GL_DEPTH_TEST,           // DEPTH_TEST (turned on again for the depth pass)
+    GL_BLEND,                // BLEND
+    GL_ALPHA_TEST,           // ALPHA_TEST
+    GL_TEXTURE_2D,           // TEXTURE_2D
+    GL_TEXTURE_1D,           // TEXTURE_1D
+    GL_TEXTURE_3D,           // TEXTURE_3D
+    GL_TEXTURE_CUBE_MAP,     // TEXTURE_CUBE_MAP
+    GL_LIGHTING,             // LIGHTING
+    GL_FOG,                  // FOG
+    GL_STENCIL_TEST,         // STENCIL_TEST
+    GL_SCISSOR_TEST,         // SCISSOR_TEST
+    GL_COLOR_LOGIC_OP,       // COLOR_LOGIC_OP
+    GL_CULL_FACE,            // CULL_FACE
+    GL_VERTEX_PROGRAM_ARB,   // VERTEX_PROGRAM_ARB
+    GL_FRAGMENT_PROGRAM_ARB, // FRAGMENT_PROGRAM_ARB
 ];
 
 /// Draws `r` over the whole drawable.

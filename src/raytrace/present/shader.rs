@@ -9,6 +9,18 @@
 //! may bind another context by the next frame); compiling the two small shaders costs well under
 //! a millisecond against the frame's ray tracing.
 
+use glray_gl::{
+    GL_ACTIVE_TEXTURE, GL_ALPHA_TEST, GL_ALWAYS, GL_BACK, GL_BLEND, GL_CLIP_DISTANCE0, GL_COLOR_LOGIC_OP,
+    GL_COLOR_WRITEMASK, GL_COMPILE_STATUS, GL_CULL_FACE, GL_CURRENT_PROGRAM, GL_DEPTH_CLAMP, GL_DEPTH_FUNC,
+    GL_DEPTH_TEST, GL_DEPTH_WRITEMASK, GL_FILL, GL_FLOAT, GL_FRAGMENT_SHADER, GL_FRAMEBUFFER_SRGB, GL_FRONT,
+    GL_FRONT_AND_BACK, GL_INFO_LOG_LENGTH, GL_LINK_STATUS, GL_NEAREST, GL_PIXEL_UNPACK_BUFFER,
+    GL_PIXEL_UNPACK_BUFFER_BINDING, GL_POLYGON_MODE, GL_POLYGON_OFFSET_FILL, GL_POLYGON_STIPPLE, GL_R32F,
+    GL_RASTERIZER_DISCARD, GL_RED, GL_RGBA, GL_RGBA8, GL_SAMPLER_BINDING, GL_SAMPLE_ALPHA_TO_COVERAGE,
+    GL_SAMPLE_COVERAGE, GL_SAMPLE_MASK, GL_SCISSOR_TEST, GL_STENCIL_TEST, GL_TEXTURE0, GL_TEXTURE_2D,
+    GL_TEXTURE_BINDING_2D, GL_TEXTURE_MAG_FILTER, GL_TEXTURE_MIN_FILTER, GL_TRIANGLES, GL_UNPACK_ALIGNMENT,
+    GL_UNPACK_ROW_LENGTH, GL_UNPACK_SKIP_PIXELS, GL_UNPACK_SKIP_ROWS, GL_UNPACK_SWAP_BYTES, GL_UNSIGNED_BYTE,
+    GL_VERTEX_ARRAY_BINDING, GL_VERTEX_SHADER, GL_VIEWPORT,
+};
 use std::ffi::c_void;
 
 use glray_render::Rendered;
@@ -35,78 +47,49 @@ void main() {
 }
 ";
 
-const GL_TRIANGLES: u32 = 0x0004;
-const GL_TEXTURE_2D: u32 = 0x0DE1;
-const GL_TEXTURE0: u32 = 0x84C0;
-const GL_ACTIVE_TEXTURE: u32 = 0x84E0;
-const GL_TEXTURE_BINDING_2D: u32 = 0x8069;
-const GL_SAMPLER_BINDING: u32 = 0x8919;
-const GL_TEXTURE_MIN_FILTER: u32 = 0x2801;
-const GL_TEXTURE_MAG_FILTER: u32 = 0x2800;
-const GL_NEAREST: i32 = 0x2600;
-const GL_RGBA8: i32 = 0x8058;
-const GL_R32F: i32 = 0x822E;
-const GL_RGBA: u32 = 0x1908;
-const GL_RED: u32 = 0x1903;
-const GL_UNSIGNED_BYTE: u32 = 0x1401;
-const GL_FLOAT: u32 = 0x1406;
-const GL_CURRENT_PROGRAM: u32 = 0x8B8D;
-const GL_VERTEX_ARRAY_BINDING: u32 = 0x85B5;
-const GL_PIXEL_UNPACK_BUFFER: u32 = 0x88EC;
-const GL_PIXEL_UNPACK_BUFFER_BINDING: u32 = 0x88EF;
-const GL_VIEWPORT: u32 = 0x0BA2;
-const GL_DEPTH_TEST: u32 = 0x0B71;
-const GL_DEPTH_FUNC: u32 = 0x0B74;
-const GL_DEPTH_WRITEMASK: u32 = 0x0B72;
-const GL_COLOR_WRITEMASK: u32 = 0x0C23;
-const GL_ALWAYS: u32 = 0x0207;
-const GL_POLYGON_MODE: u32 = 0x0B40;
-const GL_FRONT_AND_BACK: u32 = 0x0408;
-const GL_FRONT: u32 = 0x0404;
-const GL_BACK: u32 = 0x0405;
-const GL_FILL: i32 = 0x1B02;
-const GL_VERTEX_SHADER: u32 = 0x8B31;
-const GL_FRAGMENT_SHADER: u32 = 0x8B30;
-const GL_COMPILE_STATUS: u32 = 0x8B81;
-const GL_LINK_STATUS: u32 = 0x8B82;
-const GL_INFO_LOG_LENGTH: u32 = 0x8B84;
-
 /// Unpack state that would change how the images are read, with the value they are read with.
 const UNPACK: &[(u32, i32)] = &[
-    (0x0CF5, 4), // UNPACK_ALIGNMENT (rows of 4-byte texels)
-    (0x0CF2, 0), // UNPACK_ROW_LENGTH
-    (0x0CF3, 0), // UNPACK_SKIP_ROWS
-    (0x0CF4, 0), // UNPACK_SKIP_PIXELS
-    (0x0CF0, 0), // UNPACK_SWAP_BYTES
+    (GL_UNPACK_ALIGNMENT, 4),   // UNPACK_ALIGNMENT (rows of 4-byte texels)
+    (GL_UNPACK_ROW_LENGTH, 0),  // UNPACK_ROW_LENGTH
+    (GL_UNPACK_SKIP_ROWS, 0),   // UNPACK_SKIP_ROWS
+    (GL_UNPACK_SKIP_PIXELS, 0), // UNPACK_SKIP_PIXELS
+    (GL_UNPACK_SWAP_BYTES, 0),  // UNPACK_SWAP_BYTES
 ];
 
 /// Fragment and rasterizer state of every desktop GL 3.1+ context that the triangle must not
 /// meet (depth test is turned on, with GL_ALWAYS, to write depth).
 const OFF: &[u32] = &[
-    0x0BE2, // BLEND
-    0x0B90, // STENCIL_TEST
-    0x0C11, // SCISSOR_TEST
-    0x0B44, // CULL_FACE
-    0x0BF2, // COLOR_LOGIC_OP
-    0x8C89, // RASTERIZER_DISCARD
-    0x809E, // SAMPLE_ALPHA_TO_COVERAGE
-    0x80A0, // SAMPLE_COVERAGE
-    0x8DB9, // FRAMEBUFFER_SRGB
-    0x8037, // POLYGON_OFFSET_FILL
-    0x3000, 0x3001, 0x3002, 0x3003, 0x3004, 0x3005, 0x3006, 0x3007, // CLIP_DISTANCE0..7
+    GL_BLEND,                    // BLEND
+    GL_STENCIL_TEST,             // STENCIL_TEST
+    GL_SCISSOR_TEST,             // SCISSOR_TEST
+    GL_CULL_FACE,                // CULL_FACE
+    GL_COLOR_LOGIC_OP,           // COLOR_LOGIC_OP
+    GL_RASTERIZER_DISCARD,       // RASTERIZER_DISCARD
+    GL_SAMPLE_ALPHA_TO_COVERAGE, // SAMPLE_ALPHA_TO_COVERAGE
+    GL_SAMPLE_COVERAGE,          // SAMPLE_COVERAGE
+    GL_FRAMEBUFFER_SRGB,         // FRAMEBUFFER_SRGB
+    GL_POLYGON_OFFSET_FILL,      // POLYGON_OFFSET_FILL
+    GL_CLIP_DISTANCE0,
+    0x3001,
+    0x3002,
+    0x3003,
+    0x3004,
+    0x3005,
+    0x3006,
+    0x3007, // CLIP_DISTANCE0..7
 ];
 
 /// What GL 3.2 added (a 3.1 context answers GL_INVALID_ENUM for these).
 const OFF_32: &[u32] = &[
-    0x8E51, // SAMPLE_MASK
-    0x864F, // DEPTH_CLAMP
+    GL_SAMPLE_MASK, // SAMPLE_MASK
+    GL_DEPTH_CLAMP, // DEPTH_CLAMP
 ];
 
 /// What compatibility contexts add (when `shader` is forced there): per-fragment fixed-function
 /// state that still applies behind a GLSL program.
 const OFF_COMPAT: &[u32] = &[
-    0x0BC0, // ALPHA_TEST
-    0x0B42, // POLYGON_STIPPLE
+    GL_ALPHA_TEST,      // ALPHA_TEST
+    GL_POLYGON_STIPPLE, // POLYGON_STIPPLE
 ];
 
 /// The capabilities to turn off (and put back) in a context of kind `kind`.
@@ -329,8 +312,8 @@ unsafe fn upload(unit: u32, texture: u32, internal: i32, format: u32, ty: u32, w
     real::glActiveTexture(GL_TEXTURE0 + unit);
     real::glBindTexture(GL_TEXTURE_2D, texture);
     // One level, never filtered: NEAREST keeps the texture complete without mipmaps.
-    real::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    real::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    real::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST as i32);
+    real::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST as i32);
     real::glTexImage2D(GL_TEXTURE_2D, 0, internal, w, h, 0, format, ty, pixels as *mut c_void);
 }
 
@@ -358,8 +341,8 @@ unsafe fn draw_saved(r: &Rendered, kind: Kind, off: &[u32]) -> Result<(), String
         real::glBindSampler(0, 0);
         real::glBindSampler(1, 0);
     }
-    upload(0, objects.textures[0], GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, w, h, r.rgba.as_ptr().cast());
-    upload(1, objects.textures[1], GL_R32F, GL_RED, GL_FLOAT, w, h, r.depth.as_ptr().cast());
+    upload(0, objects.textures[0], GL_RGBA8 as i32, GL_RGBA, GL_UNSIGNED_BYTE, w, h, r.rgba.as_ptr().cast());
+    upload(1, objects.textures[1], GL_R32F as i32, GL_RED, GL_FLOAT, w, h, r.depth.as_ptr().cast());
     real::glUseProgram(objects.program);
     real::glUniform1i(real::glGetUniformLocation(objects.program, c"colour_image".as_ptr() as *mut c_void), 0);
     real::glUniform1i(real::glGetUniformLocation(objects.program, c"depth_image".as_ptr() as *mut c_void), 1);
@@ -372,7 +355,7 @@ unsafe fn draw_saved(r: &Rendered, kind: Kind, off: &[u32]) -> Result<(), String
     real::glDepthFunc(GL_ALWAYS);
     real::glDepthMask(1);
     real::glColorMask(1, 1, 1, 1);
-    real::glPolygonMode(GL_FRONT_AND_BACK, GL_FILL as u32);
+    real::glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
     real::glDrawArrays(GL_TRIANGLES, 0, 3);
     Ok(())
 }
