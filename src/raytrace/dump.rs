@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use glray_capture::frame::Frame;
+use glray_scene::frame::Frame;
 
 pub fn write(dir: &Path, number: u64, frame: &Frame) -> Result<(), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;

@@ -10,7 +10,6 @@
 //! and materials...).
 
 use glray_capture::events::Capture;
-use glray_capture::lighting::{Light, LightModel, Material};
 use glray_capture::list_effects::StateSeen;
 use glray_capture::matrix::Seen;
 use glray_gl::{
@@ -20,6 +19,7 @@ use glray_gl::{
     GL_SEPARATE_SPECULAR_COLOR, GL_SHININESS, GL_SINGLE_COLOR, GL_SPECULAR, GL_SPOT_CUTOFF, GL_SPOT_DIRECTION,
     GL_SPOT_EXPONENT, GL_TEXTURE_2D,
 };
+use glray_scene::lighting::{Light, LightModel, Material};
 
 use crate::real;
 

@@ -3,6 +3,7 @@
 //! vertices for the vertex stage.
 
 use glam::DVec4;
+use glray_core::hash::content_hash;
 use glray_core::threads::{collect_pieces, fill_pieces, piece_of, Filler};
 use glray_core::trace::{array_kind, Value};
 use glray_gl::{
@@ -10,14 +11,12 @@ use glray_gl::{
     GL_TEXTURE_COORD_ARRAY, GL_TRIANGLES, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT, GL_VERTEX_ARRAY,
 };
 
-use xxhash_rust::xxh3::xxh3_128;
-
 use crate::args;
 use crate::client_draws::KEEP_FROM_ELEMENTS;
 use crate::context::{Context, Fetched};
 use crate::error::{GlError, GlResult};
 use crate::immediate::TEXCOORD_UNITS;
-use crate::mesh::Mesh;
+use crate::mesh_builder::Compiled;
 use crate::ops::Op;
 use crate::primitive::QuadSplit;
 use crate::texture::Unpack;
@@ -215,21 +214,6 @@ fn fetch(sources: &[Option<Source<'_>>; 4], i: u64) -> Fetched {
         color: sources[2].as_ref().and_then(|s| s.fetch(i, true)),
         tex: sources[3].as_ref().and_then(|s| s.fetch(i, false)),
     }
-}
-
-/// What a draw's keys hold of a block of memory it reads (client arrays, client indices): 128
-/// bits of xxh3, which a kept mesh is found by (`client_draws`). A big block is hashed in
-/// pieces on glray's threads, and the pieces' hashes hashed: a 10M-triangle draw's indices and
-/// arrays are 240 MB read every frame, more than one core's share of the memory's bandwidth.
-pub(crate) fn content_hash(bytes: &[u8]) -> [i64; 2] {
-    use glray_core::threads::{PIECE, SPLIT_FROM};
-    let h = if bytes.len() < SPLIT_FROM {
-        xxh3_128(bytes)
-    } else {
-        let pieces = glray_core::threads::map_pieces(bytes, PIECE, xxh3_128);
-        xxh3_128(&pieces.iter().flat_map(|h| h.to_ne_bytes()).collect::<Vec<u8>>())
-    };
-    [h as i64, (h >> 64) as i64]
 }
 
 impl Context {
@@ -487,7 +471,7 @@ impl Context {
     /// most of a 25-second first frame) where 5M are enough. None for other draws, indices
     /// spread far wider than their number, or a vertex the arrays cannot give: the general path
     /// takes those (errors included).
-    pub(crate) fn indexed_triangles(&self, op: Op, a: &[Value]) -> Option<Mesh> {
+    pub(crate) fn indexed_triangles(&self, op: Op, a: &[Value]) -> Option<Compiled> {
         if !matches!(op, Op::DrawElements | Op::DrawRangeElements) {
             return None;
         }
@@ -556,7 +540,7 @@ impl Context {
         });
         let current = |k: usize, normalized: bool| sources[k].as_ref().and_then(|s| s.fetch(last, normalized));
         let end = (current(1, true).map(|n| n.truncate()), current(2, true), current(3, false));
-        Some(Mesh::from_arrays(positions, ws, normals, colors, texcoords, triangles, end))
+        Some(Compiled::from_arrays(positions, ws, normals, colors, texcoords, triangles, end))
     }
 
     /// Where each array (vertex, normal, color, texcoord 0) of the next draw comes from.

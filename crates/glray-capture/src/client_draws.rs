@@ -16,7 +16,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use crate::arrays::BufferDraw;
-use crate::mesh::Mesh;
+use crate::mesh_builder::Compiled;
 
 /// Client draws reading fewer elements than this stay the frame's own triangles: they are cheap
 /// to make again, and that path follows Mesa's clipping rule for quads (`QuadSplit`).
@@ -25,19 +25,19 @@ pub(crate) const KEEP_FROM_ELEMENTS: i64 = 4096;
 #[derive(Default)]
 pub(crate) struct ClientDraws {
     /// Each mesh, with the number of the frame that last drew it.
-    meshes: HashMap<BufferDraw, (Arc<Mesh>, u64)>,
+    meshes: HashMap<BufferDraw, (Arc<Compiled>, u64)>,
     /// The number of the frame being drawn.
     frame: u64,
 }
 
 impl ClientDraws {
     /// The mesh of a draw that read the same bytes before.
-    pub(crate) fn get(&self, key: &BufferDraw) -> Option<Arc<Mesh>> {
+    pub(crate) fn get(&self, key: &BufferDraw) -> Option<Arc<Compiled>> {
         self.meshes.get(key).map(|(mesh, _)| mesh.clone())
     }
 
     /// A draw's mesh, drawn in this frame.
-    pub(crate) fn insert(&mut self, key: BufferDraw, mesh: Arc<Mesh>) {
+    pub(crate) fn insert(&mut self, key: BufferDraw, mesh: Arc<Compiled>) {
         self.meshes.insert(key, (mesh, self.frame));
     }
 

@@ -8,16 +8,16 @@ use glray_gl::{
     GL_ALPHA_TEST, GL_AMBIENT, GL_AMBIENT_AND_DIFFUSE, GL_ARRAY_BUFFER, GL_BACK, GL_BLEND, GL_CCW, GL_CLIP_PLANE0,
     GL_COLOR_ARRAY, GL_COLOR_BUFFER_BIT, GL_COLOR_INDEXES, GL_COLOR_LOGIC_OP, GL_COLOR_MATERIAL,
     GL_CONSTANT_ATTENUATION, GL_CULL_FACE, GL_CURRENT_BIT, GL_CW, GL_DEPTH_BUFFER_BIT, GL_DEPTH_TEST, GL_DIFFUSE,
-    GL_DOUBLE, GL_ELEMENT_ARRAY_BUFFER, GL_EMISSION, GL_EYE_PLANE, GL_FILL, GL_FLAT, GL_FLOAT, GL_FOG, GL_FOG_COLOR,
-    GL_FOG_DENSITY, GL_FOG_END, GL_FOG_MODE, GL_FOG_START, GL_FRONT, GL_FRONT_AND_BACK, GL_INT, GL_LIGHT0, GL_LIGHTING,
-    GL_LIGHT_MODEL_AMBIENT, GL_LIGHT_MODEL_COLOR_CONTROL, GL_LIGHT_MODEL_LOCAL_VIEWER, GL_LIGHT_MODEL_TWO_SIDE,
-    GL_LINE, GL_LINEAR_ATTENUATION, GL_LINE_SMOOTH, GL_NORMALIZE, GL_NORMAL_ARRAY, GL_OBJECT_PLANE, GL_POINT,
-    GL_POINT_SMOOTH, GL_POLYGON, GL_POLYGON_OFFSET_FILL, GL_POSITION, GL_QUADRATIC_ATTENUATION, GL_RESCALE_NORMAL,
-    GL_S, GL_SCISSOR_TEST, GL_SEPARATE_SPECULAR_COLOR, GL_SHININESS, GL_SMOOTH, GL_SPECULAR, GL_SPOT_CUTOFF,
-    GL_SPOT_DIRECTION, GL_SPOT_EXPONENT, GL_T, GL_TEXTURE0, GL_TEXTURE_1D, GL_TEXTURE_2D, GL_TEXTURE_COORD_ARRAY,
-    GL_TEXTURE_ENV_COLOR, GL_TEXTURE_ENV_MODE, GL_TEXTURE_GEN_MODE, GL_TEXTURE_GEN_S, GL_TEXTURE_GEN_T, GL_TRIANGLES,
-    GL_UNPACK_ALIGNMENT, GL_UNPACK_ROW_LENGTH, GL_UNPACK_SKIP_PIXELS, GL_UNPACK_SKIP_ROWS, GL_UNSIGNED_INT,
-    GL_VERTEX_ARRAY,
+    GL_DOUBLE, GL_DRAW_FRAMEBUFFER, GL_ELEMENT_ARRAY_BUFFER, GL_EMISSION, GL_EYE_PLANE, GL_FILL, GL_FLAT, GL_FLOAT,
+    GL_FOG, GL_FOG_COLOR, GL_FOG_DENSITY, GL_FOG_END, GL_FOG_MODE, GL_FOG_START, GL_FRAMEBUFFER, GL_FRONT,
+    GL_FRONT_AND_BACK, GL_INT, GL_LIGHT0, GL_LIGHTING, GL_LIGHT_MODEL_AMBIENT, GL_LIGHT_MODEL_COLOR_CONTROL,
+    GL_LIGHT_MODEL_LOCAL_VIEWER, GL_LIGHT_MODEL_TWO_SIDE, GL_LINE, GL_LINEAR_ATTENUATION, GL_LINE_SMOOTH, GL_NORMALIZE,
+    GL_NORMAL_ARRAY, GL_OBJECT_PLANE, GL_POINT, GL_POINT_SMOOTH, GL_POLYGON, GL_POLYGON_OFFSET_FILL, GL_POSITION,
+    GL_QUADRATIC_ATTENUATION, GL_RESCALE_NORMAL, GL_S, GL_SCISSOR_TEST, GL_SEPARATE_SPECULAR_COLOR, GL_SHININESS,
+    GL_SMOOTH, GL_SPECULAR, GL_SPOT_CUTOFF, GL_SPOT_DIRECTION, GL_SPOT_EXPONENT, GL_T, GL_TEXTURE0, GL_TEXTURE_1D,
+    GL_TEXTURE_2D, GL_TEXTURE_COORD_ARRAY, GL_TEXTURE_ENV_COLOR, GL_TEXTURE_ENV_MODE, GL_TEXTURE_GEN_MODE,
+    GL_TEXTURE_GEN_S, GL_TEXTURE_GEN_T, GL_TRIANGLES, GL_UNPACK_ALIGNMENT, GL_UNPACK_ROW_LENGTH, GL_UNPACK_SKIP_PIXELS,
+    GL_UNPACK_SKIP_ROWS, GL_UNSIGNED_INT, GL_VERTEX_ARRAY,
 };
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -28,19 +28,23 @@ use glray_core::trace::{ArrayData, Value};
 
 use crate::args;
 use crate::arrays::{quad_split, BufferDraw, Client};
-use crate::camera::Viewport;
 use crate::client_draws::ClientDraws;
 use crate::error::{ErrorFlag, GlError, GlResult};
-use crate::frame::{DepthClear, Frame, ScissoredClear};
 use crate::immediate::{Immediate, TEXCOORD_UNITS};
 use crate::lists::{DisplayLists, MAX_NESTING};
 use crate::matrix::{from_gl, Matrices};
-use crate::mesh::{Mesh, MeshBuilder};
+use crate::mesh_builder::{Compiled, MeshBuilder};
 use crate::ops::{Attr, AttrForm, Op};
 use crate::primitive::QuadSplit;
 use crate::state::{State, MAX_ATTRIB_DEPTH};
-use crate::texture::{self, Level, LodRange, Texture, Unpack};
+use crate::texture::{self, Unpack};
 use crate::vertex::{decode_attribute, Given};
+use glray_scene::camera::Viewport;
+use glray_scene::facing::Face;
+use glray_scene::frame::{DepthClear, Frame, ScissoredClear};
+use glray_scene::lighting::ColorMaterialMode;
+use glray_scene::surface::{BlendFactor, CompareFunc, FogMode, LogicOp, TexEnvMode};
+use glray_scene::texture::{Level, Texture};
 
 /// A vertex after the vertex stage: eye position, lit colours of both faces, texture
 /// coordinates.
@@ -70,7 +74,7 @@ pub(crate) struct Fetched {
 const MAX_BUFFER_DRAWS: usize = 256;
 
 /// An array draw's fetched vertices as a mesh, its quads cut as `quads` says.
-fn fetched_mesh(mode: u32, verts: &[Fetched], quads: QuadSplit) -> Mesh {
+fn fetched_mesh(mode: u32, verts: &[Fetched], quads: QuadSplit) -> Compiled {
     let mut b = MeshBuilder::new(true, quads);
     b.begin(mode);
     for v in verts {
@@ -93,7 +97,7 @@ pub(crate) enum Kept {
 pub(crate) enum Item {
     Call(Op, u32, Vec<Kept>),
     /// A glBegin/glEnd, or an array draw resolved to its vertices at compile time.
-    Mesh(Arc<Mesh>),
+    Mesh(Arc<Compiled>),
 }
 
 /// What the contexts of a share group share (glXCreateContext's shareList, eglCreateContext's
@@ -103,7 +107,7 @@ pub struct Shared {
     pub(crate) lists: DisplayLists<Item>,
     pub(crate) buffers: HashMap<u32, Vec<u8>>,
     /// Meshes of array draws that read buffer objects only, while the buffers are unchanged.
-    pub(crate) buffer_draws: HashMap<BufferDraw, Arc<Mesh>>,
+    pub(crate) buffer_draws: HashMap<BufferDraw, Arc<Compiled>>,
     pub(crate) textures: HashMap<u32, Arc<Texture>>,
 }
 
@@ -243,7 +247,7 @@ impl Context {
             // frame: hashed where they are (as the draw's key needs anyway), the same bytes as
             // the last draw's are not copied again (10M triangles' positions and normals were
             // 120 MB copied every frame).
-            let h = (a.bytes.len() >= HASHED_FROM).then(|| crate::arrays::content_hash(a.bytes));
+            let h = (a.bytes.len() >= HASHED_FROM).then(|| glray_core::hash::content_hash(a.bytes));
             if h.is_some() && h == *hash && kept.len() == a.bytes.len() {
                 continue;
             }
@@ -452,7 +456,7 @@ impl Context {
 
     /// The mesh of an array draw (one run: glDrawArrays, glDrawElements, glDrawRangeElements),
     /// for keeping; None when it draws nothing.
-    fn array_mesh(&mut self, op: Op, a: &[Value]) -> GlResult<Option<Arc<Mesh>>> {
+    fn array_mesh(&mut self, op: Op, a: &[Value]) -> GlResult<Option<Arc<Compiled>>> {
         if let Some(mesh) = self.indexed_triangles(op, a) {
             return Ok(Some(Arc::new(mesh)));
         }
@@ -486,15 +490,16 @@ impl Context {
     /// A list's mesh, called: an instance when the state allows, else its vertices through
     /// the vertex stage as the calls that made it would have gone. The attribute values it
     /// gave last stay current either way.
-    pub(crate) fn run_mesh(&mut self, mesh: &Arc<Mesh>) -> GlResult {
-        if self.imm.inside() && !mesh.from_arrays {
+    pub(crate) fn run_mesh(&mut self, compiled: &Arc<Compiled>) -> GlResult {
+        if self.imm.inside() && !compiled.from_arrays {
             // The list's glBegin, inside the caller's.
             self.unseen_error.record::<()>(Err(GlError::InvalidOperation));
             return Err(GlError::InvalidOperation);
         }
         let saved = self.imm.current;
-        if self.instances(mesh) {
-            self.instance(mesh);
+        let mesh = &compiled.mesh;
+        if self.instances(compiled) {
+            self.instance(compiled);
         } else {
             let mut outs = Vec::with_capacity(mesh.positions.len());
             for i in 0..mesh.vertex_count() {
@@ -510,23 +515,23 @@ impl Context {
                 }
                 outs.push(self.vertex_stage(mesh.position(i)));
             }
-            if mesh.runs.is_empty() {
+            if compiled.runs.is_empty() {
                 // An indexed mesh: its triangles.
                 let corners: Vec<Out> = mesh.triangles.iter().flatten().map(|&i| outs[i as usize]).collect();
-                self.draw(GL_TRIANGLES, &corners, mesh.quads);
+                self.draw(GL_TRIANGLES, &corners, compiled.quads);
             }
-            for r in &mesh.runs {
-                self.draw(r.mode, &outs[r.start as usize..(r.start + r.count) as usize], mesh.quads);
+            for r in &compiled.runs {
+                self.draw(r.mode, &outs[r.start as usize..(r.start + r.count) as usize], compiled.quads);
             }
         }
         // GL leaves the current values of enabled arrays undefined after a draw; Mesa keeps
         // the last one of a colour array only.
         let cur = &mut self.imm.current;
         *cur = saved;
-        if !mesh.from_arrays || mesh.end_color.is_some() {
-            cur.normal = mesh.end_normal.unwrap_or(cur.normal);
-            cur.color = mesh.end_color.unwrap_or(cur.color);
-            cur.texcoords[0] = mesh.end_texcoord.unwrap_or(cur.texcoords[0]);
+        if !compiled.from_arrays || compiled.end_color.is_some() {
+            cur.normal = compiled.end_normal.unwrap_or(cur.normal);
+            cur.color = compiled.end_color.unwrap_or(cur.color);
+            cur.texcoords[0] = compiled.end_texcoord.unwrap_or(cur.texcoords[0]);
         }
         Ok(())
     }
@@ -689,12 +694,8 @@ impl Context {
             }
             Op::Material => self.material(a, ty)?,
             Op::ColorMaterial => {
-                let (face, mode) = (args::uint(a, 0), args::uint(a, 1));
-                if !matches!(face, GL_FRONT | GL_BACK | GL_FRONT_AND_BACK)
-                    || !matches!(mode, GL_EMISSION | GL_AMBIENT | GL_DIFFUSE | GL_SPECULAR | GL_AMBIENT_AND_DIFFUSE)
-                {
-                    return Err(GlError::InvalidEnum);
-                }
+                let face = Face::from_gl(args::uint(a, 0)).ok_or(GlError::InvalidEnum)?;
+                let mode = ColorMaterialMode::from_gl(args::uint(a, 1)).ok_or(GlError::InvalidEnum)?;
                 self.s.color_material_face = face;
                 self.s.color_material_mode = mode;
             }
@@ -723,10 +724,7 @@ impl Context {
                 GL_CW => self.s.front_ccw = false,
                 _ => return Err(GlError::InvalidEnum),
             },
-            Op::CullFace => match args::uint(a, 0) {
-                f @ (GL_FRONT | GL_BACK | GL_FRONT_AND_BACK) => self.s.cull_face = f,
-                _ => return Err(GlError::InvalidEnum),
-            },
+            Op::CullFace => self.s.cull_face = Face::from_gl(args::uint(a, 0)).ok_or(GlError::InvalidEnum)?,
             Op::ClearColor => {
                 self.s.clear_color =
                     Vec4::from_array(std::array::from_fn(|i| args::float(a, i) as f32)).clamp(Vec4::ZERO, Vec4::ONE)
@@ -949,32 +947,33 @@ impl Context {
                 let target = args::uint(a, 0);
                 if target == GL_TEXTURE_2D || target == GL_TEXTURE_1D {
                     let value = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0);
-                    let (v, pname) = (value as u32, args::uint(a, 1));
                     // Only a value that changes touches the texture: a change is a new version
                     // to the renderer (no unchanged frame shown again), and a texture this frame
                     // has drawn with is copied to be changed, every level of it. Programs set
                     // the same parameters before every draw (VTK does).
                     let name = self.bound_texture_name(target);
-                    let (now, mut lod) = match self.shared.textures.get(&name) {
-                        Some(t) => (t.parameter(pname), t.lod),
-                        None => (Texture::default().parameter(pname), LodRange::default()),
+                    let now = self.shared.textures.get(&name);
+                    // The sampling state alone (every field but the levels is a number).
+                    let mut set = match now {
+                        Some(t) => Texture { levels: Vec::new(), ..**t },
+                        None => Texture { version: 0, ..Texture::default() },
                     };
-                    if let Some(p) = lod.parameter_mut(pname) {
-                        // The level-of-detail parameters are floats, set the same way.
-                        if *p != value as f32 {
-                            *p = value as f32;
-                            self.texture_mut(target).lod = lod;
+                    let before = Texture { levels: Vec::new(), ..set };
+                    match texture::set_parameter(&mut set, args::uint(a, 1), value) {
+                        Some(Err(e)) => return Err(e),
+                        Some(Ok(())) if set != before => {
+                            let t = self.texture_mut(target);
+                            (t.min_filter, t.mag_filter, t.wrap_s, t.wrap_t, t.lod) =
+                                (set.min_filter, set.mag_filter, set.wrap_s, set.wrap_t, set.lod);
                         }
-                    } else if now.is_some_and(|p| p != v) {
-                        if let Some(p) = self.texture_mut(target).parameter_mut(pname) {
-                            *p = v;
-                        }
+                        _ => {}
                     }
                 }
             }
             Op::TexEnv => match args::uint(a, 1) {
                 GL_TEXTURE_ENV_MODE => {
-                    self.s.env_mode = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0) as u32
+                    let mode = self.floats(a, 2, ty, 1).first().copied().unwrap_or(0.0) as u32;
+                    self.s.env_mode = TexEnvMode::from_gl(mode).ok_or(GlError::InvalidEnum)?
                 }
                 GL_TEXTURE_ENV_COLOR => self.s.env_color = vec4(self.color_param(a, 2, ty)),
                 _ => {}
@@ -1020,7 +1019,7 @@ impl Context {
                 let color = vec4(self.color_param(a, 1, ty));
                 let f = &mut self.s.fog;
                 match args::uint(a, 0) {
-                    GL_FOG_MODE => f.mode = first as u32,
+                    GL_FOG_MODE => f.mode = FogMode::from_gl(first as u32).ok_or(GlError::InvalidEnum)?,
                     GL_FOG_DENSITY => f.density = first as f32,
                     GL_FOG_START => f.start = first as f32,
                     GL_FOG_END => f.end = first as f32,
@@ -1028,15 +1027,18 @@ impl Context {
                     _ => {}
                 }
             }
-            Op::BlendFunc => self.s.blend_func = (args::uint(a, 0), args::uint(a, 1)),
-            Op::AlphaFunc => self.s.alpha_func = (args::uint(a, 0), args::float(a, 1).clamp(0.0, 1.0) as f32),
-            Op::DepthFunc => self.s.depth_func = args::uint(a, 0),
+            Op::BlendFunc => {
+                let factor = |k| BlendFactor::from_gl(args::uint(a, k)).ok_or(GlError::InvalidEnum);
+                self.s.blend_func = (factor(0)?, factor(1)?)
+            }
+            Op::AlphaFunc => {
+                let func = CompareFunc::from_gl(args::uint(a, 0)).ok_or(GlError::InvalidEnum)?;
+                self.s.alpha_func = (func, args::float(a, 1).clamp(0.0, 1.0) as f32)
+            }
+            Op::DepthFunc => self.s.depth_func = CompareFunc::from_gl(args::uint(a, 0)).ok_or(GlError::InvalidEnum)?,
             Op::DepthMask => self.s.depth_mask = args::int(a, 0) != 0,
             Op::ColorMask => self.s.color_mask = std::array::from_fn(|k| args::int(a, k) != 0),
-            Op::LogicOp => match args::uint(a, 0) {
-                op @ 0x1500..=0x150F => self.s.logic_op = op,
-                _ => return Err(GlError::InvalidEnum),
-            },
+            Op::LogicOp => self.s.logic_op = LogicOp::from_gl(args::uint(a, 0)).ok_or(GlError::InvalidEnum)?,
             Op::Scissor => {
                 let (width, height) = (args::int(a, 2), args::int(a, 3));
                 if width < 0 || height < 0 {
@@ -1088,7 +1090,7 @@ impl Context {
             Op::UseProgram => self.programmable = args::uint(a, 0) != 0,
             Op::BindFramebuffer => {
                 // GL_FRAMEBUFFER or GL_DRAW_FRAMEBUFFER: where draws go.
-                if matches!(args::uint(a, 0), 0x8D40 | 0x8CA9) {
+                if matches!(args::uint(a, 0), GL_FRAMEBUFFER | GL_DRAW_FRAMEBUFFER) {
                     self.framebuffer = args::uint(a, 1);
                 }
             }
@@ -1299,14 +1301,15 @@ impl Context {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::{Triangle, TriangleId};
     use crate::ops::op_for;
     use glam::Vec3;
     use glray_gl::GL_ENABLE_BIT;
     use glray_gl::{
-        GL_CLAMP_TO_EDGE, GL_COMPILE, GL_COMPILE_AND_EXECUTE, GL_LINEAR, GL_NEAREST, GL_REPEAT, GL_RGBA, GL_TEXTURE,
+        GL_CLAMP_TO_EDGE, GL_COMPILE, GL_COMPILE_AND_EXECUTE, GL_LINEAR, GL_NEAREST, GL_RGBA, GL_TEXTURE,
         GL_TEXTURE_LOD_BIAS, GL_TEXTURE_MAX_LEVEL, GL_TEXTURE_MAX_LOD, GL_TEXTURE_MIN_LOD,
     };
+    use glray_scene::frame::{Triangle, TriangleId};
+    use glray_scene::texture::{Filter, Wrap};
 
     /// Calls a command by name with scalar arguments (floats as F64, the rest as Int).
     pub(crate) fn call(c: &mut Context, name: &str, args: &[Value]) {
@@ -1370,7 +1373,7 @@ mod tests {
         call(&mut c, "glCullFace", &[i(GL_FRONT as i64)]);
         call(&mut c, "glPopAttrib", &[]);
         assert!(!c.s.cull, "GL_ENABLE_BIT restores the enable");
-        assert_eq!(c.s.cull_face, GL_FRONT, "but not the face, which GL_POLYGON_BIT saves");
+        assert_eq!(c.s.cull_face, Face::Front, "but not the face, which GL_POLYGON_BIT saves");
         for _ in 0..MAX_ATTRIB_DEPTH {
             call(&mut c, "glPushAttrib", &[i(0xFFFFF)]);
         }
@@ -1531,10 +1534,10 @@ mod tests {
     }
 
     /// Whether an instance's triangle is kept by GL's own rule: its window winding.
-    fn on_window(inst: &crate::instance::Instance, k: usize) -> bool {
+    fn on_window(inst: &glray_scene::instance::Instance, k: usize) -> bool {
         let clip = inst.mesh.triangles[k].map(|v| inst.object_to_clip * inst.mesh.position(v));
-        let front = crate::draw::window_facing(clip, inst.front_ccw).unwrap_or(true);
-        !crate::draw::culled(inst.cull, front)
+        let front = glray_scene::facing::window_facing(clip, inst.front_ccw).unwrap_or(true);
+        !glray_scene::facing::culled(inst.cull, front)
     }
 
     #[test]
@@ -2172,7 +2175,7 @@ mod tests {
         assert_eq!(texel(now, 1), texel(&held, 1), "the other level is kept");
         assert_eq!(now.levels.len(), 2);
         assert_eq!(now.min_filter, held.min_filter);
-        assert_eq!(now.min_filter, 0x2600);
+        assert_eq!(now.min_filter, Filter::Nearest);
         assert_eq!(c.errors.take(), 0);
     }
 
@@ -2250,12 +2253,12 @@ mod tests {
         call(&mut c, "glTexParameteri", &[tex.clone(), i(0x2803), i(GL_CLAMP_TO_EDGE as i64)]); // WRAP_T CLAMP_TO_EDGE
         let now = &c.shared.textures[&3];
         assert!(!Arc::ptr_eq(&held, now));
-        assert_eq!((now.wrap_t, held.wrap_t), (0x812F, GL_REPEAT)); // GL_REPEAT held
-        assert_eq!((now.min_filter, now.parameter(0x2801)), (0x2601, Some(0x2601)));
+        assert_eq!((now.wrap_t, held.wrap_t), (Wrap::ClampToEdge, Wrap::Repeat)); // GL_REPEAT held
+        assert_eq!(now.min_filter, Filter::Linear);
         // A texture not made yet takes a value that is not its default.
         call(&mut c, "glBindTexture", &[tex.clone(), i(4)]);
         call(&mut c, "glTexParameteri", &[tex, i(0x2800), i(GL_NEAREST as i64)]); // MAG_FILTER NEAREST
-        assert_eq!(c.shared.textures[&4].mag_filter, 0x2600);
+        assert_eq!(c.shared.textures[&4].mag_filter, Filter::Nearest);
     }
 
     #[test]

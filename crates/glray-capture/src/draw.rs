@@ -2,17 +2,20 @@
 //! assembly, facing from the clip-space winding, culling, polygon modes, flat shading, and
 //! lines and points as the screen-aligned quads a rasterizer fills.
 
-use glray_gl::{GL_FILL, GL_FRONT, GL_FRONT_AND_BACK, GL_LINE, GL_POINT, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
+use glray_gl::{GL_FILL, GL_LINE, GL_POINT, GL_POLYGON, GL_QUADS, GL_QUAD_STRIP};
 use std::sync::Arc;
 
-use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
+use glam::{DMat4, DVec2, DVec4, Vec2, Vec3, Vec4};
 
-use crate::camera::Viewport;
 use crate::context::{vec4, Context, Out};
-use crate::frame::{Coverage, Solid, Surface, Texturing, Triangle, View, NO_LIGHTING};
-use crate::instance::{facing_flip, Instance};
-use crate::mesh::Mesh;
+use crate::mesh_builder::Compiled;
 use crate::primitive::{assemble, QuadSplit};
+use glray_scene::camera::Viewport;
+use glray_scene::facing::{culled, facing_flip, window_facing};
+use glray_scene::frame::{Solid, Triangle, View, NO_LIGHTING};
+use glray_scene::instance::Instance;
+use glray_scene::lighting::ColorMaterial;
+use glray_scene::surface::{Coverage, Surface, Texturing};
 
 /// What `draw_setup` decided for a draw.
 struct Setup {
@@ -22,17 +25,6 @@ struct Setup {
     surface: u32,
     lighting: u32,
     sequence: u32,
-}
-
-/// Whether a triangle with these clip-space corners faces front, from its window-space winding
-/// (from clip coordinates: exact even for triangles that cross the near plane, which clipping
-/// keeps on the same plane); None for one with no area on the screen.
-#[inline]
-pub(crate) fn window_facing(clip: [DVec4; 3], front_ccw: bool) -> Option<bool> {
-    let [a, b, c] = clip;
-    let det =
-        DMat3::from_cols(DVec3::new(a.x, a.y, a.w), DVec3::new(b.x, b.y, b.w), DVec3::new(c.x, c.y, c.w)).determinant();
-    (det != 0.0).then_some((det > 0.0) == front_ccw)
 }
 
 /// The point a fraction `s` of the way from `a` to `b` (glam's `lerp`), but `b` itself at the
@@ -57,16 +49,6 @@ pub(crate) fn near_part(a: DVec4, b: DVec4) -> Option<(f64, f64)> {
         (false, false) => None,
         (true, false) => Some((0.0, da / (da - db))),
         (false, true) => Some((da / (da - db), 1.0)),
-    }
-}
-
-/// Whether glCullFace's `cull` (when GL_CULL_FACE is on) removes a triangle of this facing.
-#[inline]
-pub(crate) fn culled(cull: Option<u32>, front: bool) -> bool {
-    match cull {
-        Some(GL_FRONT_AND_BACK) => true,
-        Some(face) => (face == GL_FRONT) == front,
-        None => false,
     }
 }
 
@@ -179,7 +161,8 @@ impl Context {
             // before a new one is made, whose lights are copied and prepared (~1,400
             // instructions, most of a small draw's set-up).
             let s = &self.s;
-            let color_material = s.color_material.then_some((s.color_material_face, s.color_material_mode));
+            let color_material =
+                s.color_material.then_some(ColorMaterial { face: s.color_material_face, mode: s.color_material_mode });
             let enabled = s.lights.iter().filter(|l| l.enabled);
             let same = self
                 .frame
@@ -211,8 +194,8 @@ impl Context {
     /// Whether a list's mesh can be drawn now as an instance: triangles filled, texture
     /// coordinates not generated from positions, positions with w = 1, an invertible affine
     /// modelview (rays go into the mesh's space through its inverse).
-    pub(crate) fn instances(&self, mesh: &Mesh) -> bool {
-        !mesh.lines_or_points && mesh.ws.is_none() && self.instances_now()
+    pub(crate) fn instances(&self, compiled: &Compiled) -> bool {
+        !compiled.lines_or_points && compiled.mesh.ws.is_none() && self.instances_now()
     }
 
     /// The state's part of `instances`: what no call between glBegin and glEnd can change.
@@ -226,7 +209,8 @@ impl Context {
     }
 
     /// A list's mesh drawn as an instance (the caller checked `instances`).
-    pub(crate) fn instance(&mut self, mesh: &Arc<Mesh>) {
+    pub(crate) fn instance(&mut self, compiled: &Compiled) {
+        let mesh = &compiled.mesh;
         self.revision += 1;
         if mesh.triangles.is_empty() {
             return;

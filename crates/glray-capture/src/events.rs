@@ -10,8 +10,8 @@
 use glray_core::trace::{Event, Value};
 
 use crate::context::Context;
-use crate::frame::Frame;
 use crate::ops::{context_call, op_for, AttrForm, ContextCall, Op};
+use glray_scene::frame::Frame;
 
 /// Every call looks its thread's context up (four maps, twice per call): a 10M-vertex display
 /// list is 60M calls, and SipHash on these small integer keys was a fifth of compiling it.

@@ -26,11 +26,13 @@ use std::sync::Arc;
 
 use glam::{DVec3, DVec4, Vec3, Vec4};
 
-use crate::arrays::{content_hash, BufferDraw};
+use crate::arrays::BufferDraw;
 use crate::context::Context;
-use crate::mesh::{Attribute, Mesh, MeshBuilder};
+use crate::mesh_builder::{MeshBuilder, Run};
 use crate::primitive::QuadSplit;
 use crate::vertex::Given;
+use glray_core::hash::content_hash;
+use glray_scene::mesh::{Attribute, Mesh};
 
 /// How many vertices a run reaches before it is taken from the vertex stage and kept as a mesh
 /// (as many as a client-array draw needs to be kept).
@@ -59,7 +61,7 @@ pub(crate) struct Recordings {
     spare: Vec<Noted>,
     /// The vectors of the last mesh recorded that was not kept (the same as one already
     /// kept), for the next.
-    room: Option<Mesh>,
+    room: Option<MeshBuilder>,
 }
 
 impl Recordings {
@@ -173,7 +175,8 @@ impl Context {
             // As the vertex stage's draw would cut them (`Context::draw`).
             b.cut_quads(QuadSplit::Indexed);
         }
-        let key = key(b.closed());
+        let (mesh, runs, quads, ends) = b.closed();
+        let key = key(mesh, runs, quads, ends);
         let mesh = match self.client_draws.get(&key) {
             Some(kept) => {
                 self.recording.room = Some(b.into_room());
@@ -206,7 +209,7 @@ impl Context {
 /// noted vertices. An attribute that kept one value over them is left to the current value at
 /// the draw (which it is: nothing changed it since the last vertex); one that changed is each
 /// vertex's own.
-fn taken(mode: u32, noted: &[Noted], room: Option<Mesh>) -> MeshBuilder {
+fn taken(mode: u32, noted: &[Noted], room: Option<MeshBuilder>) -> MeshBuilder {
     let mut b = match room {
         Some(room) => MeshBuilder::reusing(room, false, QuadSplit::Direct),
         None => MeshBuilder::new(false, QuadSplit::Direct),
@@ -233,16 +236,15 @@ fn taken(mode: u32, noted: &[Noted], room: Option<Mesh>) -> MeshBuilder {
 
 /// A recorded run's key among the kept meshes: every value it gave, and the values it left
 /// current (first word 2: client-array draws' keys start with 0 or 1).
-fn key(mesh: &Mesh) -> BufferDraw {
-    let mut words = vec![2, mesh.quads as i64];
-    for run in &mesh.runs {
+fn key(mesh: &Mesh, runs: &[Run], quads: QuadSplit, ends: [Option<DVec4>; 3]) -> BufferDraw {
+    let mut words = vec![2, quads as i64];
+    for run in runs {
         words.extend([i64::from(run.mode), i64::from(run.start), i64::from(run.count)]);
     }
     words.extend(content_hash(bytemuck::cast_slice::<Vec3, u8>(&mesh.positions)));
     attribute_words(&mut words, &mesh.normals);
     attribute_words(&mut words, &mesh.colors);
     attribute_words(&mut words, &mesh.texcoords);
-    let ends = [mesh.end_normal.map(|n| n.extend(0.0)), mesh.end_color, mesh.end_texcoord];
     for end in ends {
         let v = end.unwrap_or(DVec4::NAN);
         words.extend([i64::from(end.is_some())].into_iter().chain(v.to_array().map(|x| x.to_bits() as i64)));

@@ -12,41 +12,35 @@
 //! - `client_draws`: meshes of big draws from client memory, kept by a hash of what they read;
 //! - `draw`: a draw's vertices into the frame's triangles (facing, culling, polygon modes, flat
 //!   shading, lines and points as quads);
-//! - `frame`: what a frame hands the tracer, and bringing every draw into one camera;
-//! - `mesh`: a display list's draw kept in object coordinates, compiled once;
-//! - `instance`: one call of a mesh, whose triangles are made (lit, faced, culled) when a ray
-//!   hits them;
-//! - `texture`: texture objects and GL's sampling;
-//! - `camera`: rays through pixel centres from the projection and viewport, window depth of hits;
+//! - `mesh_builder`: meshes made from GL calls (a list's glBegin/glEnd, an array draw), compiled
+//!   once into the scene's `Mesh`;
+//! - `texture`: client pixels decoded into texels, glTexParameter's sampling state;
 //! - `error`: GL error codes and the error flag glGetError reads;
 //! - `matrix`: the matrix stacks and every operation on them, as Mesa implements them;
 //! - `immediate`: the current vertex attributes and glBegin/glEnd;
-//! - `lighting`: the fixed-function lighting equation, per vertex, as a rasterizer evaluates it;
 //! - `list_effects`: the state (beside the matrices) a list leaves changed, for the real GL;
 //! - `lists`: display lists with Mesa's rules (generic over what a list holds);
 //! - `primitive`: assembling vertex streams into points, lines and triangles, with the provoking
-//!   vertex flat shading uses;
+//!   vertex flat shading uses.
+//!
+//! What a frame hands the tracer (`Frame`, meshes, instances, lighting, textures) is the
+//! scene's (crates/glray-scene): capture produces it, and never sees the tracer.
 
 pub mod args;
 mod arrays;
-pub mod camera;
 mod client_draws;
 pub mod context;
 mod draw;
 pub mod error;
 pub mod events;
-pub mod frame;
 pub mod immediate;
 mod immediate_meshes;
-pub mod instance;
-pub mod lighting;
 pub mod list_effects;
 pub mod lists;
 pub mod matrix;
-pub mod mesh;
+pub mod mesh_builder;
 pub mod ops;
 pub mod primitive;
 mod state;
-pub mod sunlit;
 pub mod texture;
 mod vertex;

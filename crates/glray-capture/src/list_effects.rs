@@ -14,7 +14,7 @@ use glray_gl::{
 };
 
 use crate::context::Context;
-use crate::lighting::{Light, LightModel, Material};
+use glray_scene::lighting::{Light, LightModel, Material};
 
 /// The state a list can leave changed that the real GL answers queries with and draws with.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -87,13 +87,13 @@ impl Context {
         StateSeen {
             enables,
             front_face: if s.front_ccw { GL_CCW } else { GL_CW },
-            cull_face: s.cull_face,
+            cull_face: s.cull_face.gl(),
             shade_model: if s.flat { GL_FLAT } else { GL_SMOOTH },
             polygon_mode: s.polygon_mode,
-            depth_func: s.depth_func,
+            depth_func: s.depth_func.gl(),
             depth_mask: s.depth_mask,
-            blend_func: s.blend_func,
-            alpha_func: s.alpha_func,
+            blend_func: (s.blend_func.0.gl(), s.blend_func.1.gl()),
+            alpha_func: (s.alpha_func.0.gl(), s.alpha_func.1),
             line_width: s.line_width,
             point_size: s.point_size,
             bound_texture: s.bound_texture,
@@ -102,7 +102,7 @@ impl Context {
             lights: s.lights,
             materials: s.materials,
             light_model: s.model,
-            color_material: (s.color_material_face, s.color_material_mode),
+            color_material: (s.color_material_face.gl(), s.color_material_mode.gl()),
         }
     }
 }

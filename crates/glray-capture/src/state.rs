@@ -3,14 +3,14 @@
 
 use glam::{DVec4, Vec4};
 use glray_gl::{
-    GL_ALWAYS, GL_AMBIENT_AND_DIFFUSE, GL_BACK, GL_COLOR_BUFFER_BIT, GL_COPY, GL_DEPTH_BUFFER_BIT, GL_ENABLE_BIT,
-    GL_EXP, GL_EYE_LINEAR, GL_FILL, GL_FOG_BIT, GL_FRONT_AND_BACK, GL_LESS, GL_LIGHTING_BIT, GL_LINE_BIT, GL_MODULATE,
-    GL_POINT_BIT, GL_POLYGON_BIT, GL_SCISSOR_BIT, GL_TEXTURE_BIT, GL_TRANSFORM_BIT, GL_VIEWPORT_BIT,
+    GL_COLOR_BUFFER_BIT, GL_DEPTH_BUFFER_BIT, GL_ENABLE_BIT, GL_EYE_LINEAR, GL_FILL, GL_FOG_BIT, GL_LIGHTING_BIT,
+    GL_LINE_BIT, GL_POINT_BIT, GL_POLYGON_BIT, GL_SCISSOR_BIT, GL_TEXTURE_BIT, GL_TRANSFORM_BIT, GL_VIEWPORT_BIT,
 };
 
-use crate::camera::Viewport;
-use crate::frame::Fog;
-use crate::lighting::{Light, LightModel, Material};
+use glray_scene::camera::Viewport;
+use glray_scene::facing::Face;
+use glray_scene::lighting::{ColorMaterialMode, Light, LightModel, Material};
+use glray_scene::surface::{BlendFactor, CompareFunc, Fog, FogMode, LogicOp, TexEnvMode};
 
 /// How deep glPushAttrib's stack goes (GL_MAX_ATTRIB_STACK_DEPTH, 16 in Mesa).
 pub(crate) const MAX_ATTRIB_DEPTH: usize = 16;
@@ -33,8 +33,8 @@ pub(crate) struct State {
     pub(crate) model: LightModel,
     pub(crate) materials: [Material; 2],
     pub(crate) color_material: bool,
-    pub(crate) color_material_face: u32,
-    pub(crate) color_material_mode: u32,
+    pub(crate) color_material_face: Face,
+    pub(crate) color_material_mode: ColorMaterialMode,
     pub(crate) flat: bool,
     // GL_TRANSFORM_BIT
     pub(crate) normalize: bool,
@@ -42,7 +42,7 @@ pub(crate) struct State {
     pub(crate) clip_planes: [(bool, DVec4); 6],
     // GL_POLYGON_BIT
     pub(crate) cull: bool,
-    pub(crate) cull_face: u32,
+    pub(crate) cull_face: Face,
     pub(crate) front_ccw: bool,
     pub(crate) polygon_mode: [u32; 2],
     /// GL_POLYGON_OFFSET_FILL, and glPolygonOffset's (factor, units).
@@ -50,7 +50,7 @@ pub(crate) struct State {
     pub(crate) polygon_offset: (f32, f32),
     // GL_DEPTH_BUFFER_BIT
     pub(crate) depth_test: bool,
-    pub(crate) depth_func: u32,
+    pub(crate) depth_func: CompareFunc,
     pub(crate) depth_mask: bool,
     // GL_SCISSOR_BIT
     /// GL_SCISSOR_TEST, and glScissor's box (None until it is given: the whole drawable).
@@ -64,21 +64,21 @@ pub(crate) struct State {
     /// glClearDepth, clamped to [0, 1].
     pub(crate) clear_depth: f32,
     pub(crate) blend: bool,
-    pub(crate) blend_func: (u32, u32),
+    pub(crate) blend_func: (BlendFactor, BlendFactor),
     pub(crate) alpha_test: bool,
-    pub(crate) alpha_func: (u32, f32),
+    pub(crate) alpha_func: (CompareFunc, f32),
     /// glColorMask: which of red, green, blue and alpha draws write.
     pub(crate) color_mask: [bool; 4],
     /// GL_COLOR_LOGIC_OP's enable and glLogicOp's operation.
     pub(crate) logic_op_enabled: bool,
-    pub(crate) logic_op: u32,
+    pub(crate) logic_op: LogicOp,
     // GL_TEXTURE_BIT
     pub(crate) texture_2d: bool,
     pub(crate) bound_texture: u32,
     /// GL_TEXTURE_1D's enable and binding (a 2D texture, enabled, takes precedence).
     pub(crate) texture_1d: bool,
     pub(crate) bound_texture_1d: u32,
-    pub(crate) env_mode: u32,
+    pub(crate) env_mode: TexEnvMode,
     pub(crate) env_color: Vec4,
     pub(crate) texgen: [TexGen; 2],
     // GL_FOG_BIT
@@ -101,20 +101,20 @@ impl Default for State {
             model: LightModel::default(),
             materials: [Material::default(); 2],
             color_material: false,
-            color_material_face: GL_FRONT_AND_BACK,
-            color_material_mode: GL_AMBIENT_AND_DIFFUSE,
+            color_material_face: Face::FrontAndBack,
+            color_material_mode: ColorMaterialMode::AmbientAndDiffuse,
             flat: false,
             normalize: false,
             rescale_normal: false,
             clip_planes: [(false, DVec4::ZERO); 6],
             cull: false,
-            cull_face: GL_BACK,
+            cull_face: Face::Back,
             front_ccw: true,
             polygon_mode: [GL_FILL; 2],
             polygon_offset_fill: false,
             polygon_offset: (0.0, 0.0),
             depth_test: false,
-            depth_func: GL_LESS,
+            depth_func: CompareFunc::Less,
             depth_mask: true,
             scissor_test: false,
             scissor: None,
@@ -123,21 +123,21 @@ impl Default for State {
             clear_color: Vec4::ZERO,
             clear_depth: 1.0,
             blend: false,
-            blend_func: (1, 0),
+            blend_func: (BlendFactor::One, BlendFactor::Zero),
             alpha_test: false,
-            alpha_func: (GL_ALWAYS, 0.0),
+            alpha_func: (CompareFunc::Always, 0.0),
             color_mask: [true; 4],
             logic_op_enabled: false,
-            logic_op: GL_COPY,
+            logic_op: LogicOp::Copy,
             texture_2d: false,
             bound_texture: 0,
             texture_1d: false,
             bound_texture_1d: 0,
-            env_mode: GL_MODULATE,
+            env_mode: TexEnvMode::Modulate,
             env_color: Vec4::ZERO,
             texgen: [texgen, TexGen { object_plane: DVec4::Y, eye_plane: DVec4::Y, ..texgen }],
             fog_enabled: false,
-            fog: Fog { mode: GL_EXP, density: 1.0, start: 0.0, end: 1.0, color: Vec4::ZERO },
+            fog: Fog { mode: FogMode::Exp, density: 1.0, start: 0.0, end: 1.0, color: Vec4::ZERO },
             line_width: 1.0,
             point_size: 1.0,
             line_smooth: false,

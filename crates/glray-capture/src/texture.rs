@@ -1,21 +1,23 @@
-//! 2D texture objects as glTexImage2D/glTexSubImage2D/glTexParameter leave them, and sampling
-//! them the way GL does (nearest or linear, mipmapped, REPEAT or CLAMP wraps). Texels are kept
-//! as RGBA floats expanded from the client's format; the base internal format is kept too,
-//! because the texture environment treats LUMINANCE, ALPHA and INTENSITY differently.
+//! The GL side of textures: client pixels decoded into RGBA texels with the unpack state
+//! (glTexImage2D, glTexSubImage2D), the base internal format GL keeps, and glTexParameter's
+//! sampling state. The texture objects themselves, and sampling them, are the scene's
+//! (`glray_scene::texture`).
 
-use glam::{Vec2, Vec4};
+use glam::Vec4;
 use glray_gl::{
-    GL_ALPHA, GL_BGR, GL_BGRA, GL_FLOAT, GL_INTENSITY, GL_LINEAR, GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR_MIPMAP_NEAREST,
-    GL_LUMINANCE, GL_LUMINANCE_ALPHA, GL_MIRRORED_REPEAT, GL_NEAREST, GL_NEAREST_MIPMAP_LINEAR,
-    GL_NEAREST_MIPMAP_NEAREST, GL_RED, GL_REPEAT, GL_RGB, GL_RGBA, GL_TEXTURE_LOD_BIAS, GL_TEXTURE_MAG_FILTER,
+    GL_ALPHA, GL_ALPHA16, GL_ALPHA4, GL_BGR, GL_BGRA, GL_FLOAT, GL_INTENSITY, GL_INTENSITY16, GL_INTENSITY4,
+    GL_LUMINANCE, GL_LUMINANCE16, GL_LUMINANCE16_ALPHA16, GL_LUMINANCE4, GL_LUMINANCE4_ALPHA4, GL_LUMINANCE_ALPHA,
+    GL_R3_G3_B2, GL_RED, GL_RGB, GL_RGB16, GL_RGB4, GL_RGBA, GL_SRGB8, GL_TEXTURE_LOD_BIAS, GL_TEXTURE_MAG_FILTER,
     GL_TEXTURE_MAX_LOD, GL_TEXTURE_MIN_FILTER, GL_TEXTURE_MIN_LOD, GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T,
     GL_UNSIGNED_BYTE, GL_UNSIGNED_BYTE_2_3_3_REV, GL_UNSIGNED_BYTE_3_3_2, GL_UNSIGNED_INT_10_10_10_2,
     GL_UNSIGNED_INT_2_10_10_10_REV, GL_UNSIGNED_INT_8_8_8_8, GL_UNSIGNED_INT_8_8_8_8_REV,
     GL_UNSIGNED_SHORT_1_5_5_5_REV, GL_UNSIGNED_SHORT_4_4_4_4, GL_UNSIGNED_SHORT_4_4_4_4_REV, GL_UNSIGNED_SHORT_5_5_5_1,
     GL_UNSIGNED_SHORT_5_6_5, GL_UNSIGNED_SHORT_5_6_5_REV,
 };
+use glray_scene::texture::{BaseFormat, Filter, Texture, Wrap};
 
 use crate::args;
+use crate::error::{GlError, GlResult};
 
 /// glPixelStore's unpack state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -32,113 +34,33 @@ impl Default for Unpack {
     }
 }
 
-/// One mipmap level.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Level {
-    pub width: usize,
-    pub height: usize,
-    pub texels: Vec<Vec4>,
-}
-
-#[derive(Debug, Clone, PartialEq)]
-pub struct Texture {
-    pub levels: Vec<Level>,
-    /// The base internal format (GL_RGB, GL_RGBA, GL_LUMINANCE, ...).
-    pub base_format: u32,
-    pub min_filter: u32,
-    pub mag_filter: u32,
-    pub wrap_s: u32,
-    pub wrap_t: u32,
-    /// Made by glTexImage1D: one row, sampled by s alone (its level of detail ignores t).
-    pub one_d: bool,
-    /// How the level of detail is moved and bounded (glTexParameterf's GL_TEXTURE_LOD_BIAS,
-    /// GL_TEXTURE_MIN_LOD and GL_TEXTURE_MAX_LOD).
-    pub lod: LodRange,
-    /// Which state of the texture this is: a number no state of any texture in the process
-    /// has had before, renewed at every change (`changed`). The renderer knows a frame's
-    /// textures by it (an address would be taken again by a texture made after one is freed,
-    /// and a texture no frame holds is changed in place).
-    pub version: u64,
-}
-
-/// A texture's level-of-detail parameters. GL adds the bias to the level of detail worked out
-/// from the pixel's footprint, then clamps the sum to [min, max] (OpenGL 2.1, 3.8.8); the
-/// result picks both the levels and whether the texture is magnified or minified. Programs
-/// set a small positive bias to soften minified text (xscreensaver's texture fonts: 0.25).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LodRange {
-    pub bias: f32,
-    pub min: f32,
-    pub max: f32,
-}
-
-impl Default for LodRange {
-    fn default() -> Self {
-        LodRange { bias: 0.0, min: -1000.0, max: 1000.0 }
-    }
-}
-
-impl LodRange {
-    /// The level of detail a sample takes, from the one of the pixel's footprint.
-    pub fn apply(&self, lod: f32) -> f32 {
-        (lod + self.bias).clamp(self.min, self.max.max(self.min))
-    }
-
-    /// The parameter glTexParameterf's `pname` sets, if it is one of these.
-    pub fn parameter_mut(&mut self, pname: u32) -> Option<&mut f32> {
-        Some(match pname {
-            GL_TEXTURE_LOD_BIAS => &mut self.bias,
-            GL_TEXTURE_MIN_LOD => &mut self.min,
-            GL_TEXTURE_MAX_LOD => &mut self.max,
-            _ => return None,
-        })
-    }
-}
-
-/// A version no texture has had (`Texture::version`).
-fn next_version() -> u64 {
-    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
-    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-}
-
-impl Texture {
-    /// Marks a change: the texture is a new state to the renderer.
-    pub fn changed(&mut self) {
-        self.version = next_version();
-    }
-
-    /// The parameter glTexParameter's `pname` sets, of those glray follows.
-    pub fn parameter_mut(&mut self, pname: u32) -> Option<&mut u32> {
-        Some(match pname {
-            GL_TEXTURE_MIN_FILTER => &mut self.min_filter,
-            GL_TEXTURE_MAG_FILTER => &mut self.mag_filter,
-            GL_TEXTURE_WRAP_S => &mut self.wrap_s,
-            GL_TEXTURE_WRAP_T => &mut self.wrap_t,
-            _ => return None,
-        })
-    }
-
-    /// The value of that parameter (read through `parameter_mut` on a copy of the
-    /// parameters alone, so that the two never disagree on which field a `pname` is).
-    pub fn parameter(&self, pname: u32) -> Option<u32> {
-        Texture { levels: Vec::new(), ..*self }.parameter_mut(pname).map(|p| *p)
-    }
-}
-
-impl Default for Texture {
-    fn default() -> Self {
-        Texture {
-            levels: Vec::new(),
-            base_format: GL_RGBA,
-            min_filter: GL_NEAREST_MIPMAP_LINEAR,
-            mag_filter: GL_LINEAR,
-            wrap_s: GL_REPEAT,
-            wrap_t: GL_REPEAT,
-            one_d: false,
-            lod: LodRange::default(),
-            version: next_version(),
+/// Sets glTexParameter's `pname` to `value` on `t`'s sampling state (filters, wraps, level of
+/// detail); None for a `pname` glray does not follow, Err for a value GL refuses (the state is
+/// left as it was).
+pub fn set_parameter(t: &mut Texture, pname: u32, value: f64) -> Option<GlResult> {
+    let v = value as u32;
+    let set = match pname {
+        GL_TEXTURE_MIN_FILTER => Filter::from_gl(v).map(|f| t.min_filter = f),
+        GL_TEXTURE_MAG_FILTER => {
+            Filter::from_gl(v).filter(|f| matches!(f, Filter::Nearest | Filter::Linear)).map(|f| t.mag_filter = f)
         }
-    }
+        GL_TEXTURE_WRAP_S => Wrap::from_gl(v).map(|w| t.wrap_s = w),
+        GL_TEXTURE_WRAP_T => Wrap::from_gl(v).map(|w| t.wrap_t = w),
+        GL_TEXTURE_LOD_BIAS => {
+            t.lod.bias = value as f32;
+            Some(())
+        }
+        GL_TEXTURE_MIN_LOD => {
+            t.lod.min = value as f32;
+            Some(())
+        }
+        GL_TEXTURE_MAX_LOD => {
+            t.lod.max = value as f32;
+            Some(())
+        }
+        _ => return None,
+    };
+    Some(set.ok_or(GlError::InvalidEnum))
 }
 
 /// Components per pixel of a client format; None for formats glray does not read.
@@ -153,14 +75,14 @@ fn components(format: u32) -> Option<usize> {
 }
 
 /// The base internal format GL derives from glTexImage2D's internalformat argument.
-pub fn base_format(internal: u32) -> u32 {
+pub fn base_format(internal: u32) -> BaseFormat {
     match internal {
-        1 | GL_LUMINANCE | 0x803F..=0x8042 => GL_LUMINANCE,
-        2 | GL_LUMINANCE_ALPHA | 0x8043..=0x8048 => GL_LUMINANCE_ALPHA,
-        GL_ALPHA | 0x803B..=0x803E => GL_ALPHA,
-        GL_INTENSITY | 0x804A..=0x804D => GL_INTENSITY,
-        3 | GL_RGB | 0x2A10 | 0x804F..=0x8054 | 0x8C41 => GL_RGB,
-        _ => GL_RGBA,
+        1 | GL_LUMINANCE | GL_LUMINANCE4..=GL_LUMINANCE16 => BaseFormat::Luminance,
+        2 | GL_LUMINANCE_ALPHA | GL_LUMINANCE4_ALPHA4..=GL_LUMINANCE16_ALPHA16 => BaseFormat::LuminanceAlpha,
+        GL_ALPHA | GL_ALPHA4..=GL_ALPHA16 => BaseFormat::Alpha,
+        GL_INTENSITY | GL_INTENSITY4..=GL_INTENSITY16 => BaseFormat::Intensity,
+        3 | GL_RGB | GL_R3_G3_B2 | GL_RGB4..=GL_RGB16 | GL_SRGB8 => BaseFormat::Rgb,
+        _ => BaseFormat::Rgba,
     }
 }
 
@@ -330,125 +252,22 @@ fn texel(format: u32, c: [f32; 4]) -> Vec4 {
 
 /// Converts texels to the base internal format (what GL stores): LUMINANCE keeps red, ALPHA
 /// only alpha, INTENSITY red in all four.
-pub fn to_base(c: Vec4, base: u32) -> Vec4 {
+pub fn to_base(c: Vec4, base: BaseFormat) -> Vec4 {
     match base {
-        GL_LUMINANCE => Vec4::new(c.x, c.x, c.x, 1.0),
-        GL_LUMINANCE_ALPHA => Vec4::new(c.x, c.x, c.x, c.w),
-        GL_ALPHA => Vec4::new(0.0, 0.0, 0.0, c.w),
-        GL_INTENSITY => Vec4::splat(c.x),
-        GL_RGB => c.truncate().extend(1.0),
-        _ => c,
+        BaseFormat::Luminance => Vec4::new(c.x, c.x, c.x, 1.0),
+        BaseFormat::LuminanceAlpha => Vec4::new(c.x, c.x, c.x, c.w),
+        BaseFormat::Alpha => Vec4::new(0.0, 0.0, 0.0, c.w),
+        BaseFormat::Intensity => Vec4::splat(c.x),
+        BaseFormat::Rgb => c.truncate().extend(1.0),
+        BaseFormat::Rgba => c,
     }
 }
-
-impl Texture {
-    /// Whether the texture can be sampled (GL: "complete"): level 0 exists, and when the
-    /// minification filter uses mipmaps, every level down to 1x1.
-    pub fn complete(&self) -> bool {
-        let Some(base) = self.levels.first().filter(|l| l.width > 0 && l.height > 0) else {
-            return false;
-        };
-        if !self.mipmapped() {
-            return true;
-        }
-        let (mut w, mut h) = (base.width, base.height);
-        for level in &self.levels {
-            if level.width != w || level.height != h {
-                return false;
-            }
-            if w == 1 && h == 1 {
-                return true;
-            }
-            w = (w / 2).max(1);
-            h = (h / 2).max(1);
-        }
-        false
-    }
-
-    fn mipmapped(&self) -> bool {
-        !matches!(self.min_filter, GL_NEAREST | GL_LINEAR)
-    }
-
-    fn wrap(mode: u32, i: i64, n: usize) -> usize {
-        let n = n as i64;
-        let i = match mode {
-            GL_REPEAT => i.rem_euclid(n),
-            GL_MIRRORED_REPEAT => {
-                let m = i.rem_euclid(2 * n);
-                if m < n {
-                    m
-                } else {
-                    2 * n - 1 - m
-                }
-            }
-            _ => i.clamp(0, n - 1), // CLAMP, CLAMP_TO_EDGE (no border colour)
-        };
-        i as usize
-    }
-
-    fn texel(&self, l: &Level, x: i64, y: i64) -> Vec4 {
-        let x = Self::wrap(self.wrap_s, x, l.width);
-        let y = Self::wrap(self.wrap_t, y, l.height);
-        l.texels[y * l.width + x]
-    }
-
-    fn sample_level(&self, level: usize, uv: Vec2, linear: bool) -> Vec4 {
-        let l = &self.levels[level];
-        let x = uv.x * l.width as f32;
-        let y = uv.y * l.height as f32;
-        if !linear {
-            return self.texel(l, x.floor() as i64, y.floor() as i64);
-        }
-        let (x, y) = (x - 0.5, y - 0.5);
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (x0, y0) = (x0 as i64, y0 as i64);
-        let a = self.texel(l, x0, y0).lerp(self.texel(l, x0 + 1, y0), fx);
-        let b = self.texel(l, x0, y0 + 1).lerp(self.texel(l, x0 + 1, y0 + 1), fx);
-        a.lerp(b, fy)
-    }
-
-    /// Whether `sample` depends on its level of detail: with mipmaps, or with one filter for
-    /// magnification and another for minification. Without, the level of detail (worked out
-    /// from the triangle's derivatives on the screen at every pixel) can be left out.
-    pub fn reads_lod(&self) -> bool {
-        self.mipmapped() || (self.mag_filter == GL_LINEAR) != (self.min_filter == GL_LINEAR)
-    }
-
-    /// The filtered texel at `uv` for a level of detail `lod` (log2 of texels per pixel).
-    pub fn sample(&self, uv: Vec2, lod: f32) -> Vec4 {
-        if !self.complete() {
-            return Vec4::ONE;
-        }
-        let lod = self.lod.apply(lod);
-        if lod <= 0.0 || !self.mipmapped() {
-            let filter = if lod <= 0.0 { self.mag_filter } else { self.min_filter };
-            return self.sample_level(0, uv, filter == GL_LINEAR);
-        }
-        let last = (self.levels.len() - 1) as f32;
-        let linear = matches!(self.min_filter, GL_LINEAR_MIPMAP_NEAREST | GL_LINEAR_MIPMAP_LINEAR);
-        match self.min_filter {
-            GL_NEAREST_MIPMAP_NEAREST | GL_LINEAR_MIPMAP_NEAREST => {
-                let level = (lod + 0.5).floor().clamp(0.0, last) as usize;
-                self.sample_level(level, uv, linear)
-            }
-            _ => {
-                let lod = lod.min(last);
-                let l0 = lod.floor() as usize;
-                let l1 = (l0 + 1).min(last as usize);
-                self.sample_level(l0, uv, linear).lerp(self.sample_level(l1, uv, linear), lod.fract())
-            }
-        }
-    }
-}
-
-/// The default pixel type for the tests below.
-#[allow(dead_code)]
-const UBYTE: u32 = GL_UNSIGNED_BYTE;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    const UBYTE: u32 = GL_UNSIGNED_BYTE;
 
     #[test]
     fn decode_honours_alignment_and_formats() {
@@ -547,68 +366,5 @@ mod tests {
         // A packed type whose component count is not the format's, and too little memory.
         assert!(decode(1, 1, GL_RGBA, 0x8363, &un, &[0; 2]).is_none());
         assert!(decode(2, 1, GL_RGBA, 0x8367, &un, &[0; 7]).is_none());
-    }
-
-    #[test]
-    fn sampling_wraps_and_filters() {
-        let texels = vec![Vec4::ZERO, Vec4::ONE];
-        let t = Texture {
-            levels: vec![Level { width: 2, height: 1, texels }],
-            min_filter: GL_NEAREST,
-            mag_filter: GL_NEAREST,
-            ..Texture::default()
-        };
-        assert_eq!(t.sample(Vec2::new(0.25, 0.5), 0.0), Vec4::ZERO);
-        assert_eq!(t.sample(Vec2::new(1.75, 0.5), 0.0), Vec4::ONE, "REPEAT");
-        let t = Texture { mag_filter: GL_LINEAR, ..t };
-        assert_eq!(t.sample(Vec2::new(0.5, 0.5), 0.0), Vec4::splat(0.5));
-        let incomplete = Texture { min_filter: GL_LINEAR_MIPMAP_LINEAR, ..t };
-        assert!(!incomplete.complete());
-    }
-
-    #[test]
-    fn the_level_of_detail_is_read_only_where_it_changes_a_sample() {
-        // Two levels: 2x1 (black, white) and 1x1 grey.
-        let levels = vec![
-            Level { width: 2, height: 1, texels: vec![Vec4::ZERO, Vec4::ONE] },
-            Level { width: 1, height: 1, texels: vec![Vec4::splat(0.5)] },
-        ];
-        let base = Texture { levels, ..Texture::default() };
-        let at = Vec2::new(0.4, 0.5);
-        let lods = [-3.0, 0.0, 0.5, 1.0, 6.0];
-        for (min, mag) in [
-            (GL_NEAREST, GL_NEAREST),
-            (GL_LINEAR, GL_LINEAR),
-            (GL_NEAREST, GL_LINEAR),
-            (GL_LINEAR, GL_NEAREST),
-            (GL_NEAREST_MIPMAP_NEAREST, GL_NEAREST),
-            (GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR),
-        ] {
-            let t = Texture { min_filter: min, mag_filter: mag, ..base.clone() };
-            let samples: Vec<Vec4> = lods.iter().map(|&lod| t.sample(at, lod)).collect();
-            let varies = samples.iter().any(|s| *s != samples[0]);
-            assert_eq!(t.reads_lod(), varies, "min {min:#x}, mag {mag:#x}: {samples:?}");
-        }
-    }
-
-    #[test]
-    fn the_level_of_detail_is_biased_then_clamped() {
-        // Two levels: 1x1 white and 1x1 black (level 1 of a 1x1 texture is not complete, but
-        // sampling reads the levels given).
-        let levels = vec![
-            Level { width: 2, height: 2, texels: vec![Vec4::ONE; 4] },
-            Level { width: 1, height: 1, texels: vec![Vec4::ZERO] },
-        ];
-        let t = Texture { levels, min_filter: GL_LINEAR_MIPMAP_LINEAR, ..Texture::default() };
-        let at = Vec2::new(0.5, 0.5);
-        assert_eq!(t.sample(at, 0.5), Vec4::splat(0.5));
-        let biased = Texture { lod: LodRange { bias: 0.25, ..LodRange::default() }, ..t.clone() };
-        assert_eq!(biased.sample(at, 0.5), Vec4::splat(0.25), "half way plus a quarter");
-        // A bias past zero makes a magnified sample minified: it reads the mipmaps.
-        assert_eq!(biased.sample(at, -0.125), Vec4::splat(0.875));
-        let clamped = Texture { lod: LodRange { bias: 0.25, min: 0.0, max: 0.5 }, ..t.clone() };
-        assert_eq!(clamped.sample(at, 0.5), Vec4::splat(0.5), "at most max");
-        let raised = Texture { lod: LodRange { min: 1.0, ..LodRange::default() }, ..t };
-        assert_eq!(raised.sample(at, -3.0), Vec4::ZERO, "at least min");
     }
 }

@@ -11,11 +11,11 @@ use glray_gl::{
 use crate::args;
 use crate::context::{Context, Out};
 use crate::error::{GlError, GlResult};
-use crate::frame::{color_materials, Lighting};
 use crate::immediate::TEXCOORD_UNITS;
-use crate::lighting::light_face;
 use crate::ops::{Attr, AttrForm, Op};
 use crate::primitive::QuadSplit;
+use glray_scene::draw_lighting::{color_materials, Lighting};
+use glray_scene::lighting::{eye_normal, light_face, ColorMaterial};
 
 /// How many vertices of a glBegin of separate primitives are drawn at once (a multiple of 1,
 /// 2, 3 and 4, so that no primitive is cut; 3 MB of vertices).
@@ -99,24 +99,6 @@ pub(crate) fn given_from(f: AttrForm, target: u32, raw: &[f64]) -> GlResult<Give
         Attr::SecondaryColor => Given::SecondaryColor,
         Attr::EdgeFlag => Given::EdgeFlag(get(0, 1.0) != 0.0),
     })
-}
-
-/// An object-space normal in eye coordinates, as lighting uses it: through the normal matrix,
-/// then GL_NORMALIZE (to unit length) or GL_RESCALE_NORMAL (by the modelview's scale).
-#[inline]
-pub(crate) fn eye_normal(nm: &DMat3, n: DVec3, normalize: bool, rescale: bool) -> DVec3 {
-    let n = *nm * n;
-    if normalize {
-        return n.normalize_or_zero();
-    }
-    if rescale {
-        // The inverse modelview's third row: the normal matrix's third column.
-        let len = nm.col(2).length();
-        if len > 0.0 {
-            return n / len;
-        }
-    }
-    n
 }
 
 impl Context {
@@ -234,7 +216,7 @@ impl Context {
             s.lights.iter().filter(|l| l.enabled).copied().collect(),
             s.model,
             s.materials,
-            s.color_material.then_some((s.color_material_face, s.color_material_mode)),
+            s.color_material.then_some(ColorMaterial { face: s.color_material_face, mode: s.color_material_mode }),
         )
     }
 
@@ -254,7 +236,8 @@ impl Context {
             let s = &self.s;
             normal = eye_normal(&nm, cur_normal, s.normalize, s.rescale_normal);
             // (Not `lighting_state()`: that copies the lights, at every vertex.)
-            let color_material = s.color_material.then_some((s.color_material_face, s.color_material_mode));
+            let color_material =
+                s.color_material.then_some(ColorMaterial { face: s.color_material_face, mode: s.color_material_mode });
             let mats = color_materials(&s.materials, color_material, cur_color);
             let s = &self.s;
             let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };

@@ -3,6 +3,7 @@
 
 pub mod config;
 pub mod gltypes;
+pub mod hash;
 pub mod image;
 pub mod indices;
 pub mod log;

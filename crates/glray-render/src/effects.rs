@@ -2,7 +2,7 @@
 //! reflections, several jittered samples per pixel, and the presets that combine them.
 
 use glam::{DVec3, Vec3};
-use glray_capture::lighting::Light;
+use glray_scene::lighting::Light;
 
 use crate::sampling::{Hemisphere, Sampler, Strata};
 use crate::scene::Scene;
@@ -124,11 +124,11 @@ mod tests {
     use super::*;
     use crate::render::{render, Options, Rendered, Renderer};
     use glam::{DMat4, DVec4};
-    use glray_capture::camera::{Camera, Viewport};
     use glray_capture::context::Context;
-    use glray_capture::frame::Frame;
     use glray_core::trace::Value::{self, Int, F64};
     use glray_gl::{GL_ALPHA_TEST, GL_BLEND, GL_COLOR_MATERIAL, GL_DEPTH_TEST, GL_GREATER, GL_LIGHT0, GL_LIGHTING};
+    use glray_scene::camera::{Camera, Viewport};
+    use glray_scene::frame::Frame;
 
     const SIZE: u32 = 64;
 
@@ -435,8 +435,8 @@ mod tests {
     #[test]
     fn an_unchanged_gl_look_frame_is_shown_again_and_a_changed_one_traced() {
         use glam::Vec4;
-        use glray_capture::frame::Texturing;
-        use glray_capture::texture::{Level, Texture};
+        use glray_scene::surface::Texturing;
+        use glray_scene::texture::{Level, Texture};
         use std::sync::Arc;
         let frame = crease();
         let mut renderer = Renderer::new(with(Effects::GL));
@@ -465,7 +465,9 @@ mod tests {
             Arc::new(Texture { levels: vec![Level { width: 1, height: 1, texels }], ..Texture::default() })
         };
         let mut textured = frame.clone();
-        let texturing = |t| Some(Texturing { texture: t, env_mode: 0x2100, env_color: Vec4::ZERO });
+        let texturing = |t| {
+            Some(Texturing { texture: t, env_mode: glray_scene::surface::TexEnvMode::Modulate, env_color: Vec4::ZERO })
+        };
         textured.surfaces[0].texturing = texturing(texture(1.0));
         renderer.render(&textured, SIZE, SIZE, None);
         assert!(!renderer.stats().reused);

@@ -5,12 +5,11 @@
 //! 3.8-3.10).
 
 use glam::{DVec2, DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
-use glray_capture::camera::Camera;
-use glray_capture::frame::{Coverage, Frame, Triangle, NO_LIGHTING};
-use glray_capture::lighting::{light_vertex_prepared, Light};
-use glray_gl::{
-    GL_ADD, GL_ALPHA, GL_BLEND, GL_DECAL, GL_EXP, GL_EXP2, GL_LINEAR, GL_LUMINANCE, GL_MODULATE, GL_REPLACE, GL_RGB,
-};
+use glray_scene::camera::Camera;
+use glray_scene::frame::{Frame, Triangle, NO_LIGHTING};
+use glray_scene::lighting::{light_vertex_prepared, Light};
+use glray_scene::surface::{Coverage, FogMode, TexEnvMode};
+use glray_scene::texture::BaseFormat;
 
 /// A fragment: its colour (before blending) and window depth.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -160,22 +159,23 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
         let base = tx.texture.base_format;
         let (cf, af, ct, at) = (c.xyz(), c.w, s.xyz(), s.w);
         c = match tx.env_mode {
-            GL_REPLACE => match base {
-                GL_ALPHA => cf.extend(at),
-                GL_RGB | GL_LUMINANCE => ct.extend(af), // RGB, LUMINANCE
+            TexEnvMode::Replace => match base {
+                BaseFormat::Alpha => cf.extend(at),
+                BaseFormat::Rgb | BaseFormat::Luminance => ct.extend(af),
                 _ => s,
             },
-            GL_DECAL => match base {
-                GL_RGB => ct.extend(af),
+            TexEnvMode::Decal => match base {
+                BaseFormat::Rgb => ct.extend(af),
                 _ => (cf * (1.0 - at) + ct * at).extend(af),
             },
-            GL_BLEND => (cf * (Vec3::ONE - ct) + tx.env_color.xyz() * ct).extend(af * at),
-            GL_ADD => (cf + ct).min(Vec3::ONE).extend(af * at),
-            GL_MODULATE => match base {
-                GL_ALPHA => cf.extend(af * at),
+            TexEnvMode::Blend => (cf * (Vec3::ONE - ct) + tx.env_color.xyz() * ct).extend(af * at),
+            TexEnvMode::Add => (cf + ct).min(Vec3::ONE).extend(af * at),
+            TexEnvMode::Modulate => match base {
+                BaseFormat::Alpha => cf.extend(af * at),
                 _ => (cf * ct).extend(af * at),
             },
-            _ => c,
+            // GL_COMBINE's stages are not followed.
+            TexEnvMode::Combine => c,
         };
     }
     if let Some(coverage) = surface.coverage {
@@ -248,16 +248,15 @@ fn finish(
     if let Some(fog) = &frame.surfaces[surface as usize].fog {
         let z = fog_z();
         let f = match fog.mode {
-            GL_LINEAR => {
+            FogMode::Linear => {
                 if fog.end == fog.start {
                     1.0
                 } else {
                     (fog.end - z) / (fog.end - fog.start)
                 }
             }
-            GL_EXP2 => (-(fog.density * z).powi(2)).exp(),
-            GL_EXP => (-fog.density * z).exp(),
-            _ => 1.0,
+            FogMode::Exp2 => (-(fog.density * z).powi(2)).exp(),
+            FogMode::Exp => (-fog.density * z).exp(),
         }
         .clamp(0.0, 1.0);
         c = (c.xyz() * f + fog.color.xyz() * (1.0 - f)).extend(c.w);
@@ -297,8 +296,8 @@ pub(crate) mod tests {
     #[test]
     fn eye_space_weights_are_the_perspective_correct_screen_weights_under_the_own_camera() {
         use glam::DMat4;
-        use glray_capture::camera::Viewport;
-        use glray_capture::frame::View;
+        use glray_scene::camera::Viewport;
+        use glray_scene::frame::View;
         let mut m = glray_capture::matrix::Matrices::default();
         m.frustum(-0.4, 0.4, -0.3, 0.3, 0.5, 50.0).unwrap();
         let projection = *m.top();

@@ -9,9 +9,9 @@
 //! positions are not looked up at all: on a big mesh that is three cache misses a hit.
 
 use glam::{DVec3, Vec3};
-use glray_capture::camera::Camera;
-use glray_capture::frame::{Frame, TriangleId};
-use glray_capture::instance::projection_flips;
+use glray_scene::camera::Camera;
+use glray_scene::facing::projection_flips;
+use glray_scene::frame::{Frame, TriangleId};
 
 use crate::fragment::{mixed, own_camera, Fragment};
 use crate::render::Options;

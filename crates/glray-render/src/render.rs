@@ -7,8 +7,8 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::Vec4;
-use glray_capture::camera::Camera;
-use glray_capture::frame::{Frame, TriangleId};
+use glray_scene::camera::Camera;
+use glray_scene::frame::{Frame, TriangleId};
 use rayon::prelude::*;
 
 use crate::bvh_choice::{ray_work, BvhBuild};
@@ -544,9 +544,10 @@ impl Job<'_> {
 mod tests {
     use super::*;
     use glam::{DMat4, Vec2, Vec3};
-    use glray_capture::camera::Viewport;
-    use glray_capture::frame::{Fog, Surface, Triangle};
     use glray_gl::{GL_COLOR_MATERIAL, GL_DEPTH_TEST, GL_LIGHT0, GL_LIGHTING};
+    use glray_scene::camera::Viewport;
+    use glray_scene::frame::Triangle;
+    use glray_scene::surface::{Fog, Surface};
 
     fn surface() -> Surface {
         Surface::depth_tested()
@@ -566,7 +567,7 @@ mod tests {
             clip_w: [1.0; 3],
             normals: [Vec3::Z; 3],
             base_colors: [color; 3],
-            lighting: glray_capture::frame::NO_LIGHTING,
+            lighting: glray_scene::frame::NO_LIGHTING,
             back: false,
         };
         [tri(0, 1, 2), tri(0, 2, 3)]
@@ -585,7 +586,7 @@ mod tests {
             surfaces,
             projection: Some(projection),
             viewport: Some(viewport),
-            cameras: vec![glray_capture::frame::View { projection, viewport }],
+            cameras: vec![glray_scene::frame::View { projection, viewport }],
             depth_range: (0.0, 1.0),
             clear_color: Vec4::new(0.0, 0.0, 1.0, 1.0),
             cleared: true,
@@ -652,7 +653,8 @@ mod tests {
         // A half-transparent white quad drawn last, behind the red one, with depth test off.
         let mut over = surface();
         over.depth_test = false;
-        over.blend = Some((0x0302, 0x0303));
+        over.blend =
+            Some((glray_scene::surface::BlendFactor::SrcAlpha, glray_scene::surface::BlendFactor::OneMinusSrcAlpha));
         let red = quad(-3.0, Vec4::new(1.0, 0.0, 0.0, 1.0), 0, 0);
         let white = quad(-5.0, Vec4::new(1.0, 1.0, 1.0, 0.5), 1, 1);
         let r = render(&frame([red, white].concat(), vec![surface(), over]), 8, 8, None, &Options::default());
@@ -675,7 +677,13 @@ mod tests {
     #[test]
     fn fog_mixes_by_eye_distance() {
         let mut fogged = surface();
-        fogged.fog = Some(Fog { mode: 0x2601, density: 1.0, start: 2.0, end: 6.0, color: Vec4::ONE });
+        fogged.fog = Some(Fog {
+            mode: glray_scene::surface::FogMode::Linear,
+            density: 1.0,
+            start: 2.0,
+            end: 6.0,
+            color: Vec4::ONE,
+        });
         let black = quad(-4.0, Vec4::new(0.0, 0.0, 0.0, 1.0), 0, 0);
         let r = render(&frame(black.to_vec(), vec![fogged]), 8, 8, None, &Options::default());
         // Linear fog at distance 4 between 2 and 6: half fog colour.
@@ -684,8 +692,8 @@ mod tests {
 
     #[test]
     fn lighting_per_pixel_catches_a_highlight_between_vertices() {
-        use glray_capture::frame::Lighting;
-        use glray_capture::lighting::{Light, LightModel, Material};
+        use glray_scene::draw_lighting::Lighting;
+        use glray_scene::lighting::{Light, LightModel, Material};
         // A big quad and a close positional light over its centre: at the corners the light
         // grazes, so per-vertex lighting leaves the centre dark; per pixel it is bright.
         let light = Light { enabled: true, position: glam::DVec4::new(0.0, 0.0, -4.0, 1.0), ..Light::new(0) };
@@ -862,7 +870,7 @@ mod tests {
             assert_eq!((listed.instances.len(), inline.instances.len()), (2, 0), "{what}");
             let camera = Camera::new(listed.projection.unwrap(), listed.viewport.unwrap(), listed.depth_range).unwrap();
             let short = Gouraud::new(&listed, &camera, &Options::default(), true).expect("the GL look");
-            assert!((0..2).all(|i| short.takes(glray_capture::frame::TriangleId { instance: i, index: 0 })), "{what}");
+            assert!((0..2).all(|i| short.takes(glray_scene::frame::TriangleId { instance: i, index: 0 })), "{what}");
             let traced = Renderer { flatten_below: 0, ..Renderer::default() }.render(&listed, 48, 48, None);
             let reference = render(&inline, 48, 48, None, &Options::default());
             let differ = traced.rgba.iter().zip(&reference.rgba).filter(|(a, b)| a.abs_diff(**b) > 1).count();

@@ -5,9 +5,9 @@
 //! that start as the clear values.
 
 use glam::{BVec4A, DVec3, Vec3, Vec4, Vec4Swizzles};
-use glray_capture::camera::Camera;
-use glray_capture::frame::{Frame, Surface, Triangle};
-use glray_gl::{GL_EQUAL, GL_GEQUAL, GL_GREATER, GL_LEQUAL, GL_LESS, GL_NEVER, GL_NOTEQUAL};
+use glray_scene::camera::Camera;
+use glray_scene::frame::{Frame, Triangle};
+use glray_scene::surface::{BlendFactor, CompareFunc, LogicOp, Surface};
 
 use crate::fragment::Fragment;
 use crate::scene::Hit;
@@ -18,7 +18,7 @@ pub fn closest_hit_suffices(frame: &Frame) -> bool {
         && frame.surfaces.iter().all(|s| {
             s.depth_test
                 && s.depth_mask
-                && matches!(s.depth_func, GL_LESS | GL_LEQUAL)
+                && matches!(s.depth_func, CompareFunc::Less | CompareFunc::LessOrEqual)
                 && s.blend.is_none()
                 && s.logic_op.is_none()
                 && s.alpha_test.is_none()
@@ -47,36 +47,40 @@ pub fn offset_depth(camera: &Camera, t: &Triangle, depth: f64, (factor, units): 
 }
 
 /// A comparison function of glDepthFunc and glAlphaFunc.
-pub(crate) fn passes(func: u32, value: f64, reference: f64) -> bool {
+pub(crate) fn passes(func: CompareFunc, value: f64, reference: f64) -> bool {
     match func {
-        GL_NEVER => false,
-        GL_LESS => value < reference,
-        GL_EQUAL => value == reference,
-        GL_LEQUAL => value <= reference,
-        GL_GREATER => value > reference,
-        GL_NOTEQUAL => value != reference,
-        GL_GEQUAL => value >= reference,
-        _ => true,
+        CompareFunc::Never => false,
+        CompareFunc::Less => value < reference,
+        CompareFunc::Equal => value == reference,
+        CompareFunc::LessOrEqual => value <= reference,
+        CompareFunc::Greater => value > reference,
+        CompareFunc::NotEqual => value != reference,
+        CompareFunc::GreaterOrEqual => value >= reference,
+        CompareFunc::Always => true,
     }
 }
 
-fn factor(f: u32, src: Vec4, dst: Vec4) -> Vec4 {
+fn factor(f: BlendFactor, src: Vec4, dst: Vec4) -> Vec4 {
     match f {
-        0 => Vec4::ZERO,
-        1 => Vec4::ONE,
-        0x0300 => src,
-        0x0301 => Vec4::ONE - src,
-        0x0302 => Vec4::splat(src.w),
-        0x0303 => Vec4::splat(1.0 - src.w),
-        0x0304 => Vec4::splat(dst.w),
-        0x0305 => Vec4::splat(1.0 - dst.w),
-        0x0306 => dst,
-        0x0307 => Vec4::ONE - dst,
-        0x0308 => {
+        BlendFactor::Zero => Vec4::ZERO,
+        BlendFactor::One => Vec4::ONE,
+        BlendFactor::SrcColor => src,
+        BlendFactor::OneMinusSrcColor => Vec4::ONE - src,
+        BlendFactor::SrcAlpha => Vec4::splat(src.w),
+        BlendFactor::OneMinusSrcAlpha => Vec4::splat(1.0 - src.w),
+        BlendFactor::DstAlpha => Vec4::splat(dst.w),
+        BlendFactor::OneMinusDstAlpha => Vec4::splat(1.0 - dst.w),
+        BlendFactor::DstColor => dst,
+        BlendFactor::OneMinusDstColor => Vec4::ONE - dst,
+        BlendFactor::SrcAlphaSaturate => {
             let f = src.w.min(1.0 - dst.w);
             Vec3::splat(f).extend(1.0)
         }
-        _ => Vec4::ONE,
+        // The constant colour (glBlendColor) is not followed.
+        BlendFactor::ConstantColor
+        | BlendFactor::OneMinusConstantColor
+        | BlendFactor::ConstantAlpha
+        | BlendFactor::OneMinusConstantAlpha => Vec4::ONE,
     }
 }
 
@@ -90,28 +94,28 @@ fn blend(surface: &Surface, src: Vec4, dst: Vec4) -> Vec4 {
 
 /// Colour of the framebuffer after glLogicOp's `op` combines `src` with `dst`, bit by bit on
 /// the 8-bit values the framebuffer holds.
-fn logic(op: u32, src: Vec4, dst: Vec4) -> Vec4 {
+fn logic(op: LogicOp, src: Vec4, dst: Vec4) -> Vec4 {
     let bits = |c: Vec4| c.to_array().map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8);
     let (s, d) = (bits(src), bits(dst));
     let out: [f32; 4] = std::array::from_fn(|k| {
         let (s, d) = (s[k], d[k]);
         let v = match op {
-            0x1500 => 0,
-            0x1501 => s & d,
-            0x1502 => s & !d,
-            0x1504 => !s & d,
-            0x1505 => d,
-            0x1506 => s ^ d,
-            0x1507 => s | d,
-            0x1508 => !(s | d),
-            0x1509 => !(s ^ d),
-            0x150A => !d,
-            0x150B => s | !d,
-            0x150C => !s,
-            0x150D => !s | d,
-            0x150E => !(s & d),
-            0x150F => 0xFF,
-            _ => s, // GL_COPY
+            LogicOp::Clear => 0,
+            LogicOp::And => s & d,
+            LogicOp::AndReverse => s & !d,
+            LogicOp::Copy => s,
+            LogicOp::AndInverted => !s & d,
+            LogicOp::Noop => d,
+            LogicOp::Xor => s ^ d,
+            LogicOp::Or => s | d,
+            LogicOp::Nor => !(s | d),
+            LogicOp::Equiv => !(s ^ d),
+            LogicOp::Invert => !d,
+            LogicOp::OrReverse => s | !d,
+            LogicOp::CopyInverted => !s,
+            LogicOp::OrInverted => !s | d,
+            LogicOp::Nand => !(s & d),
+            LogicOp::Set => 0xFF,
         };
         v as f32 / 255.0
     });
@@ -167,12 +171,17 @@ pub fn opaque(fragment: &Fragment) -> Vec4 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glray_capture::frame::{DepthClear, TriangleId};
+    use glray_scene::frame::{DepthClear, TriangleId};
 
     #[test]
     fn comparisons_and_blending() {
-        assert!(passes(GL_LESS, 0.2, 0.5) && !passes(GL_LESS, 0.5, 0.5) && passes(GL_LEQUAL, 0.5, 0.5));
-        let s = Surface { blend: Some((0x0302, 0x0303)), ..Surface::depth_tested() };
+        assert!(
+            passes(CompareFunc::Less, 0.2, 0.5)
+                && !passes(CompareFunc::Less, 0.5, 0.5)
+                && passes(CompareFunc::LessOrEqual, 0.5, 0.5)
+        );
+        let s =
+            Surface { blend: Some((BlendFactor::SrcAlpha, BlendFactor::OneMinusSrcAlpha)), ..Surface::depth_tested() };
         let c = blend(&s, Vec4::new(1.0, 0.0, 0.0, 0.25), Vec4::new(0.0, 0.0, 1.0, 1.0));
         assert!((c - Vec4::new(0.25, 0.0, 0.75, 0.8125)).length() < 1e-6, "{c}");
     }
@@ -190,7 +199,11 @@ mod tests {
         };
         let fragment = |color: Vec4, depth: f64, surface: u32| Fragment { color, depth, eye: DVec3::ZERO, surface };
         let masked = Surface { color_mask: [false; 4], ..Surface::depth_tested() };
-        let equal = Surface { depth_func: GL_EQUAL, blend: Some((0x0302, 0x0303)), ..Surface::depth_tested() };
+        let equal = Surface {
+            depth_func: CompareFunc::Equal,
+            blend: Some((BlendFactor::SrcAlpha, BlendFactor::OneMinusSrcAlpha)),
+            ..Surface::depth_tested()
+        };
         let frame = Frame { surfaces: vec![Surface::depth_tested(), masked, equal], ..Frame::default() };
         assert!(!closest_hit_suffices(&frame));
         let shell = Vec4::new(0.0, 0.0, 1.0, 0.5);

@@ -12,9 +12,9 @@ use std::sync::{Arc, Weak};
 use std::time::Duration;
 
 use glam::{Affine3A, DMat4, Mat3, Vec2, Vec3, Vec3A};
-use glray_capture::frame::{Frame, Solid, TriangleId};
-use glray_capture::instance::Instance;
-use glray_capture::mesh::Mesh;
+use glray_scene::frame::{Frame, Solid, TriangleId};
+use glray_scene::instance::Instance;
+use glray_scene::mesh::Mesh;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;

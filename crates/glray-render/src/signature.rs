@@ -10,7 +10,7 @@
 use std::hash::{Hash, Hasher};
 
 use glam::Vec2;
-use glray_capture::frame::{Frame, Triangle};
+use glray_scene::frame::{Frame, Triangle};
 use rayon::prelude::*;
 use xxhash_rust::xxh3::Xxh3;
 
@@ -152,12 +152,13 @@ mod tests {
 
     #[test]
     fn any_number_of_any_triangle_changes_the_signature_and_threads_do_not() {
-        use glray_capture::frame::{Surface, Texturing};
-        use glray_capture::texture::Texture;
+        use glray_scene::surface::{Surface, Texturing};
+        use glray_scene::texture::Texture;
         // Several chunks' worth, the change in a middle one; surface 0 textured, 1 not.
         let mut textured = Surface::depth_tested();
         let texture = Arc::new(Texture::default());
-        textured.texturing = Some(Texturing { texture, env_mode: 0x2100, env_color: Vec4::ZERO });
+        textured.texturing =
+            Some(Texturing { texture, env_mode: glray_scene::surface::TexEnvMode::Modulate, env_color: Vec4::ZERO });
         let frame = Frame {
             triangles: (0..3 * CHUNK + 5).map(triangle).collect(),
             surfaces: vec![textured, Surface::depth_tested()],
@@ -203,11 +204,13 @@ mod tests {
 
     #[test]
     fn lines_depth_state_and_texture_environment_change_the_signature() {
-        use glray_capture::frame::{DepthClear, Solid, Surface, Texturing};
-        use glray_capture::texture::Texture;
+        use glray_scene::frame::{DepthClear, Solid};
+        use glray_scene::surface::{Surface, Texturing};
+        use glray_scene::texture::Texture;
         let texture = Arc::new(Texture::default());
         let mut surface = Surface::depth_tested();
-        surface.texturing = Some(Texturing { texture, env_mode: 0x2100, env_color: Vec4::ZERO });
+        surface.texturing =
+            Some(Texturing { texture, env_mode: glray_scene::surface::TexEnvMode::Modulate, env_color: Vec4::ZERO });
         let line = Solid { a: Vec3::ZERO, b: Vec3::X, radius: 0.1, sequence: 0, camera: 0 };
         let frame = Frame {
             triangles: vec![triangle(0)],
@@ -230,18 +233,20 @@ mod tests {
             ("the depth range", |f| f.depth_range.1 = 0.5),
             ("depth not cleared", |f| f.depth_cleared = None),
             ("depth cleared to another value", |f| f.depth_cleared = Some(0.5)),
-            ("the texture environment", |f| f.surfaces[0].texturing.as_mut().unwrap().env_mode = 0x1E01),
+            ("the texture environment", |f| {
+                f.surfaces[0].texturing.as_mut().unwrap().env_mode = glray_scene::surface::TexEnvMode::Replace
+            }),
             ("the texture environment's colour", |f| f.surfaces[0].texturing.as_mut().unwrap().env_color.x = 1.0),
             ("the colour mask", |f| f.surfaces[0].color_mask[1] = false),
             ("the polygon offset", |f| f.surfaces[0].polygon_offset = Some((1.0, 1.0))),
-            ("antialiased lines", |f| f.surfaces[0].coverage = Some(glray_capture::frame::Coverage::Line(1.0))),
+            ("antialiased lines", |f| f.surfaces[0].coverage = Some(glray_scene::surface::Coverage::Line(1.0))),
             ("a scissored clear", |f| {
-                let rect = glray_capture::camera::Viewport { x: 0, y: 0, width: 8, height: 8 };
-                f.scissored_clears.push(glray_capture::frame::ScissoredClear { rect, color: None, depth: Some(1.0) })
+                let rect = glray_scene::camera::Viewport { x: 0, y: 0, width: 8, height: 8 };
+                f.scissored_clears.push(glray_scene::frame::ScissoredClear { rect, color: None, depth: Some(1.0) })
             }),
             ("a depth clear between draws", |f| f.depth_clears.push(DepthClear { before: 2, depth: 1.0 })),
             ("a depth clear between draws to another depth", |f| f.depth_clears[0].depth = 0.5),
-            ("a logic op", |f| f.surfaces[0].logic_op = Some(0x1506)),
+            ("a logic op", |f| f.surfaces[0].logic_op = Some(glray_scene::surface::LogicOp::Xor)),
         ];
         for (what, change) in changes {
             let mut changed = frame.clone();

@@ -5,9 +5,9 @@
 use std::cell::Cell;
 
 use glam::{DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
-use glray_capture::camera::{Camera, Ray as EyeRay};
-use glray_capture::frame::{Frame, Triangle, TriangleId};
-use glray_capture::lighting::Light;
+use glray_scene::camera::{Camera, Ray as EyeRay};
+use glray_scene::frame::{Frame, Triangle, TriangleId};
+use glray_scene::lighting::Light;
 use obvhs::ray::Ray;
 
 use crate::effects::{leaving, lit_by, occlusion, Origin};

@@ -8,11 +8,6 @@ use std::path::Path;
 use std::time::Instant;
 
 use glam::{DMat4, DVec3, DVec4, Vec3};
-use glray_capture::camera::Viewport;
-use glray_capture::frame::{Frame, Lighting, Surface, View};
-use glray_capture::instance::Instance;
-use glray_capture::lighting::{Light, LightModel, Material};
-use glray_capture::mesh::Mesh;
 use glray_core::image::Image;
 use glray_render::bvh_choice::BvhBuild;
 use glray_render::effects::{occlusion, Origin};
@@ -20,6 +15,13 @@ use glray_render::pieces::{for_each_block, TILE};
 use glray_render::sampling::Sampler;
 use glray_render::scene::{Meshes, Ray, Scene};
 use glray_render::{Effects, Options, Renderer};
+use glray_scene::camera::Viewport;
+use glray_scene::draw_lighting::Lighting;
+use glray_scene::frame::{Frame, View};
+use glray_scene::instance::Instance;
+use glray_scene::lighting::{Light, LightModel, Material};
+use glray_scene::mesh::Mesh;
+use glray_scene::surface::Surface;
 use rayon::prelude::*;
 
 /// The anchors' camera and light (common.h).
@@ -182,7 +184,7 @@ fn kernels(frame: &Frame, ao: u32, frames: u32, bvh: BvhBuild) -> Kernels {
     let mut meshes = Meshes::default();
     // The mesh is drawn unchanged, as in the frames below: no tree is built again next frame.
     let scene = Scene::build(frame, &mut meshes, bvh, 0.0);
-    let camera = glray_capture::camera::Camera::new(
+    let camera = glray_scene::camera::Camera::new(
         frame.projection.expect("the bench frame has a projection"),
         frame.viewport.expect("and a viewport"),
         frame.depth_range,
@@ -200,7 +202,7 @@ fn kernels(frame: &Frame, ao: u32, frames: u32, bvh: BvhBuild) -> Kernels {
             HitRecord { p: Vec3::from(ray.origin) + d * hit.t, n }
         })
     };
-    let ray = |r: glray_capture::camera::Ray| {
+    let ray = |r: glray_scene::camera::Ray| {
         glray_render::bvh::ray(r.origin.as_vec3a(), r.direction.as_vec3a(), 0.0, r.t_max as f32)
     };
     // In 4x2 blocks of camera rays, as the renderer traces them.

@@ -6,10 +6,10 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use glray_capture::events::Capture;
-use glray_capture::frame::Frame;
 use glray_core::image::Image;
 use glray_core::trace::{Event, Reader};
 use glray_render::{Options, Rendered, Renderer};
+use glray_scene::frame::Frame;
 
 use crate::replay::FrameSet;
 

@@ -5,9 +5,10 @@
 //! projections alike, and bounds the ray to what GL would not clip.
 
 use glam::{DMat4, DVec3, DVec4};
+use serde::{Deserialize, Serialize};
 
 /// glViewport.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Viewport {
     pub x: i32,
     pub y: i32,
@@ -159,12 +160,32 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::matrix::Matrices;
 
-    fn projection(f: impl FnOnce(&mut Matrices)) -> DMat4 {
-        let mut m = Matrices::default();
-        f(&mut m);
-        *m.top()
+    /// glFrustum's and glOrtho's matrices (OpenGL 2.1, 2.11.1).
+    struct Gl;
+
+    impl Gl {
+        fn frustum(&self, l: f64, r: f64, b: f64, t: f64, n: f64, f: f64) -> Option<DMat4> {
+            Some(DMat4::from_cols(
+                DVec4::new(2.0 * n / (r - l), 0.0, 0.0, 0.0),
+                DVec4::new(0.0, 2.0 * n / (t - b), 0.0, 0.0),
+                DVec4::new((r + l) / (r - l), (t + b) / (t - b), -(f + n) / (f - n), -1.0),
+                DVec4::new(0.0, 0.0, -2.0 * f * n / (f - n), 0.0),
+            ))
+        }
+
+        fn ortho(&self, l: f64, r: f64, b: f64, t: f64, n: f64, f: f64) -> Option<DMat4> {
+            Some(DMat4::from_cols(
+                DVec4::new(2.0 / (r - l), 0.0, 0.0, 0.0),
+                DVec4::new(0.0, 2.0 / (t - b), 0.0, 0.0),
+                DVec4::new(0.0, 0.0, -2.0 / (f - n), 0.0),
+                DVec4::new(-(r + l) / (r - l), -(t + b) / (t - b), -(f + n) / (f - n), 1.0),
+            ))
+        }
+    }
+
+    fn projection(f: impl FnOnce(&Gl) -> DMat4) -> DMat4 {
+        f(&Gl)
     }
 
     const VP: Viewport = Viewport { x: 0, y: 0, width: 200, height: 100 };

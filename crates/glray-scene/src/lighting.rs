@@ -5,11 +5,14 @@
 //! the moment glLight is called; the caller does that). Colour material and two-sided lighting
 //! are the caller's choice of `Material` and normal.
 
-use glam::{DVec3, DVec4};
-use glray_gl::{GL_AMBIENT, GL_BACK, GL_DIFFUSE, GL_EMISSION, GL_FRONT, GL_SPECULAR};
+use glam::{DMat3, DVec3, DVec4};
+use serde::{Deserialize, Serialize};
+
+use crate::facing::Face;
+use crate::gl_enum::gl_enum;
 
 /// One light's parameters, with GL's initial values (`Light::new(0)` is GL_LIGHT0).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Light {
     pub enabled: bool,
     pub ambient: DVec4,
@@ -48,7 +51,7 @@ impl Light {
 }
 
 /// A material, with GL's initial values.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Material {
     pub ambient: DVec4,
     pub diffuse: DVec4,
@@ -70,7 +73,7 @@ impl Default for Material {
 }
 
 /// glLightModel state, with GL's initial values.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LightModel {
     pub ambient: DVec4,
     pub local_viewer: bool,
@@ -99,32 +102,61 @@ pub struct ColorTarget {
     pub emission: bool,
 }
 
-/// What glColorMaterial's `mode` replaces (GL_AMBIENT_AND_DIFFUSE for any other value).
-pub fn color_target(mode: u32) -> ColorTarget {
-    let only = |ambient, diffuse, specular, emission| ColorTarget { ambient, diffuse, specular, emission };
-    match mode {
-        GL_AMBIENT => only(true, false, false, false),  // GL_AMBIENT
-        GL_DIFFUSE => only(false, true, false, false),  // GL_DIFFUSE
-        GL_SPECULAR => only(false, false, true, false), // GL_SPECULAR
-        GL_EMISSION => only(false, false, false, true), // GL_EMISSION
-        _ => only(true, true, false, false),            // GL_AMBIENT_AND_DIFFUSE
+gl_enum! {
+    /// Which colours of a material glColorMaterial replaces with the current colour.
+    pub enum ColorMaterialMode {
+        Emission = GL_EMISSION,
+        Ambient = GL_AMBIENT,
+        Diffuse = GL_DIFFUSE,
+        Specular = GL_SPECULAR,
+        AmbientAndDiffuse = GL_AMBIENT_AND_DIFFUSE,
     }
 }
 
-/// Which faces (front, back) glColorMaterial's `face` applies to.
-pub fn color_faces(face: u32) -> [bool; 2] {
-    match face {
-        GL_FRONT => [true, false], // GL_FRONT
-        GL_BACK => [false, true],  // GL_BACK
-        _ => [true, true],         // GL_FRONT_AND_BACK
+impl ColorMaterialMode {
+    /// The colours it replaces.
+    pub fn target(self) -> ColorTarget {
+        let only = |ambient, diffuse, specular, emission| ColorTarget { ambient, diffuse, specular, emission };
+        match self {
+            ColorMaterialMode::Ambient => only(true, false, false, false),
+            ColorMaterialMode::Diffuse => only(false, true, false, false),
+            ColorMaterialMode::Specular => only(false, false, true, false),
+            ColorMaterialMode::Emission => only(false, false, false, true),
+            ColorMaterialMode::AmbientAndDiffuse => only(true, true, false, false),
+        }
     }
+}
+
+/// glColorMaterial's face and mode, when GL_COLOR_MATERIAL is on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ColorMaterial {
+    pub face: Face,
+    pub mode: ColorMaterialMode,
+}
+
+/// An object-space normal in eye coordinates, as lighting uses it: through the normal matrix,
+/// then GL_NORMALIZE (to unit length) or GL_RESCALE_NORMAL (by the modelview's scale).
+#[inline]
+pub fn eye_normal(nm: &DMat3, n: DVec3, normalize: bool, rescale: bool) -> DVec3 {
+    let n = *nm * n;
+    if normalize {
+        return n.normalize_or_zero();
+    }
+    if rescale {
+        // The inverse modelview's third row: the normal matrix's third column.
+        let len = nm.col(2).length();
+        if len > 0.0 {
+            return n / len;
+        }
+    }
+    n
 }
 
 /// What the lighting equation needs of a directional light that no vertex changes, worked out
 /// once per frame: its unit direction and, for a viewer at infinity, its half vector (two
 /// square roots and divisions per light and vertex otherwise; the tracer lights every hit's
 /// three corners). See `prepare`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Prepared {
     /// The light is directional (`direction` holds its unit direction).
     directional: bool,

@@ -1,24 +1,21 @@
-//! What capture hands the renderer for one frame: triangles in eye coordinates with the colours
-//! the rasterizer would interpolate (already lit, with the face and flat shading decided),
-//! instances of display-list meshes that make such triangles when a ray hits them, the surface
-//! state each was drawn with, and the camera. Lines and points arrive as the
-//! screen-aligned quads a rasterizer fills for them, so that the GL look needs no other
-//! primitive.
-
-use std::borrow::Cow;
-use std::sync::Arc;
+//! A frame's scene (`Frame`): what capture hands the renderer for one frame. Triangles in eye
+//! coordinates with the colours the rasterizer would interpolate (already lit, with the face
+//! and flat shading decided), instances of meshes that make such triangles when a ray hits
+//! them, the surface state each was drawn with, the lighting of lit draws, every camera, the
+//! clears. Lines and points arrive as the screen-aligned quads a rasterizer fills for them, so
+//! that the GL look needs no other primitive, and as solids for secondary rays.
 
 use glam::{DMat4, DVec4, Vec2, Vec3, Vec4};
 use glray_core::prefetch;
+use serde::{Deserialize, Serialize};
 
 use crate::camera::Viewport;
+use crate::draw_lighting::Lighting;
 use crate::instance::Instance;
-use crate::lighting::{color_faces, color_target, prepare, Light, LightModel, Material, Prepared};
-use crate::sunlit::Sunlit;
-use crate::texture::Texture;
+use crate::surface::Surface;
 
 /// One triangle, ready to trace.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Triangle {
     /// Corners in eye coordinates, in the winding order that faces the viewer.
     pub positions: [Vec3; 3],
@@ -50,7 +47,7 @@ pub struct Triangle {
 /// from `a` to `b` (a ball when they are the same point), as thick as it is on the screen. Rays
 /// from the camera see the rasterizer's quad instead (the GL look); this is what secondary
 /// rays see.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Solid {
     pub a: Vec3,
     pub b: Vec3,
@@ -63,184 +60,16 @@ pub struct Solid {
 /// `Triangle::lighting` of a triangle drawn without GL_LIGHTING.
 pub const NO_LIGHTING: u32 = u32::MAX;
 
-/// The lighting state of a draw, so that the lighting equation can also run per pixel.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Lighting {
-    // Every field is private: `prepared` and `positional` are derived from the others in `new`
-    // and would go stale if those changed afterwards.
-    /// The enabled lights, in eye coordinates.
-    lights: Vec<Light>,
-    model: LightModel,
-    /// Front and back.
-    materials: [Material; 2],
-    /// glColorMaterial's (face, mode) when GL_COLOR_MATERIAL is on.
-    color_material: Option<(u32, u32)>,
-    /// `lighting::prepare` of the lights and model: what every vertex would otherwise work out
-    /// again. Private, so that every `Lighting` is made by `new`, which derives it.
-    prepared: Vec<Prepared>,
-    /// Whether the lighting reads a vertex's position (`reads_position`), derived in `new`.
-    positional: bool,
-    /// The equation in single precision when every light is at infinity (`sunlit`), derived
-    /// in `new`.
-    sunlit: Option<Sunlit>,
-}
-
-impl Lighting {
-    /// A draw's lighting: the enabled `lights` (eye coordinates), the model, the front and back
-    /// materials and glColorMaterial's (face, mode).
-    pub fn new(
-        lights: Vec<Light>,
-        model: LightModel,
-        materials: [Material; 2],
-        color_material: Option<(u32, u32)>,
-    ) -> Lighting {
-        let prepared = prepare(&lights, &model);
-        let positional = model.local_viewer || lights.iter().any(|l| l.enabled && l.position.w != 0.0);
-        let sunlit = Sunlit::new(&lights, &model, &materials, color_material);
-        Lighting { lights, model, materials, color_material, prepared, positional, sunlit }
-    }
-
-    /// Whether `new` would make this lighting of these inputs (`lights`, the enabled ones):
-    /// the same inputs make the same derived parts.
-    pub fn is_made_of<'a>(
-        &self,
-        mut lights: impl Iterator<Item = &'a Light>,
-        model: &LightModel,
-        materials: &[Material; 2],
-        color_material: Option<(u32, u32)>,
-    ) -> bool {
-        self.model == *model
-            && self.materials == *materials
-            && self.color_material == color_material
-            && self.lights.iter().all(|l| lights.next() == Some(l))
-            && lights.next().is_none()
-    }
-
-    /// The lighting made ready for many vertices in single precision, when every enabled light
-    /// is at infinity and not a spotlight and the viewer is at infinity (`sunlit::Sunlit`).
-    pub fn sunlit(&self) -> Option<&Sunlit> {
-        self.sunlit.as_ref()
-    }
-
-    /// Whether a vertex's lit colour depends on where it is: a light at a point (not at
-    /// infinity) or a local viewer. Otherwise only its normal and material count.
-    pub fn reads_position(&self) -> bool {
-        self.positional
-    }
-
-    /// The enabled lights, in eye coordinates.
-    pub fn lights(&self) -> &[Light] {
-        &self.lights
-    }
-
-    /// The light model.
-    pub fn model(&self) -> &LightModel {
-        &self.model
-    }
-
-    /// The lights made ready for many vertices (`lighting::prepare`), one entry per light.
-    pub fn prepared(&self) -> &[Prepared] {
-        &self.prepared
-    }
-
-    /// The materials with `color` put in by glColorMaterial, as GL does at each vertex.
-    pub fn materials(&self, color: DVec4) -> Cow<'_, [Material; 2]> {
-        color_materials(&self.materials, self.color_material, color)
-    }
-}
-
-/// Front and back `materials` with `color` put in by glColorMaterial's (face, mode), if on:
-/// without glColorMaterial, `materials` themselves, not a copy (this runs for every vertex and
-/// every corner of every hit, and the two materials are 336 bytes).
-pub fn color_materials(
-    materials: &[Material; 2],
-    color_material: Option<(u32, u32)>,
-    color: DVec4,
-) -> Cow<'_, [Material; 2]> {
-    let Some((face, mode)) = color_material else { return Cow::Borrowed(materials) };
-    let mut mats = *materials;
-    let t = color_target(mode);
-    for (m, on) in mats.iter_mut().zip(color_faces(face)) {
-        if on {
-            m.ambient = if t.ambient { color } else { m.ambient };
-            m.diffuse = if t.diffuse { color } else { m.diffuse };
-            m.specular = if t.specular { color } else { m.specular };
-            m.emission = if t.emission { color } else { m.emission };
-        }
-    }
-    Cow::Owned(mats)
-}
-
 /// A projection and viewport draws were made with.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct View {
     pub projection: DMat4,
     pub viewport: Viewport,
 }
 
-/// glFog state.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Fog {
-    pub mode: u32,
-    pub density: f32,
-    pub start: f32,
-    pub end: f32,
-    pub color: Vec4,
-}
-
-/// Texturing of a draw: the texture object's image and sampling state, and the environment.
-#[derive(Debug, Clone)]
-pub struct Texturing {
-    pub texture: Arc<Texture>,
-    /// GL_TEXTURE_ENV_MODE: MODULATE, REPLACE, DECAL, BLEND, ADD.
-    pub env_mode: u32,
-    pub env_color: Vec4,
-}
-
-/// The per-fragment state of a draw: what the tracer needs besides the triangle.
-#[derive(Debug, Clone)]
-pub struct Surface {
-    pub texturing: Option<Texturing>,
-    pub fog: Option<Fog>,
-    pub depth_test: bool,
-    pub depth_func: u32,
-    pub depth_mask: bool,
-    /// (src, dst) factors when GL_BLEND is on.
-    pub blend: Option<(u32, u32)>,
-    /// glLogicOp's operation when GL_COLOR_LOGIC_OP is on (GL then does not blend).
-    pub logic_op: Option<u32>,
-    /// (func, reference) when GL_ALPHA_TEST is on.
-    pub alpha_test: Option<(u32, f32)>,
-    /// Enabled user clip planes (glClipPlane), in eye coordinates: a point is kept where
-    /// plane . (x, y, z, 1) >= 0.
-    pub clip_planes: Vec<DVec4>,
-    /// glPolygonOffset's (factor, units) for the filled polygons of the draw, when
-    /// GL_POLYGON_OFFSET_FILL is on (lines and points are not offset).
-    pub polygon_offset: Option<(f32, f32)>,
-    /// glColorMask: which of red, green, blue and alpha the draw writes (a draw with none
-    /// writes only depth, as the first pass of transparent shells does).
-    pub color_mask: [bool; 4],
-    /// The draw's lines or points are antialiased (GL_LINE_SMOOTH, GL_POINT_SMOOTH): each
-    /// fragment's alpha is scaled by how much of its pixel they cover.
-    pub coverage: Option<Coverage>,
-}
-
-/// How an antialiased line or round point covers the pixels of the quad made for it, half a
-/// pixel wider than it on every side (OpenGL 2.1, 3.4.2.2 and 3.3.1): the coverage falls from 1
-/// to 0 over the pixel around the edge. The quad's triangles keep the corners in an order that
-/// tells its shape: corners 0 and 1 are the ends of a side across the line, 1 to 2 runs along
-/// it; a point's corners 0 and 2 are opposite.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Coverage {
-    /// A line this many pixels wide.
-    Line(f32),
-    /// A round point this many pixels across.
-    Point(f32),
-}
-
 /// A glClear within a scissor box: the colour it fills the box with (None when the colour buffer
 /// was not cleared), and the depth (glClearDepth; None when the depth buffer was not cleared).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ScissoredClear {
     pub rect: Viewport,
     pub color: Option<Vec4>,
@@ -248,7 +77,7 @@ pub struct ScissoredClear {
 }
 
 /// A glClear of the depth buffer alone between a frame's draws.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DepthClear {
     /// The sequence number of the draw after it (`Triangle::sequence`).
     pub before: u32,
@@ -257,7 +86,7 @@ pub struct DepthClear {
 }
 
 /// Which triangle of a frame: one of `Frame::triangles`, or one of an instance's mesh.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct TriangleId {
     /// Index into `Frame::instances`, or `TriangleId::FLAT` for `Frame::triangles`.
     pub instance: u32,
@@ -268,29 +97,8 @@ impl TriangleId {
     pub const FLAT: u32 = u32::MAX;
 }
 
-impl Surface {
-    /// An opaque, depth-tested (GL_LESS, writing depth) surface with nothing else on: what a
-    /// program that only enables GL_DEPTH_TEST draws with.
-    pub fn depth_tested() -> Surface {
-        Surface {
-            texturing: None,
-            fog: None,
-            depth_test: true,
-            depth_func: 0x0201,
-            depth_mask: true,
-            blend: None,
-            logic_op: None,
-            alpha_test: None,
-            clip_planes: Vec::new(),
-            polygon_offset: None,
-            color_mask: [true; 4],
-            coverage: None,
-        }
-    }
-}
-
 /// A captured frame.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Frame {
     /// Triangles made this frame (immediate mode, array draws, lines and points), in eye
     /// coordinates.

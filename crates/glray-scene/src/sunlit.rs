@@ -17,7 +17,7 @@
 
 use glam::{DVec3, DVec4, Mat3, Vec3, Vec3A, Vec4};
 
-use crate::lighting::{color_faces, color_target, ColorTarget, Light, LightModel, Material};
+use crate::lighting::{ColorMaterial, ColorTarget, Light, LightModel, Material};
 
 /// One light at infinity, as the equation reads it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,7 +32,7 @@ struct Sun {
 
 /// A material in single precision.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Face {
+struct FaceMaterial {
     ambient: Vec3A,
     diffuse: Vec4,
     specular: Vec3A,
@@ -40,10 +40,10 @@ struct Face {
     shininess: f32,
 }
 
-impl Face {
-    fn new(m: &Material) -> Face {
+impl FaceMaterial {
+    fn new(m: &Material) -> FaceMaterial {
         let v3 = |v: DVec4| v.truncate().as_vec3a();
-        Face {
+        FaceMaterial {
             ambient: v3(m.ambient),
             diffuse: m.diffuse.as_vec4(),
             specular: v3(m.specular),
@@ -54,7 +54,7 @@ impl Face {
 
     /// This face with `color` put in where glColorMaterial's target says (`frame::color_materials`).
     #[inline]
-    fn with_color(mut self, t: ColorTarget, color: Vec4) -> Face {
+    fn with_color(mut self, t: ColorTarget, color: Vec4) -> FaceMaterial {
         let rgb = Vec3A::from(color.truncate());
         self.ambient = if t.ambient { rgb } else { self.ambient };
         self.diffuse = if t.diffuse { color } else { self.diffuse };
@@ -72,7 +72,7 @@ pub struct Sunlit {
     /// The scene's ambient plus every light's ambient: what a material's ambient is lit by.
     ambient: Vec3A,
     /// Front and back materials.
-    faces: [Face; 2],
+    faces: [FaceMaterial; 2],
     /// Which faces glColorMaterial's colour goes into, and as what (`Lighting::color_material`).
     color_material: Option<([bool; 2], ColorTarget)>,
     two_side: bool,
@@ -81,13 +81,13 @@ pub struct Sunlit {
 
 impl Sunlit {
     /// `lights` (the enabled ones count) under `model` with `materials` and glColorMaterial's
-    /// (face, mode); None unless every enabled light is at infinity and not a spotlight and the
+    /// face and mode; None unless every enabled light is at infinity and not a spotlight and the
     /// viewer is at infinity.
     pub fn new(
         lights: &[Light],
         model: &LightModel,
         materials: &[Material; 2],
-        color_material: Option<(u32, u32)>,
+        color_material: Option<ColorMaterial>,
     ) -> Option<Sunlit> {
         let lights: Vec<&Light> = lights.iter().filter(|l| l.enabled).collect();
         if model.local_viewer || lights.iter().any(|l| l.position.w != 0.0 || l.spot_cutoff != 180.0) {
@@ -106,11 +106,11 @@ impl Sunlit {
             })
             .collect();
         let ambient = lights.iter().fold(model.ambient.truncate(), |a, l| a + l.ambient.truncate());
-        let color_material = color_material.map(|(face, mode)| (color_faces(face), color_target(mode)));
+        let color_material = color_material.map(|c| (c.face.sides(), c.mode.target()));
         Some(Sunlit {
             suns,
             ambient: ambient.as_vec3a(),
-            faces: materials.each_ref().map(Face::new),
+            faces: materials.each_ref().map(FaceMaterial::new),
             color_material,
             two_side: model.two_side,
             separate_specular: model.separate_specular,
@@ -195,8 +195,10 @@ mod tests {
     #[test]
     fn lights_at_infinity_give_the_double_precision_equations_colours() {
         let mut s = Spread(7);
-        let faces = [0x0404, 0x0405, 0x0408];
-        let modes = [0x1200, 0x1201, 0x1202, 0x1600, 0x1602];
+        use crate::facing::Face;
+        use crate::lighting::ColorMaterialMode as Mode;
+        let faces = [Face::Front, Face::Back, Face::FrontAndBack];
+        let modes = [Mode::Ambient, Mode::Diffuse, Mode::Specular, Mode::Emission, Mode::AmbientAndDiffuse];
         for case in 0..400 {
             let lights: Vec<Light> = (0..1 + case % 3)
                 .map(|k| {
@@ -223,13 +225,14 @@ mod tests {
                 shininess: if case % 9 == 0 { 0.0 } else { s.next(1.0, 128.0) },
             };
             let materials = [material(&mut s), material(&mut s)];
-            let color_material = (case % 3 == 0).then(|| (faces[case / 3 % 3], modes[case / 3 % 5]));
+            let color_material =
+                (case % 3 == 0).then(|| ColorMaterial { face: faces[case / 3 % 3], mode: modes[case / 3 % 5] });
             let sunlit = Sunlit::new(&lights, &model, &materials, color_material).expect("lights at infinity");
             let prepared = prepare(&lights, &model);
             for _ in 0..8 {
                 let normal = s.unit();
                 let color = s.color();
-                let mats = crate::frame::color_materials(&materials, color_material, color);
+                let mats = crate::draw_lighting::color_materials(&materials, color_material, color);
                 for face in 0..2 {
                     let (p, q) = light_face(DVec3::ZERO, normal, &mats, &lights, &prepared, &model, face);
                     let (a, b) = sunlit.light(normal.as_vec3a(), color.as_vec4(), face);
@@ -264,7 +267,7 @@ mod tests {
         let nm = DMat3::from_cols_array(&[0.9, 0.1, -0.2, 0.3, 1.7, 0.4, -0.5, 0.2, 2.1]);
         let n = DVec3::new(0.3, -0.8, 0.5);
         for (normalize, rescale) in [(false, false), (true, false), (false, true), (true, true)] {
-            let want = crate::vertex::eye_normal(&nm, n, normalize, rescale);
+            let want = crate::lighting::eye_normal(&nm, n, normalize, rescale);
             let got = eye_normal(&nm.as_mat3(), n.as_vec3a(), normalize, rescale);
             assert!(got.as_dvec3().abs_diff_eq(want, 1e-6), "{normalize} {rescale}: {got} against {want}");
         }

@@ -9,12 +9,17 @@ use std::sync::Arc;
 
 use glam::{DMat3, DMat4, DVec3, DVec4, Vec2, Vec3, Vec3A, Vec4};
 
-use crate::context::vec4;
-use crate::draw::{culled, window_facing};
-use crate::frame::{Lighting, Triangle, NO_LIGHTING};
-use crate::lighting::light_face;
+use serde::{Deserialize, Serialize};
+
+use crate::draw_lighting::Lighting;
+use crate::facing::{culled, facing_flip, window_facing, Face};
+use crate::frame::{Triangle, NO_LIGHTING};
+use crate::lighting::{eye_normal, light_face};
 use crate::mesh::Mesh;
-use crate::vertex::eye_normal;
+
+fn vec4(v: DVec4) -> Vec4 {
+    v.as_vec4()
+}
 
 /// What the vertex stage makes of one vertex (`Instance::vertex`).
 #[derive(Debug, Clone, Copy)]
@@ -28,8 +33,10 @@ struct Vertex {
 }
 
 /// A mesh drawn once, with the state of that draw.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Instance {
+    /// Encoded as its id: the byte encoding sends a mesh once (`encode`).
+    #[serde(with = "crate::encode::shared_mesh")]
     pub mesh: Arc<Mesh>,
     /// Object to eye coordinates (the modelview of the call).
     pub modelview: DMat4,
@@ -51,26 +58,10 @@ pub struct Instance {
     pub flat: bool,
     pub front_ccw: bool,
     /// glCullFace's face when GL_CULL_FACE is on.
-    pub cull: Option<u32>,
+    pub cull: Option<Face>,
     /// Whether the window winding is the opposite of the object-space one as seen along the
     /// view (a mirroring modelview or projection): see `facing_flip`.
     pub mirrored: bool,
-}
-
-/// Whether `modelview` and `projection` together turn a triangle's winding around on the
-/// window, compared with how it winds seen from the eye in object space. With it, a ray from
-/// the eye tells a triangle's facing from the sign of one dot product (`keeps_seen`).
-pub fn facing_flip(modelview: &DMat4, projection: &DMat4) -> bool {
-    (DMat3::from_mat4(*modelview).determinant() < 0.0) != projection_flips(projection)
-}
-
-/// Whether `projection` turns a triangle's winding around on the window, compared with how it
-/// winds seen from the eye in eye space.
-pub fn projection_flips(projection: &DMat4) -> bool {
-    // A counter-clockwise triangle facing the eye, in front of it: front unless the projection
-    // turns the window around.
-    let probe = [DVec4::new(0.0, 0.0, -1.0, 1.0), DVec4::new(0.1, 0.0, -1.0, 1.0), DVec4::new(0.0, 0.1, -1.0, 1.0)];
-    window_facing(probe.map(|p| *projection * p), true) == Some(false)
 }
 
 impl Instance {

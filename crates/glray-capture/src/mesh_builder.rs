@@ -1,72 +1,17 @@
-//! A draw a display list keeps, in object coordinates. A list's glBegin/glEnd (or array draw)
-//! becomes a `Mesh` once, when the list is compiled; every glCallList then adds an instance of
-//! it (the modelview and the state of that call) instead of running its vertices again, and the
-//! tracer keeps the mesh's BVH for as long as the list lives. That is what makes a program that
-//! draws big lists every frame cheap to follow: its frames cost the instances, not the
-//! triangles.
-//!
-//! Vertices keep the attributes the list gave them. One the list did not give (a sphere list
-//! drawn after a glColor) is the value current at the call: `Attribute::first` says from which
-//! vertex on the list gives its own.
+//! Meshes made from GL calls: a display list's consecutive glBegin/glEnd runs (with the
+//! attributes given between them), an array draw's vertices, a long glBegin taken from the
+//! vertex stage (`immediate_meshes`). `MeshBuilder` gathers what the calls give and makes a
+//! `Compiled`: the scene's `Mesh` (what the tracer needs) with what capture itself needs to
+//! draw it again through the vertex stage and to leave GL's current values as the draw did
+//! (its runs, how its quads are cut, the values current after it).
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 use glam::{DVec3, DVec4, Vec3, Vec4};
-use glray_core::threads::{collect_pieces, map_pieces, piece_of};
+use glray_scene::mesh::{Attribute, Mesh};
 
 use crate::primitive::{assemble, QuadSplit};
 use crate::vertex::Given;
-
-/// One per-vertex attribute of a mesh.
-#[derive(Debug, Clone, Default)]
-pub struct Attribute<T> {
-    /// The first vertex that has its own value (the number of vertices if none has).
-    pub first: u32,
-    /// Values of vertices `first..`.
-    pub values: Vec<T>,
-}
-
-impl<T> Attribute<T> {
-    /// Every one of `n` vertices' values, or (None) none: all take the value current at the call.
-    fn all_or_none(values: Option<Vec<T>>, n: u32) -> Attribute<T> {
-        match values {
-            Some(values) => Attribute { first: 0, values },
-            None => Attribute { first: n, values: Vec::new() },
-        }
-    }
-}
-
-impl<T: Copy> Attribute<T> {
-    /// Vertex `i`'s own value; None when it takes the value current at the call.
-    #[inline]
-    pub fn at(&self, i: u32) -> Option<T> {
-        self.value(i).copied()
-    }
-
-    /// Where vertex `i`'s own value is stored, if it has one.
-    #[inline]
-    pub fn value(&self, i: u32) -> Option<&T> {
-        i.checked_sub(self.first).and_then(|k| self.values.get(k as usize))
-    }
-
-    /// Keeps the values of the first `n` vertices.
-    fn truncate(&mut self, n: u32) {
-        self.values.truncate(n.saturating_sub(self.first) as usize);
-    }
-
-    /// Appends vertex `index`'s value (None: not given yet).
-    fn push(&mut self, index: u32, value: Option<T>) {
-        match value {
-            Some(v) => {
-                if self.values.is_empty() {
-                    self.first = index;
-                }
-                self.values.push(v);
-            }
-            None => self.first = index + 1,
-        }
-    }
-}
 
 /// One glBegin/glEnd of a mesh: its mode and its vertices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -76,24 +21,13 @@ pub struct Run {
     pub count: u32,
 }
 
-/// A compiled draw in object coordinates.
-#[derive(Debug, Default)]
-pub struct Mesh {
-    /// Unique for the life of the process: the tracer keys its BVHs by it.
-    pub id: u64,
+/// A mesh as capture keeps it: the scene's mesh, and how it was drawn.
+#[derive(Debug)]
+pub struct Compiled {
+    pub mesh: Arc<Mesh>,
     /// The glBegin/glEnd (or array draws) it was made of, in order, each a run of vertices
     /// (empty for an indexed mesh).
     pub runs: Vec<Run>,
-    pub positions: Vec<Vec3>,
-    /// w of every position when one is not 1 (such a mesh is never instanced).
-    pub ws: Option<Vec<f32>>,
-    pub normals: Attribute<Vec3>,
-    pub colors: Attribute<Vec4>,
-    /// Texture unit 0's coordinates.
-    pub texcoords: Attribute<Vec4>,
-    /// The runs' triangles (vertex indices) and each one's provoking vertex.
-    pub triangles: Vec<[u32; 3]>,
-    pub provoking: Vec<u32>,
     /// A run draws lines or points, which depend on the screen: never instanced.
     pub lines_or_points: bool,
     /// An array draw (GL leaves current values as Mesa does: only a colour array changes
@@ -106,95 +40,18 @@ pub struct Mesh {
     pub end_normal: Option<DVec3>,
     pub end_color: Option<DVec4>,
     pub end_texcoord: Option<DVec4>,
-    /// Object-space bounds of the positions.
-    pub min: Vec3,
-    pub max: Vec3,
-    /// Triangle i's corners are vertices 3i, 3i + 1 and 3i + 2 (glBegin(GL_TRIANGLES) lists,
-    /// the common big display list): `corner_indices` works them out instead of reading
-    /// `triangles`, one cache miss less for every hit on a big mesh. Private, so that only
-    /// `finish` and `of_triangles`, which check it, set it.
-    sequential: bool,
 }
 
-/// Whether every triangle's corners are the next three vertices (see `Mesh::sequential`).
-fn sequential(triangles: &[[u32; 3]]) -> bool {
-    triangles.iter().enumerate().all(|(i, t)| {
-        let first = 3 * i as u64;
-        t.map(u64::from) == [first, first + 1, first + 2]
-    })
-}
+/// A compiled mesh reads as its scene mesh (positions, attributes, triangles).
+impl std::ops::Deref for Compiled {
+    type Target = Mesh;
 
-/// The box around `positions` (empty: min above max), a big mesh's in pieces on glray's threads.
-fn bounds(positions: &[Vec3]) -> (Vec3, Vec3) {
-    let fold =
-        |ps: &[Vec3]| ps.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
-    let piece = piece_of::<Vec3>();
-    if positions.len() <= piece {
-        return fold(positions);
+    fn deref(&self) -> &Mesh {
+        &self.mesh
     }
-    let boxes = map_pieces(positions, piece, fold);
-    boxes.into_iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)))
 }
 
-/// Each triangle's provoking vertex, its last (GL_TRIANGLES), in pieces on glray's threads.
-fn last_corners(triangles: &[[u32; 3]]) -> Vec<u32> {
-    let made = collect_pieces(triangles.len(), piece_of::<[u32; 3]>(), |first, piece| {
-        for t in &triangles[first..first + piece.room()] {
-            piece.push(t[2]);
-        }
-    });
-    made.map_or_else(|| triangles.iter().map(|t| t[2]).collect(), |(provoking, _)| provoking)
-}
-
-/// A new mesh's id.
-fn next_id() -> u64 {
-    static NEXT_ID: AtomicU64 = AtomicU64::new(1);
-    NEXT_ID.fetch_add(1, Ordering::Relaxed)
-}
-
-impl Mesh {
-    /// Indexed triangles with a normal per vertex (a mesh file's, a benchmark's): as a list of
-    /// GL_TRIANGLES would keep them, without repeating shared vertices. None if an index is out
-    /// of range.
-    pub fn indexed(positions: Vec<Vec3>, normals: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Option<Mesh> {
-        let n = positions.len() as u32;
-        if normals.len() != positions.len() || triangles.iter().flatten().any(|&i| i >= n) {
-            return None;
-        }
-        Some(Mesh::of_triangles(
-            positions,
-            Attribute::all_or_none(Some(normals), n),
-            Attribute::all_or_none(None, n),
-            Attribute::all_or_none(None, n),
-            triangles,
-        ))
-    }
-
-    /// An indexed mesh of GL_TRIANGLES (each triangle's provoking vertex its third), with its
-    /// bounds and a new id.
-    fn of_triangles(
-        positions: Vec<Vec3>,
-        normals: Attribute<Vec3>,
-        colors: Attribute<Vec4>,
-        texcoords: Attribute<Vec4>,
-        triangles: Vec<[u32; 3]>,
-    ) -> Mesh {
-        let (min, max) = bounds(&positions);
-        Mesh {
-            id: next_id(),
-            sequential: sequential(&triangles),
-            provoking: last_corners(&triangles),
-            triangles,
-            positions,
-            normals,
-            colors,
-            texcoords,
-            min,
-            max,
-            ..Mesh::default()
-        }
-    }
-
+impl Compiled {
     /// An indexed array draw of GL_TRIANGLES, its vertices fetched once each: the arrays'
     /// values (None: that array is off, the value current at the call applies), the triangles'
     /// vertex indices, and what the draw leaves current (normal, colour, texture coordinates).
@@ -207,101 +64,26 @@ impl Mesh {
         texcoords: Option<Vec<Vec4>>,
         triangles: Vec<[u32; 3]>,
         end: (Option<DVec3>, Option<DVec4>, Option<DVec4>),
-    ) -> Mesh {
+    ) -> Compiled {
         let n = positions.len() as u32;
-        // Kept only when one is not 1 (an empty `ws`: every w is 1).
-        let ws = ws.iter().any(|&w| w != 1.0).then_some(ws);
-        Mesh {
-            ws,
+        let mesh = Mesh::of_triangles(
+            positions,
+            Attribute::all_or_none(normals, n),
+            Attribute::all_or_none(colors, n),
+            Attribute::all_or_none(texcoords, n),
+            triangles,
+        )
+        .with_ws(ws);
+        Compiled {
+            mesh: Arc::new(mesh),
+            runs: Vec::new(),
+            lines_or_points: false,
             from_arrays: true,
+            quads: QuadSplit::default(),
             end_normal: end.0,
             end_color: end.1,
             end_texcoord: end.2,
-            ..Mesh::of_triangles(
-                positions,
-                Attribute::all_or_none(normals, n),
-                Attribute::all_or_none(colors, n),
-                Attribute::all_or_none(texcoords, n),
-                triangles,
-            )
         }
-    }
-
-    /// The bytes its vertices and triangles take (what shading a hit on it reads from).
-    pub fn bytes(&self) -> usize {
-        use std::mem::size_of;
-        self.positions.len() * size_of::<Vec3>()
-            + self.normals.values.len() * size_of::<Vec3>()
-            + self.colors.values.len() * size_of::<Vec4>()
-            + self.texcoords.values.len() * size_of::<Vec4>()
-            + self.triangles.len() * size_of::<[u32; 3]>()
-    }
-
-    pub fn vertex_count(&self) -> u32 {
-        self.positions.len() as u32
-    }
-
-    /// The vertex indices of triangle `index`'s corners (`triangles[index]`).
-    #[inline]
-    pub fn corner_indices(&self, index: usize) -> [u32; 3] {
-        if self.sequential && index < self.triangles.len() {
-            let first = 3 * index as u32;
-            [first, first + 1, first + 2]
-        } else {
-            self.triangles[index]
-        }
-    }
-
-    /// Whether `corner_indices` works the corners out without reading `triangles`.
-    pub fn is_sequential(&self) -> bool {
-        self.sequential
-    }
-
-    /// The object-space corners of triangle `index`.
-    #[inline]
-    pub fn corners(&self, index: usize) -> [Vec3; 3] {
-        self.corner_indices(index).map(|i| self.positions[i as usize])
-    }
-
-    /// A hash of what a BVH over the mesh depends on: its positions and its triangles' corners
-    /// (`arrays::content_hash` of each, on glray's threads for a big mesh). Two meshes with the
-    /// same shape have the same tree: a time step that sends the same vertices again (only its
-    /// colours new) keeps the last step's tree as it is.
-    pub fn shape_hash(&self) -> [i64; 4] {
-        let [a, b] = crate::arrays::content_hash(bytemuck::cast_slice(&self.positions));
-        let [c, d] = crate::arrays::content_hash(bytemuck::cast_slice(&self.triangles));
-        [a, b, c, d]
-    }
-
-    /// Starts loading what reading triangle `index`'s corners needs, in two calls a few
-    /// triangles apart: with `corners` false, its vertex indices (a sequential mesh has none
-    /// to read: its corners go then, through `vertex`), with true its corners (`vertex` of
-    /// each one's index, in cache by then if loaded before).
-    #[inline]
-    pub fn load_ahead(&self, index: usize, corners: bool, vertex: impl FnMut(u32)) {
-        let Some(indices) = self.triangles.get(index) else { return };
-        match (self.sequential, corners) {
-            (false, false) => glray_core::prefetch::line(indices),
-            (true, true) => {}
-            (false, true) | (true, false) => self.corner_indices(index).into_iter().for_each(vertex),
-        }
-    }
-
-    /// `load_ahead` of what `corners(index)` reads: the indices, then the positions.
-    #[inline]
-    pub fn load_corners(&self, index: usize, corners: bool) {
-        self.load_ahead(index, corners, |v| {
-            if let Some(p) = self.positions.get(v as usize) {
-                glray_core::prefetch::line(p);
-            }
-        });
-    }
-
-    /// Position `i` with its w.
-    #[inline]
-    pub fn position(&self, i: u32) -> DVec4 {
-        let w = self.ws.as_ref().map_or(1.0, |ws| ws[i as usize]);
-        self.positions[i as usize].as_dvec3().extend(w as f64)
     }
 }
 
@@ -309,6 +91,10 @@ impl Mesh {
 #[derive(Debug)]
 pub struct MeshBuilder {
     mesh: Mesh,
+    runs: Vec<Run>,
+    lines_or_points: bool,
+    from_arrays: bool,
+    quads: QuadSplit,
     normal: Option<DVec3>,
     color: Option<DVec4>,
     texcoord: Option<DVec4>,
@@ -321,7 +107,11 @@ impl MeshBuilder {
     /// says.
     pub fn new(from_arrays: bool, quads: QuadSplit) -> MeshBuilder {
         MeshBuilder {
-            mesh: Mesh { from_arrays, quads, ..Mesh::default() },
+            mesh: Mesh::default(),
+            runs: Vec::new(),
+            lines_or_points: false,
+            from_arrays,
+            quads,
             normal: None,
             color: None,
             texcoord: None,
@@ -331,38 +121,40 @@ impl MeshBuilder {
 
     /// `new`, in the room of `room`'s vectors (a mesh made again every frame would otherwise
     /// fault in fresh pages for all of them each time).
-    pub(crate) fn reusing(room: Mesh, from_arrays: bool, quads: QuadSplit) -> MeshBuilder {
+    pub(crate) fn reusing(room: MeshBuilder, from_arrays: bool, quads: QuadSplit) -> MeshBuilder {
         let mut b = MeshBuilder::new(from_arrays, quads);
-        let (m, mut r) = (&mut b.mesh, room);
+        let (m, mut r) = (&mut b.mesh, room.mesh);
         r.positions.clear();
         r.normals.values.clear();
         r.colors.values.clear();
         r.texcoords.values.clear();
         r.triangles.clear();
         r.provoking.clear();
-        r.runs.clear();
         (m.positions, m.normals.values, m.colors.values, m.texcoords.values) =
             (r.positions, r.normals.values, r.colors.values, r.texcoords.values);
-        (m.triangles, m.provoking, m.runs) = (r.triangles, r.provoking, r.runs);
+        (m.triangles, m.provoking) = (r.triangles, r.provoking);
+        b.runs = room.runs;
+        b.runs.clear();
         b
     }
 
     /// The mesh so far with its open glBegin closed, as `finish` would give it but for its id,
-    /// bounds and corner layout (enough to tell it from another).
-    pub(crate) fn closed(&mut self) -> &Mesh {
+    /// bounds and corner layout (enough to tell it from another), with its runs, how its quads
+    /// are cut and the values current after it.
+    pub(crate) fn closed(&mut self) -> (&Mesh, &[Run], QuadSplit, [Option<DVec4>; 3]) {
         self.end();
         let m = &mut self.mesh;
-        (m.end_normal, m.end_color, m.end_texcoord) = (self.normal, self.color, self.texcoord);
         let n = m.positions.len() as u32;
         for a in [&mut m.normals.first, &mut m.colors.first, &mut m.texcoords.first] {
             *a = (*a).min(n);
         }
-        &self.mesh
+        let ends = [self.normal.map(|n| n.extend(0.0)), self.color, self.texcoord];
+        (&self.mesh, &self.runs, self.quads, ends)
     }
 
     /// Its vectors, for `reusing`.
-    pub(crate) fn into_room(self) -> Mesh {
-        self.mesh
+    pub(crate) fn into_room(self) -> MeshBuilder {
+        self
     }
 
     /// A glBegin: the vertices that follow make a run of `mode`.
@@ -376,12 +168,12 @@ impl MeshBuilder {
         let Some((mode, start)) = self.open.take() else { return };
         let m = &mut self.mesh;
         let count = m.positions.len() as u32 - start;
-        if let Ok(asm) = assemble(mode, count as usize, m.quads) {
-            m.lines_or_points |= !asm.lines.is_empty() || !asm.points.is_empty();
+        if let Ok(asm) = assemble(mode, count as usize, self.quads) {
+            self.lines_or_points |= !asm.lines.is_empty() || !asm.points.is_empty();
             m.triangles.extend(asm.triangles.iter().map(|(t, _)| t.map(|i| i + start)));
             m.provoking.extend(asm.triangles.iter().map(|(_, p)| p + start));
         }
-        m.runs.push(Run { mode, start, count });
+        self.runs.push(Run { mode, start, count });
     }
 
     /// The positions given so far.
@@ -391,7 +183,7 @@ impl MeshBuilder {
 
     /// Cuts its quads as `quads` says from now on (its runs are assembled as they close).
     pub(crate) fn cut_quads(&mut self, quads: QuadSplit) {
-        self.mesh.quads = quads;
+        self.quads = quads;
     }
 
     /// Whether a glBegin is open.
@@ -401,7 +193,7 @@ impl MeshBuilder {
 
     /// Whether it holds any run.
     pub fn is_empty(&self) -> bool {
-        self.mesh.runs.is_empty() && self.open.is_none()
+        self.runs.is_empty() && self.open.is_none()
     }
 
     pub fn normal(&mut self, n: DVec3) {
@@ -449,19 +241,24 @@ impl MeshBuilder {
     }
 
     /// The finished mesh (an open glBegin is closed).
-    pub fn finish(mut self) -> Mesh {
+    pub fn finish(mut self) -> Compiled {
         self.closed();
-        let mut m = self.mesh;
-        m.id = next_id();
-        (m.min, m.max) = bounds(&m.positions);
-        m.sequential = sequential(&m.triangles);
-        m
+        Compiled {
+            mesh: Arc::new(self.mesh.seal()),
+            runs: self.runs,
+            lines_or_points: self.lines_or_points,
+            from_arrays: self.from_arrays,
+            quads: self.quads,
+            end_normal: self.normal,
+            end_color: self.color,
+            end_texcoord: self.texcoord,
+        }
     }
 
     /// Splits off the open glBegin, for a list that cannot keep it as a mesh after all (one
     /// with glMaterial or glCallList inside): the runs before it as a mesh (None if there are
     /// none), and the open one's mode with what was given in it, in order, as commands.
-    pub(crate) fn split_open(self) -> (Option<Mesh>, u32, Vec<Given>) {
+    pub(crate) fn split_open(self) -> (Option<Compiled>, u32, Vec<Given>) {
         let Some((mode, start)) = self.open else { return (Some(self.finish()), 0, Vec::new()) };
         let given = self.given(start);
         let mut closed = MeshBuilder { open: None, ..self };
@@ -473,7 +270,7 @@ impl MeshBuilder {
         m.normals.truncate(start);
         m.colors.truncate(start);
         m.texcoords.truncate(start);
-        let mesh = (!closed.mesh.runs.is_empty()).then(|| closed.finish());
+        let mesh = (!closed.runs.is_empty()).then(|| closed.finish());
         (mesh, mode, given)
     }
 
