@@ -1308,8 +1308,9 @@ mod tests {
         GL_CLAMP_TO_EDGE, GL_COMPILE, GL_COMPILE_AND_EXECUTE, GL_LINEAR, GL_NEAREST, GL_RGBA, GL_TEXTURE,
         GL_TEXTURE_LOD_BIAS, GL_TEXTURE_MAX_LEVEL, GL_TEXTURE_MAX_LOD, GL_TEXTURE_MIN_LOD,
     };
-    use glray_scene::frame::{Triangle, TriangleId};
+    use glray_scene::frame::TriangleId;
     use glray_scene::texture::{Filter, Wrap};
+    use glray_scene::triangle::Triangle;
 
     /// Calls a command by name with scalar arguments (floats as F64, the rest as Int).
     pub(crate) fn call(c: &mut Context, name: &str, args: &[Value]) {

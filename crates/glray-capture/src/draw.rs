@@ -12,10 +12,11 @@ use crate::mesh_builder::Compiled;
 use crate::primitive::{assemble, QuadSplit};
 use glray_scene::camera::Viewport;
 use glray_scene::facing::{culled, facing_flip, window_facing};
-use glray_scene::frame::{Solid, Triangle, View, NO_LIGHTING};
+use glray_scene::frame::{Solid, View};
 use glray_scene::instance::Instance;
 use glray_scene::lighting::ColorMaterial;
 use glray_scene::surface::{Coverage, Surface, Texturing};
+use glray_scene::triangle::{Triangle, NO_LIGHTING};
 
 /// What `draw_setup` decided for a draw.
 struct Setup {

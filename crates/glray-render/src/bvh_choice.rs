@@ -10,18 +10,7 @@
 //! fast that turns out to stay gets its SAH tree in its second frame (`scene::Meshes`).
 
 use crate::bvh::Quality;
-use crate::effects::Effects;
-
-/// The setting's values.
-pub const CHOICES: &[&str] = glray_core::config::BVH_BUILDS;
-
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub enum BvhBuild {
-    #[default]
-    Auto,
-    Sah,
-    Fast,
-}
+use crate::options::{BvhBuild, Effects};
 
 /// Under `auto`, a tree built again next frame is built fast from this many triangles per ray
 /// the frame traces (camera-ray equivalents, `ray_work`). Measured at 10M triangles on the
@@ -38,17 +27,6 @@ pub(crate) const BIG_MESH: usize = 1 << 16;
 const AO_RAY: f64 = 0.5;
 
 impl BvhBuild {
-    /// The setting's value as a choice (None for a value outside `CHOICES`; the settings
-    /// reject those before this is asked).
-    pub fn from_setting(value: &str) -> Option<BvhBuild> {
-        match value {
-            "auto" => Some(BvhBuild::Auto),
-            "sah" => Some(BvhBuild::Sah),
-            "fast" => Some(BvhBuild::Fast),
-            _ => None,
-        }
-    }
-
     /// How to build a tree over `triangles` triangles, which the next frame builds again when
     /// `rebuilt`, for a frame tracing `ray_work` rays (`ray_work`).
     pub fn quality(self, triangles: usize, rebuilt: bool, ray_work: f64) -> Quality {
@@ -106,7 +84,7 @@ mod tests {
 
     #[test]
     fn every_value_the_setting_allows_is_a_choice() {
-        for value in CHOICES {
+        for value in crate::options::BVH_CHOICES {
             assert!(BvhBuild::from_setting(value).is_some(), "{value}");
         }
         assert_eq!(BvhBuild::from_setting("SAH"), None);

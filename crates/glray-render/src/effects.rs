@@ -1,93 +1,13 @@
-//! What a ray tracer adds to the GL look: ambient occlusion, hard shadows from the GL lights,
-//! reflections, several jittered samples per pixel, and the presets that combine them.
+//! What a ray tracer adds to the GL look at a hit: ambient occlusion and hard shadows from the
+//! GL lights (reflections and samples per pixel are the tracer's; the settings and presets are
+//! `options::Effects`).
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use glray_scene::lighting::Light;
 
+use crate::offset::{leaving, Origin};
 use crate::sampling::{Hemisphere, Sampler, Strata};
 use crate::scene::Scene;
-use obvhs::ray::Ray;
-
-/// The effects a frame is rendered with.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Effects {
-    /// Ambient-occlusion rays per visible point (0: none).
-    pub ao_samples: u32,
-    /// How far an occluder counts, as a fraction of the scene's diagonal.
-    pub ao_distance: f32,
-    /// How dark a fully occluded point becomes: its colour times 1 - intensity.
-    pub ao_intensity: f32,
-    /// Hard shadows from every enabled GL light (lit surfaces are then lit per pixel).
-    pub shadows: bool,
-    /// Reflection bounces (0: none), and how much of each surface is mirror.
-    pub reflections: u32,
-    pub reflectivity: f32,
-    /// Samples per pixel: the first at the pixel centre (where GL samples), the others jittered
-    /// over the pixel (antialiasing).
-    pub samples: u32,
-    /// While the scene and camera stay the same from frame to frame, each frame adds `samples`
-    /// more to the ones before (up to `MAX_PASSES` frames): the picture converges.
-    pub progressive: bool,
-}
-
-/// The frames progressive refinement keeps adding samples for.
-pub const MAX_PASSES: u32 = 64;
-
-impl Effects {
-    /// The GL look alone: one sample at the pixel centre, what the rasterizer shows.
-    pub const GL: Effects = Effects {
-        ao_samples: 0,
-        ao_distance: 0.1,
-        ao_intensity: 1.0,
-        shadows: false,
-        reflections: 0,
-        reflectivity: 0.2,
-        samples: 1,
-        progressive: true,
-    };
-
-    /// A preset by name: `gl`; `ao`, the GL look times ambient occlusion; `full`, the advanced
-    /// look of the GLuRay paper (36 AO rays, shadows, one reflection, 4 samples per pixel).
-    pub fn preset(name: &str) -> Option<Effects> {
-        Some(match name {
-            "gl" => Effects::GL,
-            "ao" => Effects { ao_samples: 16, ..Effects::GL },
-            "full" => Effects { ao_samples: 36, shadows: true, reflections: 1, samples: 4, ..Effects::GL },
-            _ => return None,
-        })
-    }
-
-    /// Whether pixels depend on more than the GL look (random samples, secondary rays).
-    pub fn beyond_gl(&self) -> bool {
-        self.secondary_rays() || self.samples > 1
-    }
-
-    /// Whether rays leave the surfaces camera rays hit (shadows, ambient occlusion,
-    /// reflections).
-    pub fn secondary_rays(&self) -> bool {
-        self.ao_samples > 0 || self.shadows || self.reflections > 0
-    }
-}
-
-impl Default for Effects {
-    fn default() -> Self {
-        Effects::GL
-    }
-}
-
-/// A ray from `p` along `d` that starts past the surface it leaves.
-pub(crate) fn leaving(p: Vec3, n: Vec3, d: Vec3, eps: f32, tmax: f32) -> Ray {
-    let o = p + n * eps * n.dot(d).signum();
-    crate::bvh::ray(o.into(), d.into(), 0.0, tmax)
-}
-
-/// Where a secondary ray starts: the point, its surface's normal, and the draw it is on (whose
-/// own line and point solids do not count).
-pub struct Origin {
-    pub p: Vec3,
-    pub n: Vec3,
-    pub draw: u32,
-}
 
 /// The fraction of the hemisphere above `at` that geometry closer than `distance` hides, from
 /// `count` cosine-weighted rays, stratified (translucent surfaces hide their alpha's share).
@@ -121,8 +41,8 @@ pub(crate) fn lit_by(scene: &Scene, at: &Origin, light: &Light, eps: f32) -> f32
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-    use crate::render::{render, Options, Rendered, Renderer};
+    use crate::options::{Effects, Options, MAX_PASSES};
+    use crate::render::{render, Rendered, Renderer};
     use glam::{DMat4, DVec4};
     use glray_capture::context::Context;
     use glray_core::trace::Value::{self, Int, F64};

@@ -6,10 +6,11 @@
 
 use glam::{DVec2, DVec3, Vec2, Vec3, Vec4, Vec4Swizzles};
 use glray_scene::camera::Camera;
-use glray_scene::frame::{Frame, Triangle, NO_LIGHTING};
+use glray_scene::frame::Frame;
 use glray_scene::lighting::{light_vertex_prepared, Light};
 use glray_scene::surface::{Coverage, FogMode, TexEnvMode};
 use glray_scene::texture::BaseFormat;
+use glray_scene::triangle::{Triangle, NO_LIGHTING};
 
 /// A fragment: its colour (before blending) and window depth.
 #[derive(Debug, Clone, Copy, PartialEq)]

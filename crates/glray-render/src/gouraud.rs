@@ -14,9 +14,9 @@ use glray_scene::facing::projection_flips;
 use glray_scene::frame::{Frame, TriangleId};
 
 use crate::fragment::{mixed, own_camera, Fragment};
-use crate::render::Options;
+use crate::options::Options;
+use crate::recent::Recent;
 use crate::scene::Hit;
-use crate::tracer::Recent;
 
 /// The corners' colours of a triangle, primary and secondary (`Instance::corner_colors`).
 pub(crate) type Corners = ([glam::Vec4; 3], [Vec3; 3]);

@@ -1,15 +1,20 @@
 //! glray's ray tracer (DESIGN.md: "engine"): turns a captured `Frame` into pixels.
 //!
 //! - `bvh`: glray's own four-wide BVH over triangles (binned SAH build, SIMD traversal);
-//! - `scene`: the frame's geometry and its BVHs, two levels: the frame's own triangles, and
-//!   display-list meshes kept across frames under a top level (obvhs) over their instances;
+//! - `meshes`: the BVHs of meshes, kept across frames while the meshes live (refitted for time
+//!   steps);
+//! - `scene`: one frame's geometry to trace, two levels: the frame's own triangles, and the
+//!   kept meshes' trees under a top level (obvhs) over their instances;
 //! - `fragment`: a hit as the rasterizer would have produced it: interpolated colour, texture,
 //!   fog, window depth (the GL look);
 //! - `gouraud`: the short way to shade hits on untextured instances when the frame asks for
 //!   the GL look alone (corner colours mixed with the walk's weights);
 //! - `resolve`: per pixel, which fragments survive GL's depth test, alpha test and blending,
 //!   in drawing order;
-//! - `effects`: ambient occlusion, shadows, reflections, samples per pixel, and the presets;
+//! - `options`: how to render: the effects and their presets, lighting per pixel, BVH builds;
+//! - `effects`: ambient occlusion and shadows at a hit;
+//! - `offset`: where a secondary ray leaves a surface;
+//! - `recent`: what was made of the triangles recent camera rays hit;
 //! - `sampling`: deterministic random numbers (a function of pixel and sample) and directions;
 //! - `tracer`: one pixel's samples, resolved as the rasterizer would, with the effects;
 //! - `render`: the image in rayon row tiles, deterministic; progressive refinement over frames
@@ -20,8 +25,12 @@ pub mod bvh_choice;
 pub mod effects;
 pub mod fragment;
 mod gouraud;
+pub mod meshes;
+pub mod offset;
+pub mod options;
 pub mod pieces;
 mod progress;
+mod recent;
 pub mod render;
 pub mod resolve;
 pub mod sampling;
@@ -30,5 +39,5 @@ mod signature;
 mod smooth;
 mod tracer;
 
-pub use effects::Effects;
-pub use render::{render, Options, Rendered, Renderer, Stats};
+pub use options::{Effects, Options};
+pub use render::{render, Rendered, Renderer, Stats};

@@ -11,13 +11,14 @@ use glray_scene::camera::Camera;
 use glray_scene::frame::{Frame, TriangleId};
 use rayon::prelude::*;
 
-use crate::bvh_choice::{ray_work, BvhBuild};
-use crate::effects::{Effects, MAX_PASSES};
+use crate::bvh_choice::ray_work;
 use crate::gouraud::Gouraud;
+use crate::meshes::Meshes;
+use crate::options::{Options, MAX_PASSES};
 use crate::pieces::{self, for_each_block, Piece};
 use crate::progress::Progress;
 use crate::resolve::closest_hit_suffices;
-use crate::scene::{Hit, Meshes, Scene};
+use crate::scene::{Hit, Scene};
 use crate::signature::signature;
 use crate::tracer::{count, Scratch, Tracer};
 
@@ -44,46 +45,6 @@ fn to_u8(c: Vec4) -> [u8; 4] {
 
 fn from_u8(c: &[u8]) -> Vec4 {
     Vec4::from_array(std::array::from_fn(|i| c[i] as f32 / 255.0))
-}
-
-/// How to render.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Options {
-    /// Evaluate lighting per pixel instead of interpolating per-vertex colours.
-    pub per_pixel_lighting: bool,
-    pub effects: Effects,
-    /// How BVHs are built (setting `bvh`).
-    pub bvh: BvhBuild,
-}
-
-impl Options {
-    /// The options the settings ask for: the preset's effects, each overridden by its own
-    /// setting when that is set. None for preset `off` (nothing is ray traced).
-    pub fn from_config(config: &glray_core::config::Config) -> Option<Options> {
-        let mut e = Effects::preset(config.preset())?;
-        let int = |key: &str, v: &mut u32| {
-            if let Some(x) = config.number(key) {
-                *v = x as u32;
-            }
-        };
-        let float = |key: &str, v: &mut f32| {
-            if let Some(x) = config.number(key) {
-                *v = x as f32;
-            }
-        };
-        int("ao_samples", &mut e.ao_samples);
-        float("ao_distance", &mut e.ao_distance);
-        float("ao_intensity", &mut e.ao_intensity);
-        int("reflections", &mut e.reflections);
-        float("reflectivity", &mut e.reflectivity);
-        int("samples", &mut e.samples);
-        if let Some(on) = config.flag("shadows") {
-            e.shadows = on;
-        }
-        e.progressive = config.flag("progressive").unwrap_or(true);
-        let bvh = BvhBuild::from_setting(config.bvh()).unwrap_or_default();
-        Some(Options { per_pixel_lighting: config.per_pixel_lighting(), effects: e, bvh })
-    }
 }
 
 /// What rendering a frame took.
@@ -543,11 +504,12 @@ impl Job<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::options::Effects;
     use glam::{DMat4, Vec2, Vec3};
     use glray_gl::{GL_COLOR_MATERIAL, GL_DEPTH_TEST, GL_LIGHT0, GL_LIGHTING};
     use glray_scene::camera::Viewport;
-    use glray_scene::frame::Triangle;
     use glray_scene::surface::{Fog, Surface};
+    use glray_scene::triangle::Triangle;
 
     fn surface() -> Surface {
         Surface::depth_tested()
@@ -567,7 +529,7 @@ mod tests {
             clip_w: [1.0; 3],
             normals: [Vec3::Z; 3],
             base_colors: [color; 3],
-            lighting: glray_scene::frame::NO_LIGHTING,
+            lighting: glray_scene::triangle::NO_LIGHTING,
             back: false,
         };
         [tri(0, 1, 2), tri(0, 2, 3)]

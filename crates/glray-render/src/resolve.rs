@@ -6,8 +6,9 @@
 
 use glam::{BVec4A, DVec3, Vec3, Vec4, Vec4Swizzles};
 use glray_scene::camera::Camera;
-use glray_scene::frame::{Frame, Triangle};
+use glray_scene::frame::Frame;
 use glray_scene::surface::{BlendFactor, CompareFunc, LogicOp, Surface};
+use glray_scene::triangle::Triangle;
 
 use crate::fragment::Fragment;
 use crate::scene::Hit;
@@ -44,20 +45,6 @@ pub fn offset_depth(camera: &Camera, t: &Triangle, depth: f64, (factor, units): 
     // Seen edge-on, the slope is unbounded; such a triangle covers no pixel anyway.
     let slope = if n.z != 0.0 { (n.x / n.z).abs().max((n.y / n.z).abs()) } else { 0.0 };
     (depth + factor as f64 * slope + units as f64 * RESOLVABLE).clamp(0.0, 1.0)
-}
-
-/// A comparison function of glDepthFunc and glAlphaFunc.
-pub(crate) fn passes(func: CompareFunc, value: f64, reference: f64) -> bool {
-    match func {
-        CompareFunc::Never => false,
-        CompareFunc::Less => value < reference,
-        CompareFunc::Equal => value == reference,
-        CompareFunc::LessOrEqual => value <= reference,
-        CompareFunc::Greater => value > reference,
-        CompareFunc::NotEqual => value != reference,
-        CompareFunc::GreaterOrEqual => value >= reference,
-        CompareFunc::Always => true,
-    }
 }
 
 fn factor(f: BlendFactor, src: Vec4, dst: Vec4) -> Vec4 {
@@ -138,12 +125,12 @@ pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4
             continue;
         }
         if let Some((func, reference)) = s.alpha_test {
-            if !passes(func, f.color.w as f64, reference as f64) {
+            if !func.passes(f.color.w as f64, reference as f64) {
                 continue;
             }
         }
         if s.depth_test {
-            if !passes(s.depth_func, f.depth, depth) {
+            if !s.depth_func.passes(f.depth, depth) {
                 continue;
             }
             if s.depth_mask {
@@ -176,9 +163,9 @@ mod tests {
     #[test]
     fn comparisons_and_blending() {
         assert!(
-            passes(CompareFunc::Less, 0.2, 0.5)
-                && !passes(CompareFunc::Less, 0.5, 0.5)
-                && passes(CompareFunc::LessOrEqual, 0.5, 0.5)
+            CompareFunc::Less.passes(0.2, 0.5)
+                && !CompareFunc::Less.passes(0.5, 0.5)
+                && CompareFunc::LessOrEqual.passes(0.5, 0.5)
         );
         let s =
             Surface { blend: Some((BlendFactor::SrcAlpha, BlendFactor::OneMinusSrcAlpha)), ..Surface::depth_tested() };

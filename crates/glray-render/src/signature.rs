@@ -10,11 +10,12 @@
 use std::hash::{Hash, Hasher};
 
 use glam::Vec2;
-use glray_scene::frame::{Frame, Triangle};
+use glray_scene::frame::Frame;
+use glray_scene::triangle::Triangle;
 use rayon::prelude::*;
 use xxhash_rust::xxh3::Xxh3;
 
-use crate::render::Options;
+use crate::options::Options;
 
 fn floats<H: Hasher>(h: &mut H, values: impl IntoIterator<Item = f32>) {
     for v in values {

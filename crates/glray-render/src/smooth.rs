@@ -10,7 +10,7 @@
 //! surface (Hanika, "Hacking the Shadow Terminator", Ray Tracing Gems II, ch. 4).
 
 use glam::{DVec3, Vec3};
-use glray_scene::frame::{Triangle, NO_LIGHTING};
+use glray_scene::triangle::{Triangle, NO_LIGHTING};
 
 use crate::fragment::barycentric;
 

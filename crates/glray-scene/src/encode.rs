@@ -11,14 +11,13 @@
 //! `VERSION` changes whenever a type in the scene changes shape, and a message of another
 //! version is refused with both versions named.
 
-use std::cell::RefCell;
-use std::collections::HashMap;
 use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
 use crate::frame::Frame;
 use crate::mesh::Mesh;
+pub use crate::objects::Shared;
 use crate::texture::Texture;
 
 /// The first bytes of every message.
@@ -60,42 +59,6 @@ impl std::fmt::Display for DecodeError {
 
 impl std::error::Error for DecodeError {}
 
-/// What a receiver holds of the meshes and textures sent to it, by id; and what a sender knows
-/// its receivers hold. A mesh capture no longer draws is forgotten by `retain`.
-#[derive(Default)]
-pub struct Shared {
-    meshes: HashMap<u64, Arc<Mesh>>,
-    textures: HashMap<u64, Arc<Texture>>,
-}
-
-impl Shared {
-    pub fn mesh(&self, id: u64) -> Option<&Arc<Mesh>> {
-        self.meshes.get(&id)
-    }
-
-    pub fn has_mesh(&self, id: u64) -> bool {
-        self.meshes.contains_key(&id)
-    }
-
-    pub fn has_texture(&self, version: u64) -> bool {
-        self.textures.contains_key(&version)
-    }
-
-    /// How many meshes and textures it holds.
-    pub fn len(&self) -> (usize, usize) {
-        (self.meshes.len(), self.textures.len())
-    }
-
-    /// Keeps only what `frame` draws with.
-    pub fn retain_drawn(&mut self, frame: &Frame) {
-        let meshes: std::collections::HashSet<u64> = frame.instances.iter().map(|i| i.mesh.id).collect();
-        let textures: std::collections::HashSet<u64> =
-            frame.surfaces.iter().filter_map(|s| s.texturing.as_ref()).map(|t| t.texture.version).collect();
-        self.meshes.retain(|id, _| meshes.contains(id));
-        self.textures.retain(|v, _| textures.contains(v));
-    }
-}
-
 #[derive(Serialize, Deserialize)]
 struct Objects {
     meshes: Vec<Mesh>,
@@ -108,15 +71,13 @@ struct Objects {
 pub fn encode(frame: &Frame, sent: &mut Shared) -> Vec<u8> {
     let mut meshes = Vec::new();
     for i in &frame.instances {
-        if let std::collections::hash_map::Entry::Vacant(e) = sent.meshes.entry(i.mesh.id) {
-            e.insert(i.mesh.clone());
+        if sent.add_mesh(&i.mesh) {
             meshes.push(&*i.mesh);
         }
     }
     let mut textures = Vec::new();
     for t in frame.surfaces.iter().filter_map(|s| s.texturing.as_ref()) {
-        if let std::collections::hash_map::Entry::Vacant(e) = sent.textures.entry(t.texture.version) {
-            e.insert(t.texture.clone());
+        if sent.add_texture(&t.texture) {
             textures.push(&*t.texture);
         }
     }
@@ -151,102 +112,14 @@ pub fn decode(bytes: &[u8], shared: &mut Shared) -> Result<Frame, DecodeError> {
         |rest: &[u8], e: postcard::Error| DecodeError::Damaged { at: bytes.len() - rest.len(), why: e.to_string() };
     let (objects, rest) = postcard::take_from_bytes::<Objects>(body).map_err(|e| damaged(body, e))?;
     for m in objects.meshes {
-        shared.meshes.insert(m.id, Arc::new(m));
+        shared.add_mesh(&Arc::new(m));
     }
     for t in objects.textures {
-        shared.textures.insert(t.version, Arc::new(t));
+        shared.add_texture(&Arc::new(t));
     }
-    let frame = DECODING.with(|d| {
-        *d.borrow_mut() = Some(std::mem::take(shared));
-        let frame = postcard::from_bytes::<Frame>(rest);
-        *shared = d.borrow_mut().take().expect("set above");
-        frame
-    });
-    frame.map_err(|e| match MISSING.with(|m| m.take()) {
+    let (frame, missing) = shared.reading(|| postcard::from_bytes::<Frame>(rest));
+    frame.map_err(|e| match missing {
         Some((what, id)) => DecodeError::Missing { what, id },
         None => damaged(rest, e),
     })
-}
-
-thread_local! {
-    /// The meshes and textures a frame being decoded on this thread names (serde's derives
-    /// take no context: the shared objects reach `shared_mesh` and `shared_texture` here).
-    static DECODING: RefCell<Option<Shared>> = const { RefCell::new(None) };
-    /// The object a decode missed, for its error.
-    static MISSING: std::cell::Cell<Option<(&'static str, u64)>> = const { std::cell::Cell::new(None) };
-}
-
-/// An `Arc<Mesh>` field encoded as the mesh's id.
-pub mod shared_mesh {
-    use super::*;
-
-    pub fn serialize<S: serde::Serializer>(mesh: &Arc<Mesh>, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_u64(mesh.id)
-    }
-
-    pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Arc<Mesh>, D::Error> {
-        let id = u64::deserialize(d)?;
-        let found = DECODING.with(|s| s.borrow().as_ref().and_then(|s| s.meshes.get(&id).cloned()));
-        found.ok_or_else(|| {
-            MISSING.with(|m| m.set(Some(("mesh", id))));
-            serde::de::Error::custom(format!("mesh {id} was never sent"))
-        })
-    }
-}
-
-/// An `Arc<Texture>` field encoded as the texture's version.
-pub mod shared_texture {
-    use super::*;
-
-    pub fn serialize<S: serde::Serializer>(texture: &Arc<Texture>, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_u64(texture.version)
-    }
-
-    pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Arc<Texture>, D::Error> {
-        let version = u64::deserialize(d)?;
-        let found = DECODING.with(|s| s.borrow().as_ref().and_then(|s| s.textures.get(&version).cloned()));
-        found.ok_or_else(|| {
-            MISSING.with(|m| m.set(Some(("texture", version))));
-            serde::de::Error::custom(format!("texture {version} was never sent"))
-        })
-    }
-}
-
-/// A `Vec` of plain numbers encoded as its bytes (one copy, not a value at a time).
-pub mod pod_vec {
-    use std::marker::PhantomData;
-
-    use bytemuck::Pod;
-    use serde::de::{SeqAccess, Visitor};
-
-    pub fn serialize<T: Pod, S: serde::Serializer>(v: &[T], s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_bytes(bytemuck::cast_slice(v))
-    }
-
-    pub fn deserialize<'de, T: Pod, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<T>, D::Error> {
-        struct Bytes<T>(PhantomData<T>);
-        impl<'de, T: Pod> Visitor<'de> for Bytes<T> {
-            type Value = Vec<T>;
-
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                write!(f, "the bytes of an array of {}-byte values", std::mem::size_of::<T>())
-            }
-
-            fn visit_bytes<E: serde::de::Error>(self, b: &[u8]) -> Result<Vec<T>, E> {
-                if b.len() % std::mem::size_of::<T>() != 0 {
-                    return Err(E::custom(format!("{} bytes is not a whole number of values", b.len())));
-                }
-                Ok(bytemuck::pod_collect_to_vec(b))
-            }
-
-            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Vec<T>, A::Error> {
-                let mut bytes = Vec::new();
-                while let Some(b) = seq.next_element::<u8>()? {
-                    bytes.push(b);
-                }
-                self.visit_bytes(&bytes)
-            }
-        }
-        d.deserialize_bytes(Bytes(PhantomData))
-    }
 }

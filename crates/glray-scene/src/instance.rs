@@ -13,9 +13,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::draw_lighting::Lighting;
 use crate::facing::{culled, facing_flip, window_facing, Face};
-use crate::frame::{Triangle, NO_LIGHTING};
 use crate::lighting::{eye_normal, light_face};
 use crate::mesh::Mesh;
+use crate::triangle::{Triangle, NO_LIGHTING};
 
 fn vec4(v: DVec4) -> Vec4 {
     v.as_vec4()
@@ -36,7 +36,7 @@ struct Vertex {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Instance {
     /// Encoded as its id: the byte encoding sends a mesh once (`encode`).
-    #[serde(with = "crate::encode::shared_mesh")]
+    #[serde(with = "crate::objects::shared_mesh")]
     pub mesh: Arc<Mesh>,
     /// Object to eye coordinates (the modelview of the call).
     pub modelview: DMat4,

@@ -5,6 +5,7 @@
 //! the rays a camera casts), so that the tracer never calls back into capture.
 //!
 //! - `frame`: a frame: triangles, instances, solids, surfaces, lightings, cameras, clears;
+//! - `triangle`: one triangle as the rasterizer would draw it;
 //! - `mesh`: object-space triangles with their vertices' attributes, with ids;
 //! - `instance`: one draw of a mesh and the state of that draw, whose triangles are made when a
 //!   ray needs one;
@@ -16,6 +17,8 @@
 //! - `draw_lighting`: the lighting state of a lit draw, with what it derives;
 //! - `facing`: which face of a triangle is seen, and culling;
 //! - `encode`: the versioned byte encoding (meshes and textures sent once, by id);
+//! - `objects`: the meshes and textures a receiver holds, by id, and the fields naming them;
+//! - `pod_vec`: big arrays encoded as their bytes;
 //! - `gl_enum`: typed enums for sets of GL values, with GL's numbers by name.
 
 pub mod camera;
@@ -27,6 +30,9 @@ mod gl_enum;
 pub mod instance;
 pub mod lighting;
 pub mod mesh;
+pub mod objects;
+mod pod_vec;
 pub mod sunlit;
 pub mod surface;
 pub mod texture;
+pub mod triangle;

@@ -26,7 +26,7 @@ pub struct Attribute<T> {
     /// The first vertex that has its own value (the number of vertices if none has).
     pub first: u32,
     /// Values of vertices `first..`.
-    #[serde(with = "crate::encode::pod_vec")]
+    #[serde(with = "crate::pod_vec")]
     pub values: Vec<T>,
 }
 
@@ -77,7 +77,7 @@ impl<T: Copy> Attribute<T> {
 pub struct Mesh {
     /// Unique for the life of the process (`seal`): the tracer keys its BVHs by it.
     pub id: u64,
-    #[serde(with = "crate::encode::pod_vec")]
+    #[serde(with = "crate::pod_vec")]
     pub positions: Vec<Vec3>,
     /// w of every position when one is not 1 (such a mesh is never instanced).
     pub ws: Option<Vec<f32>>,
@@ -86,9 +86,9 @@ pub struct Mesh {
     /// Texture unit 0's coordinates.
     pub texcoords: Attribute<Vec4>,
     /// The triangles (vertex indices) and each one's provoking vertex.
-    #[serde(with = "crate::encode::pod_vec")]
+    #[serde(with = "crate::pod_vec")]
     pub triangles: Vec<[u32; 3]>,
-    #[serde(with = "crate::encode::pod_vec")]
+    #[serde(with = "crate::pod_vec")]
     pub provoking: Vec<u32>,
     /// Object-space bounds of the positions.
     pub min: Vec3,

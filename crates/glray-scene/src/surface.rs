@@ -47,6 +47,24 @@ gl_enum! {
     }
 }
 
+impl CompareFunc {
+    /// Whether `value` passes the comparison with `reference` (the depth test: a fragment's
+    /// depth against the buffer's; the alpha test: its alpha against glAlphaFunc's reference).
+    #[inline]
+    pub fn passes(self, value: f64, reference: f64) -> bool {
+        match self {
+            CompareFunc::Never => false,
+            CompareFunc::Less => value < reference,
+            CompareFunc::Equal => value == reference,
+            CompareFunc::LessOrEqual => value <= reference,
+            CompareFunc::Greater => value > reference,
+            CompareFunc::NotEqual => value != reference,
+            CompareFunc::GreaterOrEqual => value >= reference,
+            CompareFunc::Always => true,
+        }
+    }
+}
+
 gl_enum! {
     /// A factor of glBlendFunc.
     pub enum BlendFactor {
@@ -104,7 +122,7 @@ pub struct Fog {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Texturing {
     /// Encoded as its version: the byte encoding sends a texture once (`encode`).
-    #[serde(with = "crate::encode::shared_texture")]
+    #[serde(with = "crate::objects::shared_texture")]
     pub texture: Arc<Texture>,
     pub env_mode: TexEnvMode,
     pub env_color: Vec4,

@@ -50,7 +50,7 @@ gl_enum! {
 pub struct Level {
     pub width: usize,
     pub height: usize,
-    #[serde(with = "crate::encode::pod_vec")]
+    #[serde(with = "crate::pod_vec")]
     pub texels: Vec<Vec4>,
 }
 

@@ -9,11 +9,13 @@ use std::time::Instant;
 
 use glam::{DMat4, DVec3, DVec4, Vec3};
 use glray_core::image::Image;
-use glray_render::bvh_choice::BvhBuild;
-use glray_render::effects::{occlusion, Origin};
+use glray_render::effects::occlusion;
+use glray_render::meshes::Meshes;
+use glray_render::offset::Origin;
+use glray_render::options::BvhBuild;
 use glray_render::pieces::{for_each_block, TILE};
 use glray_render::sampling::Sampler;
-use glray_render::scene::{Meshes, Ray, Scene};
+use glray_render::scene::{Ray, Scene};
 use glray_render::{Effects, Options, Renderer};
 use glray_scene::camera::Viewport;
 use glray_scene::draw_lighting::Lighting;

@@ -129,7 +129,7 @@ enum Command {
         builds: u32,
         /// How the BVH is built (the `bvh` setting; `auto` builds the bench's mesh, drawn
         /// unchanged, by SAH).
-        #[arg(long, default_value = "auto", value_parser = glray_render::bvh_choice::CHOICES.to_vec())]
+        #[arg(long, default_value = "auto", value_parser = glray_render::options::BVH_CHOICES.to_vec())]
         bvh: String,
         /// Print one JSON object instead of RESULT lines.
         #[arg(long)]
@@ -174,7 +174,7 @@ fn main() -> ExitCode {
         Command::Bench { mesh, width, height, ao, threads, frames, builds, bvh, json, out } => {
             bench::run(&bench::Args {
                 mesh: &mesh,
-                bvh: glray_render::bvh_choice::BvhBuild::from_setting(&bvh).unwrap_or_default(),
+                bvh: glray_render::options::BvhBuild::from_setting(&bvh).unwrap_or_default(),
                 width,
                 height,
                 ao,

@@ -669,22 +669,24 @@ pub(super) fn whole(triangles: usize) -> usize {
     (triangles / 16).clamp(1 << 13, PARALLEL)
 }
 
-/// The tree over `count` triangles whose corners `corners` gives, built as `quality` says.
-pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync, quality: Quality) -> Built {
-    let record = |i: usize| Record::new(i, corners(i));
-    // Past what leaf references can index (2^30 blocks), the rest of the mesh is left out,
-    // and said so (a mesh that size is ~34 GB of build records alone).
-    let count = if count > MAX_LEAVES as usize {
+/// How many of `count` triangles one tree holds: past what leaf references can index (2^30
+/// blocks), the rest of the mesh is left out, and said so (a mesh that size is ~34 GB of build
+/// records alone).
+pub(super) fn capped(count: usize) -> usize {
+    if count > MAX_LEAVES as usize {
         glray_core::warn!(
             "a mesh of {count} triangles is more than one BVH holds ({MAX_LEAVES}); the triangles past that are not traced"
         );
         MAX_LEAVES as usize
     } else {
         count
-    };
-    if quality == Quality::Fast {
-        return super::morton::build(count, corners);
     }
+}
+
+/// The binned SAH tree over `count` triangles (at most `capped`'s) whose corners `corners`
+/// gives.
+pub(super) fn sah(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> Built {
+    let record = |i: usize| Record::new(i, corners(i));
     let mut records: Vec<Record> = if count >= PARALLEL {
         let mut records = pages::huge_vec(count);
         (0..count).into_par_iter().map(record).collect_into_vec(&mut records);
@@ -837,7 +839,7 @@ mod tests {
         // Serial (under PARALLEL records) and parallel builds, and a tree of one leaf.
         for n in [3, 1000, 100_000] {
             let tris = super::super::tests::soup(n);
-            let built = build(tris.len(), |i| tris[i], Quality::Sah);
+            let built = sah(tris.len(), |i| tris[i]);
             let walked = super::super::stack::most_pending(&built.nodes, built.root);
             assert_eq!(built.most_pending, walked, "{n} triangles");
             assert!(n < 1000 || walked > 10, "{n} triangles: a tree that deep leaves more pending");

@@ -346,7 +346,11 @@ impl TriBvh {
 
     /// The same, built as `quality` says (`Quality::Fast`: sooner, walked more slowly).
     pub fn build_as(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync, quality: Quality) -> TriBvh {
-        let build::Built { nodes, leaves, root, most_pending } = build::build(count, corners, quality);
+        let count = build::capped(count);
+        let build::Built { nodes, leaves, root, most_pending } = match quality {
+            Quality::Sah => build::sah(count, corners),
+            Quality::Fast => morton::build(count, corners),
+        };
         let bytes = nodes.len() * size_of::<Node>() + leaves.len() * size_of::<Tri4>();
         TriBvh { nodes, leaves, root, shallow: most_pending <= stack::FIXED, far: bytes > FAR }
     }
