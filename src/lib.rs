@@ -1,27 +1,21 @@
 //! libglray.so: a libGL.so.1 that forwards every GL, GLX, EGL and OSMesa call to the real
-//! implementation, and hands some of them to glray's handlers first.
+//! implementation, follows what programs draw and puts a ray-traced picture in its place.
 //!
-//! Layout (one job per module):
-//! - `commands`: the generated command table (names, class, display-list rule) from gl-spec/;
-//! - `exports`: the generated `extern "C"` functions the loader binds programs to;
-//! - `real`: generated typed calls of the real implementation;
-//! - `dispatch`: which real function a call goes to (per-thread glvnd or OSMesa), resolved
-//!   lazily, lock-free on the hot path;
-//! - `runtime`: settings and glray's own identity, read once;
-//! - `handlers`: what glray does on the calls gl-spec/classes.txt marks `handler`;
-//! - `profile`: what the current context is (version, core or compatibility profile);
-//! - `dlopen_hook`: programs that dlopen GL libraries end up in glray;
-//! - `ffi_guard`: no panic crosses `extern "C"`.
+//! Laid out as the calls flow (docs/design.md has the diagram):
+//! - `abi`: the exports programs bind to, dispatch to the real GL, the handlers, the dlopen
+//!   hook and the panic guard;
+//! - `calls`: the one stream of calls the exports hand over, under one lock, with the memory
+//!   they read, to its two sinks:
+//! - `record`: the trace file (the trace writer only);
+//! - `feed`: the live feed: capture follows the calls, and at a frame's trigger the frame is
+//!   ray traced;
+//! - `present`: the ray-traced picture put into the real framebuffer;
+//! - `start`: at load, the settings are read and the sinks started.
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
-pub mod commands;
-mod dispatch;
-mod dlopen_hook;
-pub mod exports;
-mod ffi_guard;
-mod handlers;
-mod profile;
-mod raytrace;
-mod real;
+pub mod abi;
+mod calls;
+mod feed;
+mod present;
 mod record;
-mod runtime;
+mod start;

@@ -14,7 +14,7 @@ use glray_core::reallib::{self, FileId, RealKind};
 mod apitrace;
 mod bench;
 #[allow(dead_code)]
-#[path = "../../commands.rs"]
+#[path = "../../abi/commands.rs"]
 mod commands;
 mod raytrace;
 mod replay;

@@ -16,9 +16,9 @@ pub fn generate(spec: &Spec) -> String {
     for c in &cmds {
         let (params, args, ret) = signature(c);
         let call = if c.flags.handler {
-            format!("crate::ffi_guard::guard(c\"{0}\", || crate::handlers::{0}({args}))", c.name)
+            format!("crate::abi::ffi_guard::guard(c\"{0}\", || crate::abi::handlers::{0}({args}))", c.name)
         } else {
-            format!("crate::real::{}({args})", c.name)
+            format!("crate::abi::real::{}({args})", c.name)
         };
         let sep = if args.is_empty() { "" } else { ", " };
         // The export is the hot path: a flag test, then the real call (a tail call). Recording
@@ -26,7 +26,7 @@ pub fn generate(spec: &Spec) -> String {
         writeln!(
             s,
             "#[no_mangle]\npub unsafe extern \"C\" fn {name}({params}){ret} {{\n    \
-             if crate::record::active() {{\n        return recorded::{name}({args});\n    }}\n    \
+             if crate::calls::active() {{\n        return recorded::{name}({args});\n    }}\n    \
              {call}\n}}",
             name = c.name,
         )
@@ -40,7 +40,7 @@ pub fn generate(spec: &Spec) -> String {
         let before = if c.class.hooked() {
             let b: Vec<String> = c.params.iter().map(|p| bits(&p.rust, &ident(&p.name))).collect();
             format!(
-                "let skip__ = outer__ && crate::record::before_real(crate::commands::cmd::{}, &[{}]);\n    ",
+                "let skip__ = outer__ && crate::calls::before_real(crate::abi::commands::cmd::{}, &[{}]);\n    ",
                 c.name,
                 b.join(", ")
             )
@@ -49,7 +49,7 @@ pub fn generate(spec: &Spec) -> String {
             // refuses between glBegin and glEnd (INVALID_OPERATION, nothing done, 0 returned),
             // which the real GL, outside any glBegin, would carry out (glGenLists would hand
             // out a name). Capture raises the error glGetError reports.
-            "let skip__ = outer__ && crate::raytrace::in_skipped_begin();\n    ".to_string()
+            "let skip__ = outer__ && crate::feed::in_skipped_begin();\n    ".to_string()
         } else {
             String::new()
         };
@@ -69,14 +69,14 @@ pub fn generate(spec: &Spec) -> String {
         writeln!(
             recorded,
             "#[cold]\n#[inline(never)]\n#[allow(clippy::unnecessary_cast)]\npub unsafe fn {name}({params}){ret} {{\n    \
-             let outer__ = crate::record::enter();\n    \
+             let outer__ = crate::calls::enter();\n    \
              {before}\
              let ret__ = {call};\n    \
              if outer__ {{\n        \
-             if {typed}crate::record::wants(crate::commands::cmd::{name}) {{\n            \
-             crate::record::with(|rec__| crate::record::generated::{name}(rec__, {args}{sep}ret__));\n        \
+             if {typed}crate::calls::wants(crate::abi::commands::cmd::{name}) {{\n            \
+             crate::calls::with(|rec__| crate::calls::generated::{name}(rec__, {args}{sep}ret__));\n        \
              }}\n        \
-             crate::record::leave();\n    \
+             crate::calls::leave();\n    \
              }}\n    \
              ret__\n}}",
             name = c.name,
@@ -84,7 +84,7 @@ pub fn generate(spec: &Spec) -> String {
         .unwrap();
     }
     writeln!(s, "/// The commands whose exports hand them to capture typed (`record::given`).").unwrap();
-    let typed: Vec<String> = typed_names.iter().map(|n| format!("crate::commands::cmd::{n}")).collect();
+    let typed: Vec<String> = typed_names.iter().map(|n| format!("crate::abi::commands::cmd::{n}")).collect();
     writeln!(s, "pub static TYPED: [usize; {}] = [{}];", typed.len(), typed.join(", ")).unwrap();
     writeln!(
         s,
@@ -121,13 +121,16 @@ fn given_call(c: &Command, types: &HashMap<String, String>) -> Option<String> {
         [p] if p.rust.contains('*') => {
             let ty = types.get(&pointee(&p.c))?;
             Some(format!(
-                "crate::record::given::given_ptr::<{ty}>(crate::commands::cmd::{name}, {target}, {} as *const {ty})",
+                "crate::calls::given::given_ptr::<{ty}>(crate::abi::commands::cmd::{name}, {target}, {} as *const {ty})",
                 ident(&p.name)
             ))
         }
         _ if parts.iter().all(|p| !p.rust.contains('*')) => {
             let raw: Vec<String> = parts.iter().map(|p| format!("{} as f64", ident(&p.name))).collect();
-            Some(format!("crate::record::given::given(crate::commands::cmd::{name}, {target}, &[{}])", raw.join(", ")))
+            Some(format!(
+                "crate::calls::given::given(crate::abi::commands::cmd::{name}, {target}, &[{}])",
+                raw.join(", ")
+            ))
         }
         _ => None,
     }

@@ -20,9 +20,9 @@ pub fn generate(spec: &Spec) -> String {
         if hooked {
             let b: Vec<String> = c.params.iter().map(|p| bits(&p.rust, &ident(&p.name))).collect();
             writeln!(s, "    let bits__: [u64; {}] = [{}];", b.len(), b.join(", ")).unwrap();
-            writeln!(s, "    rec.before(crate::commands::cmd::{}, &bits__);", c.name).unwrap();
+            writeln!(s, "    rec.before(crate::abi::commands::cmd::{}, &bits__);", c.name).unwrap();
         }
-        writeln!(s, "    rec.begin(crate::commands::cmd::{}, {});", c.name, c.params.len()).unwrap();
+        writeln!(s, "    rec.begin(crate::abi::commands::cmd::{}, {});", c.name, c.params.len()).unwrap();
         for p in &c.params {
             let code = if p.rust.contains('*') {
                 record_pointer(c, p, &spec.types, &spec.sizes)
@@ -37,7 +37,7 @@ pub fn generate(spec: &Spec) -> String {
             r => writeln!(s, "    {}", record_scalar(r, "ret__")).unwrap(),
         }
         if hooked {
-            writeln!(s, "    rec.after(crate::commands::cmd::{}, &bits__, {});", c.name, bits(&c.ret, "ret__"))
+            writeln!(s, "    rec.after(crate::abi::commands::cmd::{}, &bits__, {});", c.name, bits(&c.ret, "ret__"))
                 .unwrap();
         }
         writeln!(s, "}}").unwrap();
@@ -73,7 +73,7 @@ fn record_pointer(c: &Command, p: &Param, types: &HashMap<String, String>, sizes
     let base = pointee(&p.c);
     let elem = if base == "void" { 1 } else { types.get(&base).map_or(1, |r| rust_size(r)) };
     let stars = p.c.matches('*').count();
-    let unknown = format!("rec.unknown_pointer(crate::commands::cmd::{}, {v});", c.name);
+    let unknown = format!("rec.unknown_pointer(crate::abi::commands::cmd::{}, {v});", c.name);
     if !p.c.contains("const") {
         return format!("rec.output_pointer({v});");
     }

@@ -22,7 +22,7 @@ use std::sync::OnceLock;
 use glray_capture::ops::{op_for, AttrForm, Op};
 
 use super::{forked_check, Recorder, RECORDER, TO_FILE};
-use crate::commands::COMMANDS;
+use crate::abi::commands::COMMANDS;
 
 /// Capture's form of command `cmd`, when it is an attribute command.
 #[inline]
@@ -118,7 +118,7 @@ pub unsafe fn given_ptr<T: Copy + Into<f64>>(cmd: usize, target: u32, p: *const 
 /// Adds a call to this thread's batch; capture follows the batch when it is full.
 #[inline]
 fn keep(form: AttrForm, target: u32, raw: [f64; 4]) -> bool {
-    let unseen = crate::raytrace::in_skipped_begin();
+    let unseen = crate::feed::in_skipped_begin();
     let full = PENDING.try_with(|p| {
         let Ok(mut b) = p.try_borrow_mut() else { return None };
         let at = b.len;
@@ -174,9 +174,9 @@ fn locked(f: impl FnOnce(&mut Recorder)) {
 fn follow(rec: &mut Recorder, b: &mut Batch) {
     let thread = rec.calling_thread();
     rec.thread = thread;
-    let calls = b.calls[..b.len].iter().flatten();
+    let calls = b.calls[..b.len].iter().flatten().map(|g| (g.form, g.target, g.components(), g.unseen));
     if let Some(live) = rec.e.live() {
-        crate::raytrace::follow_given(live, thread, calls);
+        crate::feed::follow_given(live, thread, calls);
     }
     b.len = 0;
 }
@@ -184,15 +184,15 @@ fn follow(rec: &mut Recorder, b: &mut Batch) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::commands::{cmd, lookup};
+    use crate::abi::commands::{cmd, lookup};
     use glray_gl::GL_UNSIGNED_BYTE;
 
     #[test]
     fn every_command_an_export_hands_over_typed_has_a_form_in_capture() {
         // Else its calls would silently go the recorded way (build.rs picks the commands by
         // name; capture parses the forms from the names).
-        assert!(crate::exports::TYPED.len() >= 150, "{} commands", crate::exports::TYPED.len());
-        for &c in &crate::exports::TYPED {
+        assert!(crate::abi::exports::TYPED.len() >= 150, "{} commands", crate::abi::exports::TYPED.len());
+        for &c in &crate::abi::exports::TYPED {
             assert!(form(c).is_some(), "{:?} has no attribute form", COMMANDS[c].name);
         }
         let named = |name: &str| form(lookup(name.as_bytes()).unwrap());
@@ -200,6 +200,6 @@ mod tests {
         assert!(f.vector && f.n == 4 && f.ty == GL_UNSIGNED_BYTE);
         assert!(named("glMultiTexCoord2fARB").is_some_and(|f| f.n == 2 && !f.vector));
         assert_eq!(form(cmd::glMaterialfv), None);
-        assert!(!crate::exports::TYPED.contains(&cmd::glEdgeFlag), "edge flags are recorded");
+        assert!(!crate::abi::exports::TYPED.contains(&cmd::glEdgeFlag), "edge flags are recorded");
     }
 }

@@ -3,8 +3,8 @@
 //! (its absence is logged once, when first looked up).
 #![allow(dead_code, clippy::useless_transmute)]
 
-use crate::commands::cmd;
-use crate::dispatch;
+use crate::abi::commands::cmd;
+use crate::abi::dispatch;
 use std::ffi::{c_ulong, c_void};
 
 include!(concat!(env!("OUT_DIR"), "/real.rs"));

@@ -6,7 +6,7 @@ use glray_gl::{GL_CONTEXT_CORE_PROFILE_BIT, GL_CONTEXT_PROFILE_MASK, GL_EXTENSIO
 use std::cell::Cell;
 use std::ffi::CStr;
 
-use crate::real::{self, get_int};
+use crate::abi::real::{self, get_int};
 
 /// What a context is: its version, ES or desktop, core or compatibility.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

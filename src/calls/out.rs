@@ -12,7 +12,7 @@ use std::io::{self, Write};
 
 use glray_core::trace::{ArrayData, Encoder, Event, Value};
 
-use crate::raytrace::Live;
+use crate::feed::Live;
 
 // One per process (the recorder's): the events' state inline saves a load on every call.
 #[allow(clippy::large_enum_variant)]
@@ -249,7 +249,7 @@ pub struct Sink {
 }
 
 impl Sink {
-    pub const CAPTURE: Sink = Sink { call: crate::raytrace::follow_call, event: crate::raytrace::follow };
+    pub const CAPTURE: Sink = Sink { call: crate::feed::follow_call, event: crate::feed::follow };
 }
 
 /// Events made as the recorder goes, each handed over whole as soon as it is made.

@@ -46,7 +46,7 @@ pub unsafe extern "C" fn dlopen(filename: *const c_char, flags: c_int) -> *mut c
         if !is_gl_library(name.to_bytes()) {
             return None;
         }
-        let rt = crate::runtime::get();
+        let rt = crate::abi::runtime::get();
         if !rt.config.intercept_dlopen() {
             return None;
         }

@@ -13,7 +13,7 @@ use std::ffi::c_void;
 
 use glray_render::Rendered;
 
-use crate::real::{self, get_int};
+use crate::abi::real::{self, get_int};
 
 /// Per-fragment and pixel-path state glDrawPixels fragments pass through.
 const OFF: &[u32] = &[

@@ -12,8 +12,8 @@ use glray_core::gltypes::{array_element_bytes, value_bytes};
 use glray_core::trace::{array_kind, ArrayData};
 
 use super::bound_buffer;
-use crate::commands::cmd;
-use crate::real;
+use crate::abi::commands::cmd;
+use crate::abi::real;
 
 const MAX_UNITS: usize = 32;
 
@@ -249,7 +249,7 @@ impl ClientArrays {
             };
             // A core profile has only generic attributes: asking for the fixed arrays there
             // would leave GL_INVALID_ENUM for the program's glGetError.
-            let fixed = !crate::profile::core();
+            let fixed = !crate::abi::profile::core();
             for (k, q) in Q.iter().enumerate().filter(|_| fixed) {
                 if k == array_kind::TEXCOORD as usize {
                     continue;

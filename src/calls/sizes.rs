@@ -4,7 +4,7 @@
 use glray_gl::*;
 
 use super::{bound_buffer, Recorder};
-use crate::real;
+use crate::abi::real;
 
 /// How much memory a pointer argument reads.
 pub enum Mem {

@@ -3,11 +3,11 @@
 //! glDrawArrays mode, a glBegin inside glBegin) or saw out of place (a call inside a glBegin
 //! the real GL never got reaches it outside one and raises nothing there).
 
-use crate::real;
+use crate::abi::real;
 
 pub unsafe fn glGetError() -> u32 {
     let real = real::glGetError();
-    let ours = crate::raytrace::take_unseen_error();
+    let ours = crate::calls::take_unseen_error();
     if real != 0 {
         real
     } else {

@@ -7,8 +7,8 @@
 
 use std::ffi::{c_void, CStr};
 
-use crate::exports::own_function;
-use crate::real;
+use crate::abi::exports::own_function;
+use crate::abi::real;
 
 /// How to answer a lookup of `name`.
 enum Answer {

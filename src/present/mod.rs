@@ -15,7 +15,7 @@ use std::sync::Mutex;
 
 use glray_render::Rendered;
 
-use crate::profile::{self, Kind};
+use crate::abi::profile::{self, Kind};
 
 /// A way of presenting, as set by `GLRAY_PRESENT`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -4,7 +4,7 @@
 
 #![allow(clippy::let_unit_value, clippy::unit_arg)]
 
-use crate::commands::COUNT;
+use crate::abi::commands::COUNT;
 use std::ffi::{c_ulong, c_void};
 
 /// A function's address, shareable between threads.
@@ -17,5 +17,5 @@ include!(concat!(env!("OUT_DIR"), "/exports.rs"));
 
 /// glray's own function for a command name, if it exports one.
 pub fn own_function(name: &[u8]) -> Option<*const c_void> {
-    crate::commands::lookup(name).map(|i| EXPORTS[i].0)
+    crate::abi::commands::lookup(name).map(|i| EXPORTS[i].0)
 }

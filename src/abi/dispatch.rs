@@ -13,8 +13,8 @@ use std::sync::atomic::{AtomicPtr, AtomicU8, Ordering};
 
 use glray_core::reallib::RealKind;
 
-use crate::commands::{Lib, COMMANDS, COUNT};
-use crate::runtime;
+use crate::abi::commands::{Lib, COMMANDS, COUNT};
+use crate::abi::runtime;
 
 /// A slot value meaning "looked up, and there is no real function".
 const MISSING: *mut c_void = std::ptr::dangling_mut::<c_void>();

@@ -10,7 +10,6 @@
 mod copied;
 mod dump;
 mod lists;
-mod present;
 mod stats;
 
 use std::collections::HashMap;
@@ -21,9 +20,10 @@ use glray_capture::events::{Capture, LiveCall};
 use glray_core::config::Config;
 use glray_core::trace::{Event, Reader, Value};
 
-use crate::commands::{cmd, Ends, COMMANDS};
-use crate::dispatch::{self, Backend};
-use crate::record::given::Given;
+use crate::abi::commands::{cmd, Ends, COMMANDS};
+use crate::abi::dispatch::{self, Backend};
+use crate::present;
+use glray_capture::ops::AttrForm;
 
 static ON: AtomicBool = AtomicBool::new(false);
 
@@ -182,18 +182,21 @@ fn follow_in<'a>(capture: &mut Capture, event: &Event, name: &dyn Fn(usize) -> &
 
 /// What capture is to know of the call this thread just made.
 fn live_call() -> LiveCall {
-    LiveCall { unseen: UNSEEN.with(|u| u.replace(false)) || in_skipped_begin(), core_profile: crate::profile::core() }
+    LiveCall {
+        unseen: UNSEEN.with(|u| u.replace(false)) || in_skipped_begin(),
+        core_profile: crate::abi::profile::core(),
+    }
 }
 
-/// Capture follows attribute commands of `thread`'s handed over typed (`record::given`), in
-/// the order they were made.
-pub fn follow_given<'a>(live: &mut Live, thread: u32, calls: impl Iterator<Item = &'a Given>) {
+/// Capture follows attribute commands of `thread`'s handed over typed (`calls::given`), in
+/// the order they were made: each one's form, glMultiTexCoord's target, its components, and
+/// whether the real GL did not get it.
+pub fn follow_given<'a>(live: &mut Live, thread: u32, calls: impl Iterator<Item = (AttrForm, u32, &'a [f64], bool)>) {
     if !ON.load(Ordering::Relaxed) {
         return;
     }
-    let core_profile = crate::profile::core();
+    let core_profile = crate::abi::profile::core();
     guarded(live, |live| {
-        let calls = calls.map(|g| (g.form, g.target, g.components(), g.unseen));
         live.capture.given(thread, core_profile, calls);
         Ok(())
     });
@@ -220,7 +223,7 @@ fn follow_live(capture: &mut Capture, cmd: usize, thread: u32, args: &[Value], r
 /// Called after this thread made a context current: capture follows only compatibility
 /// contexts (a core profile has no fixed-function GL; its frames stay the real GL's).
 pub fn made_current() {
-    if ON.load(Ordering::Relaxed) && crate::profile::core() && !TOLD_CORE.with(|t| t.replace(true)) {
+    if ON.load(Ordering::Relaxed) && crate::abi::profile::core() && !TOLD_CORE.with(|t| t.replace(true)) {
         glray_core::info!(
             "a core-profile context is current: glray follows fixed-function GL, so its frames are the real GL's"
         );
@@ -243,25 +246,36 @@ pub fn in_skipped_begin() -> bool {
     SKIPPED_BEGIN.with(|s| s.get())
 }
 
-/// Called before the real call of every geometry, client, context and frame command. Presents
-/// the frame when this call is the trigger (or a raster operation about to draw over it), and
-/// says whether the real call is to be skipped: geometry the ray tracer takes is not
-/// rasterized as well.
-pub fn before(c: usize, args: &[u64]) -> bool {
-    let skip = skips(c, args);
-    UNSEEN.with(|u| u.set(skip));
-    skip
+/// What a command is to the live feed before its real call (`before`).
+#[derive(Debug, Clone, Copy)]
+pub enum Before {
+    /// Nothing to do: the real call goes ahead unless this says to skip it (a vertex of a
+    /// glBegin the real GL did not get, and its glEnd).
+    Decided(bool),
+    /// The live state is needed (`fire`, under the stream's lock).
+    Fire(Firing),
 }
 
-fn skips(c: usize, _args: &[u64]) -> bool {
+/// What `fire` does for a command: take geometry from the real GL, present the frame before
+/// something draws over it, or at a trigger.
+#[derive(Debug, Clone, Copy)]
+pub struct Firing {
+    geometry: bool,
+    raster: bool,
+    at: Option<Trigger>,
+}
+
+/// Called before the real call of every geometry, client, context and frame command: whether
+/// the live state is needed (`fire`) or what to do without it.
+pub fn before(c: usize) -> Before {
     if !ON.load(Ordering::Relaxed) {
-        return false;
+        return Before::Decided(false);
     }
     if c == cmd::glEnd {
-        return SKIPPED_BEGIN.with(|s| s.replace(false));
+        return Before::Decided(SKIPPED_BEGIN.with(|s| s.replace(false)));
     }
     if matches!(c, cmd::glArrayElement | cmd::glArrayElementEXT) {
-        return in_skipped_begin();
+        return Before::Decided(in_skipped_begin());
     }
     // What gl-spec/classes.txt says of the command: geometry glray takes (`taken`), and where
     // it ends a frame or draws over it (`ends=`).
@@ -276,16 +290,15 @@ fn skips(c: usize, _args: &[u64]) -> bool {
     };
     let raster = info.ends == Ends::Raster;
     if !geometry && at.is_none() && !raster {
-        return false;
+        return Before::Decided(false);
     }
-    let Some(thread) = crate::record::thread_number() else { return false };
-    let result = std::panic::catch_unwind(|| {
-        crate::record::with_live(|live| fire(live, c, thread, geometry, raster, at)).unwrap_or(false)
-    });
-    result.unwrap_or_else(|_| {
-        stop("internal error while ray tracing a frame");
-        false
-    })
+    Before::Fire(Firing { geometry, raster, at })
+}
+
+/// Notes whether the real GL is skipping this thread's call (capture, following it next,
+/// reports its errors instead).
+pub fn skipped(skip: bool) {
+    UNSEEN.with(|u| u.set(skip));
 }
 
 /// Whether every way a program can see what it drew fires `trigger`, so that its draws need
@@ -298,8 +311,19 @@ fn triggers_all(trigger: Trigger) -> bool {
     trigger == Trigger::Auto && dispatch::backend() == Backend::OSMesa
 }
 
-/// `skips` with the recorder's lock held.
-fn fire(live: &mut Live, c: usize, thread: u32, geometry: bool, raster: bool, at: Option<Trigger>) -> bool {
+/// Presents the frame when command `c` of `thread` is the trigger (or a raster operation about
+/// to draw over it), and says whether the real call is to be skipped: geometry the ray tracer
+/// takes is not rasterized as well. Called with the stream's lock held; a panic stops ray
+/// tracing, not the program.
+pub fn fire(live: &mut Live, c: usize, thread: u32, firing: Firing) -> bool {
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| fire_in(live, c, thread, firing)));
+    result.unwrap_or_else(|_| {
+        stop("internal error while ray tracing a frame");
+        false
+    })
+}
+
+fn fire_in(live: &mut Live, c: usize, thread: u32, Firing { geometry, raster, at }: Firing) -> bool {
     if geometry {
         // Only where this thread's frames are known to reach a trigger, so that what is not
         // rasterized will be shown: once one of its frames has been presented, or from the
@@ -332,13 +356,12 @@ fn fire(live: &mut Live, c: usize, thread: u32, geometry: bool, raster: bool, at
     false
 }
 
-/// The first error this thread's context raised that the real GL could not (0: none).
-pub fn take_unseen_error() -> u32 {
+/// The first error `thread`'s context raised that the real GL could not (0: none).
+pub fn take_unseen_error(live: &mut Live, thread: u32) -> u32 {
     if !ON.load(Ordering::Relaxed) {
         return 0;
     }
-    let Some(thread) = crate::record::thread_number() else { return 0 };
-    crate::record::with_live(|live| live.capture.context(thread).take_unseen_error()).unwrap_or(0)
+    live.capture.context(thread).take_unseen_error()
 }
 
 impl Live {

@@ -21,7 +21,7 @@ use glray_gl::{
 };
 use glray_scene::lighting::{Light, LightModel, Material};
 
-use crate::real;
+use crate::abi::real;
 
 /// Before capture follows call number `c` (the recorder's numbering) of `thread`, which the
 /// real GL did not get when `unseen`: the matrix state to compare with afterwards, for a list

@@ -26,7 +26,7 @@ use std::ffi::c_void;
 use glray_render::Rendered;
 
 use super::Kind;
-use crate::real::{self, get_int, get_ints};
+use crate::abi::real::{self, get_int, get_ints};
 
 const VERTEX: &str = "#version 140
 // One triangle that covers the viewport: (-1,-1), (3,-1), (-1,3).

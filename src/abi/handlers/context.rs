@@ -5,18 +5,18 @@
 
 use std::ffi::{c_ulong, c_void};
 
-use crate::dispatch::{set_backend, Backend};
-use crate::real;
+use crate::abi::dispatch::{set_backend, Backend};
+use crate::abi::real;
 
 /// Binds with `bind` (the real MakeCurrent), after capture followed what the thread made in the
 /// context it leaves.
 fn bind<T: PartialEq + Default>(bind: impl FnOnce() -> T, backend: Backend) -> T {
-    crate::record::given::flush();
+    crate::calls::given::flush();
     let ok = bind();
     if ok != T::default() {
         set_backend(backend);
-        crate::profile::made_current();
-        crate::raytrace::made_current();
+        crate::abi::profile::made_current();
+        crate::feed::made_current();
     }
     ok
 }

@@ -16,7 +16,7 @@ use glray_capture::args;
 use glray_capture::events::Capture;
 use glray_core::trace::Value;
 
-use crate::real::{self, get_int};
+use crate::abi::real::{self, get_int};
 
 /// glPixelStore's pack state, and what a read into a tight float array wants of it.
 const PACK: &[(u32, i32)] = &[
@@ -43,7 +43,7 @@ pub fn follow(capture: &mut Capture, c: usize, thread: u32, a: &[Value]) {
 /// `follow` for a copy.
 #[cold]
 fn read_into(capture: &mut Capture, thread: u32, a: &[Value]) {
-    if args::uint(a, 0) != GL_TEXTURE_2D || crate::profile::core() {
+    if args::uint(a, 0) != GL_TEXTURE_2D || crate::abi::profile::core() {
         return;
     }
     let ctx = capture.context(thread);

@@ -51,11 +51,6 @@ fn init() -> Runtime {
         own_path.as_ref().map_or("?".into(), |p| p.to_string_lossy()),
         if config.enable() { "" } else { " (pass-through: enable = false)" }
     );
-    let capture = config.enable() && config.preset() != "off";
-    let live = capture.then(|| crate::raytrace::configure(&config));
-    if capture || config.record().is_some() {
-        crate::record::start(config.record(), live);
-    }
     Runtime { config, own_path, own_file, own_base: info.dli_fbase }
 }
 
@@ -78,13 +73,3 @@ pub fn real(kind: RealKind) -> Option<&'static RealLib> {
     })
     .as_ref()
 }
-
-/// Reads the settings as the library loads, so that a bad setting is reported at program start.
-#[used]
-#[link_section = ".init_array"]
-static INIT: extern "C" fn() = {
-    extern "C" fn init_at_load() {
-        let _ = std::panic::catch_unwind(get);
-    }
-    init_at_load
-};
