@@ -59,7 +59,7 @@ pub fn indices(_: &mut Recorder, a: &[i64]) -> Mem {
 
 pub fn call_lists(_: &mut Recorder, a: &[i64]) -> Mem {
     // A bad type records 4 bytes a name; the real GL raises GL_INVALID_ENUM.
-    let size = glray_capture::lists::name_size(a[1] as u32).unwrap_or(4);
+    let size = glray_capture::fixed::lists::name_size(a[1] as u32).unwrap_or(4);
     Mem::Bytes((a[0].max(0) as usize).saturating_mul(size))
 }
 

@@ -10,8 +10,8 @@
 //! and materials...).
 
 use glray_capture::events::Capture;
-use glray_capture::list_effects::StateSeen;
-use glray_capture::matrix::Seen;
+use glray_capture::fixed::list_effects::StateSeen;
+use glray_capture::fixed::matrices::Seen;
 use glray_gl::{
     GL_AMBIENT, GL_BACK, GL_CONSTANT_ATTENUATION, GL_DIFFUSE, GL_EMISSION, GL_FRONT, GL_LIGHT0, GL_LIGHT_MODEL_AMBIENT,
     GL_LIGHT_MODEL_COLOR_CONTROL, GL_LIGHT_MODEL_LOCAL_VIEWER, GL_LIGHT_MODEL_TWO_SIDE, GL_LINEAR_ATTENUATION,

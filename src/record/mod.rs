@@ -1,5 +1,5 @@
 //! The trace file (`GLRAY_RECORD=path`, `glray run --record path`): one of the two sinks of the
-//! stream of calls (`crate::calls` encodes the calls; this writes them). The file is created at
+//! stream of calls (the `calls` module encodes the calls; this writes them). The file is created at
 //! the first recorded call, so processes that load glray but never call GL (a shell under
 //! `glray run`) leave it alone; `%p` in the path becomes the process id, and a forked child
 //! with `%p` in the path writes a trace of its own. docs/trace-format.md describes the file.

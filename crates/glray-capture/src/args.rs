@@ -3,6 +3,7 @@
 //! reads as 0 (or an empty array): the trace reader has already checked the encoding, and GL
 //! itself would take garbage; capture must never panic on a bad trace.
 
+use glam::DVec4;
 use glray_core::trace::Value;
 use glray_gl::{
     GL_BYTE, GL_DOUBLE, GL_FLOAT, GL_HALF_FLOAT, GL_INT, GL_SHORT, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT,
@@ -101,6 +102,30 @@ pub fn array(b: &[u8], ty: u32, n: usize) -> Vec<f64> {
     let got = elements(b, ty, &mut v);
     v.truncate(got);
     v
+}
+
+/// The values of argument `i`: a recorded array of `n` values of type `ty` (a `v` command's
+/// pointer), or the one scalar it is.
+pub fn floats(a: &[Value], i: usize, ty: u32, n: usize) -> Vec<f64> {
+    match a.get(i) {
+        Some(Value::Blob(b)) => array(b, ty, n),
+        Some(_) => vec![float(a, i)],
+        None => Vec::new(),
+    }
+}
+
+/// A colour argument: integer forms map the integer range to [-1, 1].
+pub fn color_param(a: &[Value], i: usize, ty: u32) -> DVec4 {
+    let v = floats(a, i, ty, 4);
+    let get = |k: usize| {
+        let x = v.get(k).copied().unwrap_or(0.0);
+        if ty == GL_INT {
+            x / 2147483647.0
+        } else {
+            x
+        }
+    };
+    DVec4::new(get(0), get(1), get(2), get(3))
 }
 
 fn half_to_f64(h: u16) -> f64 {

@@ -9,7 +9,7 @@
 
 use glray_core::trace::{Event, Value};
 
-use crate::context::Context;
+use crate::fixed::Context;
 use crate::ops::{context_call, op_for, AttrForm, ContextCall, Op};
 use glray_scene::frame::Frame;
 
@@ -237,11 +237,11 @@ mod tests {
             ],
         );
         assert!(c.context(0).shared.lists.is_list(2), "B sees A's lists");
-        assert_eq!(c.context(0).matrices.mode, crate::matrix::Mode::ModelView, "but has its own matrix mode");
+        assert_eq!(c.context(0).matrices.mode, crate::fixed::matrices::Mode::ModelView, "but has its own matrix mode");
         feed(&mut c, &names, &[(1, 0, vec![op(1), op(5), Value::Opaque(0xC)], Some(op(1)))]);
         assert!(!c.context(0).shared.lists.is_list(2), "C does not");
         feed(&mut c, &names, &[(1, 0, vec![op(1), op(5), Value::Opaque(0xA)], Some(op(1)))]);
         assert!(c.context(0).shared.lists.is_list(2));
-        assert_eq!(c.context(0).matrices.mode, crate::matrix::Mode::Projection);
+        assert_eq!(c.context(0).matrices.mode, crate::fixed::matrices::Mode::Projection);
     }
 }

@@ -44,7 +44,7 @@ mod tests {
     use crate::options::{Effects, Options, MAX_PASSES};
     use crate::render::{render, Rendered, Renderer};
     use glam::{DMat4, DVec4};
-    use glray_capture::context::Context;
+    use glray_capture::fixed::Context;
     use glray_core::trace::Value::{self, Int, F64};
     use glray_gl::{GL_ALPHA_TEST, GL_BLEND, GL_COLOR_MATERIAL, GL_DEPTH_TEST, GL_GREATER, GL_LIGHT0, GL_LIGHTING};
     use glray_scene::camera::{Camera, Viewport};

@@ -299,7 +299,7 @@ pub(crate) mod tests {
         use glam::DMat4;
         use glray_scene::camera::Viewport;
         use glray_scene::frame::View;
-        let mut m = glray_capture::matrix::Matrices::default();
+        let mut m = glray_capture::fixed::matrices::Matrices::default();
         m.frustum(-0.4, 0.4, -0.3, 0.3, 0.5, 50.0).unwrap();
         let projection = *m.top();
         let viewport = Viewport { x: 0, y: 0, width: 300, height: 200 };

@@ -538,7 +538,7 @@ mod tests {
     /// An orthographic frame (eye z from -1 near to -10 far) of 8x8 pixels.
     fn frame(triangles: Vec<Triangle>, surfaces: Vec<Surface>) -> Frame {
         // glOrtho(-1, 1, -1, 1, 1, 10).
-        let mut m = glray_capture::matrix::Matrices::default();
+        let mut m = glray_capture::fixed::matrices::Matrices::default();
         m.matrix_mode(0x1701).unwrap();
         m.ortho(-1.0, 1.0, -1.0, 1.0, 1.0, 10.0).unwrap();
         let projection: DMat4 = *m.top();
@@ -715,9 +715,9 @@ mod tests {
 
     /// Follows calls (scalar arguments: integers, or floats as F64) in a fresh context with
     /// a perspective camera; returns the context.
-    fn followed(calls: &[(&str, Vec<glray_core::trace::Value<'static>>)]) -> glray_capture::context::Context {
+    fn followed(calls: &[(&str, Vec<glray_core::trace::Value<'static>>)]) -> glray_capture::fixed::Context {
         use glray_core::trace::Value;
-        let mut c = glray_capture::context::Context::default();
+        let mut c = glray_capture::fixed::Context::default();
         c.set_drawable(48, 48);
         let setup: Vec<(&str, Vec<Value>)> = vec![
             ("glMatrixMode", vec![Value::Int(0x1701)]),

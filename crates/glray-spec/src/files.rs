@@ -187,7 +187,17 @@ fn attr_form(attr: Attr, c: &Command) -> AttrForm {
 pub fn read_ops(path: &Path, commands: &BTreeMap<String, Command>) -> Vec<CaptureOp> {
     let mut out: Vec<CaptureOp> = Vec::new();
     let mut seen = HashSet::new();
+    let mut concern = None;
     for line in data_lines(path) {
+        if let Some(name) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
+            // `[lighting]` -> `Lighting`.
+            let mut c = name.chars();
+            concern = Some(c.next().map(|f| f.to_ascii_uppercase().to_string() + c.as_str()).unwrap_or_default());
+            continue;
+        }
+        let Some(concern) = concern.clone() else {
+            fail(&format!("gl-spec/capture.txt: a line before any [concern]: {line}"))
+        };
         let words: Vec<&str> = line.split_whitespace().collect();
         let (attr, op, pattern) = match words.as_slice() {
             ["attr", a, rest @ ..] if !rest.is_empty() => (
@@ -224,7 +234,7 @@ pub fn read_ops(path: &Path, commands: &BTreeMap<String, Command>) -> Vec<Captur
                 OpKind::Attr(f) => f.ty,
                 OpKind::Op(_) => carried_type(c),
             };
-            out.push(CaptureOp { command: name.clone(), kind, ty });
+            out.push(CaptureOp { command: name.clone(), kind, ty, concern: concern.clone() });
         }
     }
     out

@@ -293,12 +293,14 @@ pub enum OpKind {
     Attr(AttrForm),
 }
 
-/// A command capture follows, with the GL type its pointer (or scalar) parameters carry.
+/// A command capture follows, with the GL type its pointer (or scalar) parameters carry and
+/// the part of the context that follows it (capture.txt's `[concern]`, as a `Concern` variant).
 #[derive(Debug, Clone)]
 pub struct CaptureOp {
     pub command: String,
     pub kind: OpKind,
     pub ty: &'static str,
+    pub concern: String,
 }
 
 /// Everything the generators read.

@@ -76,7 +76,7 @@ pub fn frame(mesh: Mesh, width: u32, height: u32) -> Frame {
     // gluPerspective and gluLookAt, as osmesa_bench calls them.
     let top = NEAR * (FOVY_DEG.to_radians() / 2.0).tan();
     let right = top * width as f64 / height as f64;
-    let mut m = glray_capture::matrix::Matrices::default();
+    let mut m = glray_capture::fixed::matrices::Matrices::default();
     m.matrix_mode(0x1701).expect("GL_PROJECTION");
     m.frustum(-right, right, -top, top, NEAR, FAR).expect("a valid frustum");
     let projection = *m.top();

@@ -65,6 +65,30 @@ pub fn generate(spec: &Spec) -> String {
     }
     writeln!(s, "        _ => return None,\n    }})\n}}\n").unwrap();
 
+    // The parts of the context, in the order capture.txt names them, and each op's.
+    let mut concerns: Vec<&str> = Vec::new();
+    let mut of: BTreeMap<&str, &str> = BTreeMap::new();
+    for op in &spec.ops {
+        if !concerns.contains(&op.concern.as_str()) {
+            concerns.push(&op.concern);
+        }
+        let name = match &op.kind {
+            OpKind::Op(name) => name.as_str(),
+            OpKind::Attr(_) => "Attr(_)",
+        };
+        if of.insert(name, &op.concern).is_some_and(|c| c != op.concern) {
+            fail(&format!("gl-spec/capture.txt: op {name} is in two [concern]s"));
+        }
+    }
+    writeln!(
+        s,
+        "/// The parts of a context, each with its state and the code that follows its ops\n\
+         /// (gl-spec/capture.txt's `[concern]` sections).\n\
+         #[derive(Debug, Clone, Copy, PartialEq, Eq)]\npub enum Concern {{\n    {},\n}}\n",
+        concerns.join(",\n    ")
+    )
+    .unwrap();
+
     let mut exec = Vec::new();
     let mut inside = Vec::new();
     for op in &order {
@@ -92,9 +116,12 @@ pub fn generate(spec: &Spec) -> String {
          /// section 5.4: commands that return values, create or delete objects, or set client state\n    \
          /// run at once instead).\n    pub fn compiled(self) -> bool {{\n        !matches!(self, {})\n    }}\n\n    \
          /// Whether GL allows the command between glBegin and glEnd (GL 2.1 section 2.6.3).\n    \
-         pub fn inside_begin(self) -> bool {{\n        matches!(self, {})\n    }}\n}}\n",
+         pub fn inside_begin(self) -> bool {{\n        matches!(self, {})\n    }}\n\n    \
+         /// The part of the context that follows the op.\n    \
+         pub fn concern(self) -> Concern {{\n        match self {{\n{}        }}\n    }}\n}}\n",
         exec.join(" | "),
-        inside.join(" | ")
+        inside.join(" | "),
+        of.iter().map(|(op, c)| format!("            Op::{op} => Concern::{c},\n")).collect::<String>()
     )
     .unwrap();
 

@@ -4,22 +4,28 @@
 
 use glam::DVec4;
 use glray_core::hash::content_hash;
-use glray_core::threads::{collect_pieces, fill_pieces, piece_of, Filler};
+use glray_core::threads::{collect_pieces, copy_of, fill_pieces, piece_of, Filler};
 use glray_core::trace::{array_kind, Value};
 use glray_gl::{
     GL_ARRAY_BUFFER, GL_COLOR_ARRAY, GL_ELEMENT_ARRAY_BUFFER, GL_FLOAT, GL_INT, GL_NORMAL_ARRAY, GL_POLYGON,
-    GL_TEXTURE_COORD_ARRAY, GL_TRIANGLES, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT, GL_VERTEX_ARRAY,
+    GL_TEXTURE0, GL_TEXTURE_COORD_ARRAY, GL_TRIANGLES, GL_UNPACK_ALIGNMENT, GL_UNPACK_ROW_LENGTH,
+    GL_UNPACK_SKIP_PIXELS, GL_UNPACK_SKIP_ROWS, GL_UNSIGNED_BYTE, GL_UNSIGNED_INT, GL_UNSIGNED_SHORT, GL_VERTEX_ARRAY,
 };
+use std::sync::Arc;
 
 use crate::args;
-use crate::client_draws::KEEP_FROM_ELEMENTS;
-use crate::context::{Context, Fetched};
 use crate::error::{GlError, GlResult};
-use crate::immediate::TEXCOORD_UNITS;
-use crate::mesh_builder::Compiled;
+use crate::fixed::immediate::TEXCOORD_UNITS;
+use crate::fixed::lists::fetched_mesh;
+use crate::fixed::mesh_builder::Compiled;
+use crate::fixed::{Context, Fetched};
 use crate::ops::Op;
 use crate::primitive::QuadSplit;
 use crate::texture::Unpack;
+
+/// Client draws reading fewer elements than this stay the frame's own triangles: they are cheap
+/// to make again, and that path follows Mesa's clipping rule for quads (`QuadSplit`).
+pub(crate) const KEEP_FROM_ELEMENTS: i64 = 4096;
 
 /// An array draw of buffer objects: its arguments and pointer state, and the buffers it reads.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
@@ -598,6 +604,155 @@ impl Context {
     }
 }
 
+/// How many buffer draws' meshes a share group keeps (a program that makes new draws every
+/// frame must not grow it without end).
+const MAX_BUFFER_DRAWS: usize = 256;
+
+impl Context {
+    /// Follows a client-array or buffer-object command, or an array draw (`Concern::Arrays`).
+    pub(crate) fn array_command(&mut self, op: Op, a: &[Value]) -> GlResult {
+        match op {
+            Op::ClientActiveTexture => {
+                let unit = args::uint(a, 0).wrapping_sub(GL_TEXTURE0) as usize;
+                if unit >= TEXCOORD_UNITS {
+                    return Err(GlError::InvalidEnum);
+                }
+                self.client.active_texcoord = unit;
+            }
+            Op::EnableClientState | Op::DisableClientState => {
+                let on = op == Op::EnableClientState;
+                match self.client_array(args::uint(a, 0)) {
+                    Some(p) => p.enabled = on,
+                    None => return Err(GlError::InvalidEnum),
+                }
+            }
+            Op::VertexPointer => self.set_pointer(
+                GL_VERTEX_ARRAY,
+                args::int(a, 0) as i32,
+                args::uint(a, 1),
+                args::int(a, 2) as i32,
+                a.get(3).unwrap_or(&Value::Null),
+            ),
+            Op::NormalPointer => self.set_pointer(
+                GL_NORMAL_ARRAY,
+                3,
+                args::uint(a, 0),
+                args::int(a, 1) as i32,
+                a.get(2).unwrap_or(&Value::Null),
+            ),
+            Op::ColorPointer => self.set_pointer(
+                GL_COLOR_ARRAY,
+                args::int(a, 0) as i32,
+                args::uint(a, 1),
+                args::int(a, 2) as i32,
+                a.get(3).unwrap_or(&Value::Null),
+            ),
+            Op::TexCoordPointer => self.set_pointer(
+                GL_TEXTURE_COORD_ARRAY,
+                args::int(a, 0) as i32,
+                args::uint(a, 1),
+                args::int(a, 2) as i32,
+                a.get(3).unwrap_or(&Value::Null),
+            ),
+            Op::InterleavedArrays => {
+                // The client memory arrives with each draw; only which arrays are on matters.
+                self.client.vertex.enabled = true;
+                self.client.vertex.buffer = 0;
+            }
+            Op::DrawArrays | Op::DrawElements | Op::DrawRangeElements | Op::MultiDrawArrays | Op::MultiDrawElements => {
+                if let Some(key) = self.buffer_draw_key(op, a) {
+                    // Buffer objects only: the mesh (and its BVH) lives as long as the buffers
+                    // stay as they are.
+                    let mesh = match self.shared.buffer_draws.get(&key) {
+                        Some(m) => m.clone(),
+                        None => {
+                            let Some(mesh) = self.array_mesh(op, a)? else { return Ok(()) };
+                            if self.shared.buffer_draws.len() >= MAX_BUFFER_DRAWS {
+                                self.shared.buffer_draws.clear();
+                            }
+                            self.shared.buffer_draws.insert(key, mesh.clone());
+                            mesh
+                        }
+                    };
+                    return self.run_mesh(&mesh);
+                }
+                if let Some(key) = self.client_draw_key(op, a) {
+                    // Client memory only, and big: the mesh is kept while the program draws
+                    // the same bytes, frame after frame.
+                    let mesh = match self.client_draws.get(&key) {
+                        Some(mesh) => Ok(Some(mesh)),
+                        None => self.array_mesh(op, a),
+                    };
+                    // The draw's client memory is read.
+                    self.arrays.clear();
+                    let Some(mesh) = mesh? else { return Ok(()) };
+                    self.client_draws.insert(key, mesh.clone());
+                    return self.run_mesh(&mesh);
+                }
+                for (mode, verts) in self.fetch_draw(op, a)? {
+                    self.draw_fetched(mode, &verts, quad_split(op));
+                }
+            }
+            Op::ArrayElement => self.array_element(args::int(a, 0)),
+            Op::BindBuffer => match args::uint(a, 0) {
+                GL_ARRAY_BUFFER => self.client.array_buffer = args::uint(a, 1),
+                GL_ELEMENT_ARRAY_BUFFER => self.client.element_buffer = args::uint(a, 1),
+                _ => {}
+            },
+            Op::BufferData => {
+                if let Some(name) = self.bound_buffer(args::uint(a, 0)) {
+                    let size = args::int(a, 1).max(0) as usize;
+                    let mut data = copy_of(args::bytes(a, 2));
+                    data.resize(size.min(1 << 31), 0);
+                    self.shared.buffers.insert(name, data);
+                    self.buffer_changed(name);
+                }
+            }
+            Op::BufferSubData => {
+                if let Some(name) = self.bound_buffer(args::uint(a, 0)) {
+                    let offset = args::int(a, 1).max(0) as usize;
+                    let data = args::bytes(a, 3);
+                    let buf = self.shared.buffers.entry(name).or_default();
+                    if let Some(dst) = buf.get_mut(offset..offset + data.len()) {
+                        dst.copy_from_slice(data);
+                    }
+                    self.buffer_changed(name);
+                }
+            }
+            Op::DeleteBuffers => {
+                for name in args::array(args::bytes(a, 1), GL_UNSIGNED_INT, args::int(a, 0).max(0) as usize) {
+                    self.shared.buffers.remove(&(name as u32));
+                    self.buffer_changed(name as u32);
+                }
+            }
+            Op::PixelStore => {
+                let v = args::float(a, 1).max(0.0) as usize;
+                let u = &mut self.client.unpack;
+                match args::uint(a, 0) {
+                    GL_UNPACK_ALIGNMENT => u.alignment = v,
+                    GL_UNPACK_ROW_LENGTH => u.row_length = v,
+                    GL_UNPACK_SKIP_ROWS => u.skip_rows = v,
+                    GL_UNPACK_SKIP_PIXELS => u.skip_pixels = v,
+                    _ => {}
+                }
+            }
+            Op::VertexAttribPointer => {}
+            _ => unreachable!("{op:?} is not an array command"),
+        }
+        Ok(())
+    }
+
+    /// The mesh of an array draw (one run: glDrawArrays, glDrawElements, glDrawRangeElements),
+    /// for keeping; None when it draws nothing.
+    fn array_mesh(&mut self, op: Op, a: &[Value]) -> GlResult<Option<Arc<Compiled>>> {
+        if let Some(mesh) = self.indexed_triangles(op, a) {
+            return Ok(Some(Arc::new(mesh)));
+        }
+        let runs = self.fetch_draw(op, a)?;
+        Ok(runs.first().map(|(mode, verts)| Arc::new(fetched_mesh(*mode, verts, quad_split(op)))))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -643,5 +798,343 @@ mod tests {
                 }
             }
         }
+    }
+
+    // Through the context, as a program calls them.
+    use crate::fixed::tests::*;
+    use glam::{DVec4, Vec3, Vec4};
+    use glray_core::trace::{ArrayData, Value};
+
+    use glray_scene::frame::TriangleId;
+
+    #[test]
+    fn arrays_from_buffers_and_client_memory() {
+        let mut c = context();
+        let floats: Vec<u8> = [0f32, 0.0, 1.0, 0.0, 0.0, 1.0].iter().flat_map(|v| v.to_ne_bytes()).collect();
+        // A buffer object.
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(7)]);
+        call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(24), Value::Blob(&floats), i(0x88E4)]);
+        call(&mut c, "glVertexPointer", &[i(2), i(0x1406), i(0), Value::Offset(0)]);
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        call(&mut c, "glDrawArrays", &[i(4), i(0), i(3)]);
+        assert_eq!(c.frame().all_triangles().len(), 1);
+        // Client memory, as the trace's arrays event gives it, with client indices.
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(0)]);
+        c.set_arrays(&[positions_2d(&floats)]);
+        call(&mut c, "glDrawElements", &[i(4), i(3), i(0x1401), Value::Blob(&[2, 1, 0])]);
+        let t = &c.frame().triangles;
+        assert_eq!(t.len(), 1, "client memory: made this frame");
+        assert_eq!(t[0].positions[0], Vec3::new(0.0, 1.0, 0.0), "index 2 first");
+        // Indices in an element buffer from offset 0: a null pointer in the recording.
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(7)]);
+        call(&mut c, "glVertexPointer", &[i(2), i(0x1406), i(0), Value::Null]);
+        call(&mut c, "glBindBuffer", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(8)]);
+        call(&mut c, "glBufferData", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(3), Value::Blob(&[1, 2, 0]), i(0x88E4)]);
+        call(&mut c, "glDrawElements", &[i(4), i(3), i(0x1401), Value::Null]);
+        let t = &c.frame().instances;
+        assert_eq!(t.len(), 2);
+        assert_eq!(
+            c.frame().triangle(TriangleId { instance: 1, index: 0 }).unwrap().positions[0],
+            Vec3::new(1.0, 0.0, 0.0),
+            "index 1 first"
+        );
+        call(&mut c, "glDrawArrays", &[i(4), i(-1), i(3)]);
+        assert_eq!(c.errors.take(), 0x0501);
+    }
+    #[test]
+    fn indexed_buffer_draws_fetch_each_vertex_once() {
+        // A 4 x 4 grid of vertices with a colour each, 18 triangles through an element buffer.
+        let mut c = context();
+        let (mut positions, mut colors) = (Vec::new(), Vec::new());
+        for k in 0..16 {
+            positions.extend([(k % 4) as f32, (k / 4) as f32, 0.0]);
+            colors.extend([k as f32 / 16.0, 0.5, 1.0 - k as f32 / 16.0, 1.0]);
+        }
+        let mut indices: Vec<u16> = Vec::new();
+        for y in 0..3u16 {
+            for x in 0..3u16 {
+                let k = y * 4 + x;
+                indices.extend([k, k + 1, k + 5, k, k + 5, k + 4]);
+            }
+        }
+        indices.push(0); // not a whole triangle: GL draws 18
+        let index_bytes: Vec<u8> = indices.iter().flat_map(|v| v.to_ne_bytes()).collect();
+        let (p, q) = (f32s(&positions), f32s(&colors));
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(1)]);
+        call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(p.len() as i64), Value::Blob(&p), i(0x88E4)]);
+        call(&mut c, "glVertexPointer", &[i(3), i(0x1406), i(0), Value::Null]);
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(2)]);
+        call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(q.len() as i64), Value::Blob(&q), i(0x88E4)]);
+        call(&mut c, "glColorPointer", &[i(4), i(0x1406), i(0), Value::Null]);
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        call(&mut c, "glEnableClientState", &[i(GL_COLOR_ARRAY as i64)]); // GL_COLOR_ARRAY
+        call(&mut c, "glBindBuffer", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(3)]);
+        let n = index_bytes.len() as i64;
+        call(&mut c, "glBufferData", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(n), Value::Blob(&index_bytes), i(0x88E4)]);
+        call(&mut c, "glDrawElements", &[i(4), i(indices.len() as i64), i(0x1403), Value::Null]);
+        assert_eq!(c.errors.take(), 0);
+        let frame = c.frame();
+        assert_eq!(frame.instances.len(), 1);
+        let mesh = &frame.instances[0].mesh;
+        assert_eq!((mesh.vertex_count(), mesh.triangles.len()), (16, 18), "each vertex once, whole triangles");
+        for (t, corners) in indices.chunks_exact(3).enumerate() {
+            let tri = frame.triangle(TriangleId { instance: 0, index: t as u32 }).expect("drawn");
+            for (k, &v) in corners.iter().enumerate() {
+                let v = v as usize;
+                assert_eq!(tri.positions[k], Vec3::new(positions[3 * v], positions[3 * v + 1], 0.0));
+                assert_eq!(tri.colors[k], Vec4::from_slice(&colors[4 * v..4 * v + 4]));
+            }
+        }
+        // The colour array's last vertex stays current, as Mesa leaves it (as with every array
+        // draw here: the last index read, whole triangle or not).
+        let last = indices[indices.len() - 1] as usize;
+        assert_eq!(c.imm.current.color, Vec4::from_slice(&colors[4 * last..4 * last + 4]).as_dvec4());
+    }
+    #[test]
+    fn a_big_indexed_draw_is_read_in_pieces_as_a_small_one_would_be() {
+        // 400,000 triangles over as many vertices from index 7 on (more than one piece of the
+        // threads' share-out each), and a trailing index below them: triangles, positions,
+        // normals, colours, the provoking corners and the box as read one by one, with and
+        // without glray's threads.
+        let check = || {
+            let mut c = context();
+            let (n, first) = (400_000u32, 7u32);
+            let value = |v: u32, k: u32| ((v * 7 + k * 13) % 1000) as f32 / 100.0 - 5.0 + k as f32;
+            let positions: Vec<f32> = (0..n + first).flat_map(|v| [value(v, 0), value(v, 1), value(v, 2)]).collect();
+            let normals: Vec<f32> = (0..n + first).flat_map(|v| [value(v, 3), 0.5, value(v, 4)]).collect();
+            let colors: Vec<f32> = (0..n + first).flat_map(|v| [value(v, 5), value(v, 6), 0.25, 1.0]).collect();
+            let mut indices: Vec<u32> = (0..1_200_000u32).map(|k| first + (k * 7919) % n).collect();
+            indices.push(first - 1); // not a whole triangle, and the lowest index
+            let (p, q, r) = (f32s(&positions), f32s(&normals), f32s(&colors));
+            let index_bytes: Vec<u8> = indices.iter().flat_map(|v| v.to_ne_bytes()).collect();
+            call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(1)]);
+            call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(p.len() as i64), Value::Blob(&p), i(0x88E4)]);
+            call(&mut c, "glVertexPointer", &[i(3), i(0x1406), i(0), Value::Null]);
+            call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(2)]);
+            call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(q.len() as i64), Value::Blob(&q), i(0x88E4)]);
+            call(&mut c, "glNormalPointer", &[i(0x1406), i(0), Value::Null]);
+            call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(4)]);
+            call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(r.len() as i64), Value::Blob(&r), i(0x88E4)]);
+            call(&mut c, "glColorPointer", &[i(4), i(0x1406), i(0), Value::Null]);
+            call(&mut c, "glEnableClientState", &[i(GL_COLOR_ARRAY as i64)]); // GL_COLOR_ARRAY
+            call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+            call(&mut c, "glEnableClientState", &[i(GL_NORMAL_ARRAY as i64)]); // GL_NORMAL_ARRAY
+            call(&mut c, "glBindBuffer", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(3)]);
+            let size = index_bytes.len() as i64;
+            call(
+                &mut c,
+                "glBufferData",
+                &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(size), Value::Blob(&index_bytes), i(0x88E4)],
+            );
+            call(&mut c, "glDrawElements", &[i(4), i(indices.len() as i64), i(0x1405), Value::Null]);
+            assert_eq!(c.errors.take(), 0);
+            let frame = c.frame();
+            let mesh = &frame.instances[0].mesh;
+            let base = first - 1;
+            let triangles: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| t[k] - base)).collect();
+            assert!(mesh.triangles == triangles, "triangles, less the lowest index");
+            assert_eq!(mesh.provoking, triangles.iter().map(|t| t[2]).collect::<Vec<_>>());
+            let at = |a: &[f32], v: u32| Vec3::from_slice(&a[3 * (v + base) as usize..]);
+            assert_eq!(mesh.vertex_count(), n + 1);
+            assert!((0..=n).all(|v| mesh.positions[v as usize] == at(&positions, v)), "positions");
+            assert!((0..=n).all(|v| mesh.normals.at(v) == Some(at(&normals, v))), "normals");
+            let color = |v: u32| Vec4::from_slice(&colors[4 * (v + base) as usize..]);
+            assert!((0..=n).all(|v| mesh.colors.at(v) == Some(color(v))), "colours");
+            let (lo, hi) = (0..=n).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(at(&positions, v)), hi.max(at(&positions, v)))
+            });
+            assert_eq!((mesh.min, mesh.max), (lo, hi));
+        };
+        check();
+        glray_core::threads::publish(rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap());
+        check();
+    }
+    #[test]
+    fn big_client_draws_are_kept_by_the_bytes_they_read() {
+        use crate::fixed::arrays::KEEP_FROM_ELEMENTS;
+        // A unit square's corners, and enough indices over them for the draw to be kept.
+        let mut c = context();
+        let corners = f32s(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0]);
+        let n = KEEP_FROM_ELEMENTS as usize;
+        let indices: Vec<u8> = [0u16, 1, 2, 2, 1, 3].iter().cycle().take(n).flat_map(|v| v.to_ne_bytes()).collect();
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        let draw = |c: &mut Context, positions: &[u8], count: usize| {
+            c.set_arrays(&[positions_2d(positions)]);
+            let indices = Value::Blob(&indices[..2 * count]);
+            call(c, "glDrawElements", &[i(4), i(count as i64), i(0x1403), indices]);
+        };
+        // The same bytes twice in a frame: one mesh, drawn twice.
+        draw(&mut c, &corners, n);
+        draw(&mut c, &corners, n);
+        let first = c.take_frame();
+        assert!(first.triangles.is_empty(), "drawn as instances");
+        assert_eq!(first.instances.len(), 2);
+        let kept = first.instances[0].mesh.clone();
+        assert!(Arc::ptr_eq(&kept, &first.instances[1].mesh));
+        assert_eq!(kept.triangles.len(), n / 3);
+        // The next frame, the same bytes from other memory: the same mesh.
+        draw(&mut c, &corners.clone(), n);
+        assert!(Arc::ptr_eq(&kept, &c.take_frame().instances[0].mesh), "kept from frame to frame");
+        // One corner moved: a new mesh, with the corner where it is now.
+        let mut moved = corners.clone();
+        moved[..4].copy_from_slice(&0.5f32.to_ne_bytes());
+        draw(&mut c, &moved, n);
+        let frame = c.take_frame();
+        assert!(!Arc::ptr_eq(&kept, &frame.instances[0].mesh), "a changed byte makes a new mesh");
+        let tri = frame.triangle(TriangleId { instance: 0, index: 0 }).expect("drawn");
+        assert_eq!(tri.positions[0], Vec3::new(0.5, 0.0, 0.0));
+        assert_eq!(c.client_draws.len(), 1, "only what the last frame drew is kept");
+        c.take_frame();
+        assert_eq!(c.client_draws.len(), 0, "a frame without the draw lets its mesh go");
+        // Fewer elements than kept draws have: the frame's own triangles.
+        draw(&mut c, &corners, n - 4);
+        let frame = c.take_frame();
+        assert!(frame.instances.is_empty() && frame.triangles.len() == (n - 4) / 3, "{}", frame.triangles.len());
+        // The same small arrays twice, then others in the same memory: each draw reads the
+        // arrays it was given (big ones: `big_arrays_the_same_as_the_last_draws_...`).
+        for positions in [&moved, &moved, &corners] {
+            draw(&mut c, positions, n - 4);
+            let frame = c.take_frame();
+            let corner = f32::from_ne_bytes(positions[..4].try_into().unwrap());
+            assert_eq!(frame.triangles.len(), (n - 4) / 3);
+            assert_eq!(frame.triangles[0].positions[0].x, corner, "the draw reads the arrays it was given");
+        }
+        assert_eq!(c.errors.take(), 0);
+    }
+    #[test]
+    fn big_arrays_the_same_as_the_last_draws_are_not_copied_and_changed_ones_are() {
+        // 9,000 triangles of 2D positions (216 KB: hashed before copying): drawn, drawn again
+        // from other memory holding the same bytes (not copied), then with the last triangle
+        // moved in place (the same length: copied anew, and the new mesh has it moved).
+        let mut c = context();
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        let n = 27_000usize;
+        let mut floats: Vec<f32> = (0..2 * n).map(|k| (k % 7) as f32).collect();
+        let draw = |c: &mut Context, floats: &[f32]| {
+            let bytes = f32s(floats);
+            c.set_arrays(&[positions_2d(&bytes)]);
+            call(c, "glDrawArrays", &[i(4), i(0), i(n as i64)]);
+            let frame = c.take_frame();
+            let last = TriangleId { instance: 0, index: (n / 3 - 1) as u32 };
+            (frame.instances[0].mesh.clone(), frame.triangle(last).expect("drawn").positions[2])
+        };
+        let (first, _) = draw(&mut c, &floats);
+        let (again, _) = draw(&mut c, &floats.clone());
+        assert!(Arc::ptr_eq(&first, &again), "the same bytes, the same mesh");
+        floats[2 * n - 2] = 100.0;
+        let (moved, corner) = draw(&mut c, &floats);
+        assert!(!Arc::ptr_eq(&first, &moved), "a changed byte makes a new mesh");
+        assert_eq!(corner.x, 100.0, "the new mesh has the moved corner");
+        assert_eq!(c.errors.take(), 0);
+    }
+    #[test]
+    fn array_elements_give_vertices_inside_glbegin_and_in_lists() {
+        let mut c = context();
+        let floats = f32s(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
+        let colors = [255u8, 0, 0, 0, 255, 0, 0, 0, 255];
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        call(&mut c, "glEnableClientState", &[i(GL_COLOR_ARRAY as i64)]);
+        // What the recorder captures before each glArrayElement: that element's memory.
+        let element = |c: &mut Context, k: usize| {
+            c.set_arrays(&[
+                ArrayData {
+                    kind: 0,
+                    index: 0,
+                    size: 2,
+                    gl_type: 0x1406,
+                    stride: 0,
+                    normalized: false,
+                    first: k as u64,
+                    bytes: &floats[8 * k..8 * k + 8],
+                },
+                ArrayData {
+                    kind: 2,
+                    index: 0,
+                    size: 3,
+                    gl_type: 0x1401,
+                    stride: 0,
+                    normalized: true,
+                    first: k as u64,
+                    bytes: &colors[3 * k..3 * k + 3],
+                },
+            ]);
+            call(c, "glArrayElement", &[i(k as i64)]);
+        };
+        let triangle = |c: &mut Context| {
+            call(c, "glBegin", &[i(4)]);
+            for k in [2, 0, 1] {
+                element(c, k);
+            }
+            call(c, "glEnd", &[]);
+        };
+        triangle(&mut c);
+        let t = c.frame().triangles[0];
+        assert_eq!(t.positions[0], Vec3::new(0.0, 1.0, 0.0), "element 2 first");
+        assert_eq!(t.colors[0], Vec4::new(0.0, 0.0, 1.0, 1.0), "with its colour");
+        assert_eq!(c.imm.current.color, DVec4::new(0.0, 1.0, 0.0, 1.0), "the last colour stays current");
+        // Compiled: the elements' values are copied into the list.
+        call(&mut c, "glNewList", &[i(1), i(0x1300)]);
+        triangle(&mut c);
+        call(&mut c, "glEndList", &[]);
+        call(&mut c, "glDisableClientState", &[i(GL_COLOR_ARRAY as i64)]);
+        call(&mut c, "glCallList", &[i(1)]);
+        let frame = c.take_frame();
+        assert_eq!(frame.instances.len(), 1);
+        let listed = frame.all_triangles()[1];
+        assert_eq!((listed.positions, listed.colors), (t.positions, t.colors));
+    }
+    #[test]
+    fn multi_draw_elements_draws_each_index_array() {
+        let mut c = context();
+        let floats = f32s(&[0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0]);
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        c.set_arrays(&[positions_2d(&floats)]);
+        let counts: Vec<u8> = [3i32, 3].iter().flat_map(|x| x.to_ne_bytes()).collect();
+        let lists = Value::Strings(vec![&[0u8, 1, 2][..], &[0u8, 2, 3][..]]);
+        call(&mut c, "glMultiDrawElements", &[i(4), Value::Blob(&counts), i(0x1401), lists, i(2)]);
+        let t = &c.frame().triangles;
+        assert_eq!(t.len(), 2);
+        assert_eq!(t[1].positions[2], Vec3::new(0.0, 1.0, 0.0), "the second draw's last index, 3");
+        // Offsets into an element buffer.
+        call(&mut c, "glBindBuffer", &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(8)]);
+        call(
+            &mut c,
+            "glBufferData",
+            &[i(GL_ELEMENT_ARRAY_BUFFER as i64), i(6), Value::Blob(&[0, 1, 2, 0, 2, 3]), i(0x88E4)],
+        );
+        let offsets: Vec<u8> = [3usize].iter().flat_map(|x| x.to_ne_bytes()).collect();
+        c.set_arrays(&[positions_2d(&floats)]);
+        call(&mut c, "glMultiDrawElements", &[i(4), Value::Blob(&counts[..4]), i(0x1401), Value::Blob(&offsets), i(1)]);
+        assert_eq!(c.frame().triangles[2].positions, t_positions(&floats, [0, 2, 3]));
+        call(&mut c, "glMultiDrawElements", &[i(4), Value::Blob(&counts), i(0x1406), Value::Null, i(2)]);
+        assert_eq!(c.errors.take(), 0x0500, "GL_FLOAT indices");
+    }
+    #[test]
+    fn draws_of_unchanged_buffers_keep_their_mesh() {
+        let mut c = context();
+        let floats = f32s(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(7)]);
+        call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(24), Value::Blob(&floats), i(0x88E4)]);
+        call(&mut c, "glVertexPointer", &[i(2), i(0x1406), i(0), Value::Null]);
+        call(&mut c, "glEnableClientState", &[i(GL_VERTEX_ARRAY as i64)]);
+        let draw = |c: &mut Context| call(c, "glDrawArrays", &[i(4), i(0), i(3)]);
+        draw(&mut c);
+        draw(&mut c);
+        let frame = c.take_frame();
+        assert_eq!((frame.instances.len(), frame.triangles.len()), (2, 0));
+        assert_eq!(frame.instances[0].mesh.id, frame.instances[1].mesh.id, "one mesh for the same draw");
+        // New contents: a new mesh, with the new positions.
+        call(&mut c, "glBufferSubData", &[i(GL_ARRAY_BUFFER as i64), i(0), i(4), Value::Blob(&f32s(&[0.5]))]);
+        draw(&mut c);
+        let next = c.take_frame();
+        assert_ne!(next.instances[0].mesh.id, frame.instances[0].mesh.id);
+        assert_eq!(next.all_triangles()[0].positions[0].x, 0.5);
+        // Client memory is not kept: its draws stay per frame.
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(0)]);
+        call(&mut c, "glVertexPointer", &[i(2), i(0x1406), i(0), Value::Opaque(64)]);
+        c.set_arrays(&[positions_2d(&floats)]);
+        draw(&mut c);
+        let client = c.take_frame();
+        assert_eq!((client.instances.len(), client.triangles.len()), (0, 1));
     }
 }

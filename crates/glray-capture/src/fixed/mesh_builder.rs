@@ -10,8 +10,8 @@ use std::sync::Arc;
 use glam::{DVec3, DVec4, Vec3, Vec4};
 use glray_scene::mesh::{Attribute, Mesh};
 
+use crate::fixed::vertex::Given;
 use crate::primitive::{assemble, QuadSplit};
-use crate::vertex::Given;
 
 /// One glBegin/glEnd of a mesh: its mode and its vertices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -209,7 +209,7 @@ impl MeshBuilder {
     }
 
     /// A vertex as an array gives it: the attributes of the enabled arrays, then the position.
-    pub(crate) fn give(&mut self, v: &crate::context::Fetched) {
+    pub(crate) fn give(&mut self, v: &crate::fixed::Fetched) {
         if let Some(n) = v.normal {
             self.normal(n);
         }

@@ -15,12 +15,8 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use crate::arrays::BufferDraw;
-use crate::mesh_builder::Compiled;
-
-/// Client draws reading fewer elements than this stay the frame's own triangles: they are cheap
-/// to make again, and that path follows Mesa's clipping rule for quads (`QuadSplit`).
-pub(crate) const KEEP_FROM_ELEMENTS: i64 = 4096;
+use crate::fixed::arrays::BufferDraw;
+use crate::fixed::mesh_builder::Compiled;
 
 #[derive(Default)]
 pub(crate) struct ClientDraws {

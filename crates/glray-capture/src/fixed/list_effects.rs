@@ -13,7 +13,7 @@ use glray_gl::{
     GL_POLYGON_OFFSET_FILL, GL_RESCALE_NORMAL, GL_SCISSOR_TEST, GL_SMOOTH, GL_TEXTURE_1D, GL_TEXTURE_2D,
 };
 
-use crate::context::Context;
+use crate::fixed::Context;
 use glray_scene::lighting::{Light, LightModel, Material};
 
 /// The state a list can leave changed that the real GL answers queries with and draws with.
@@ -49,11 +49,10 @@ pub struct StateSeen {
 impl Context {
     /// The state `StateSeen` describes, as capture has it now.
     pub fn state_seen(&self) -> StateSeen {
-        let s = &self.s;
-        let light = |i: usize| (GL_LIGHT0 + i as u32, s.lights[i].enabled);
-        let plane = |i: usize| (GL_CLIP_PLANE0 + i as u32, s.clip_planes[i].0);
+        let light = |i: usize| (GL_LIGHT0 + i as u32, self.lighting.lights[i].enabled);
+        let plane = |i: usize| (GL_CLIP_PLANE0 + i as u32, self.raster.clip_planes[i].0);
         let enables = [
-            (GL_LIGHTING, s.lighting),
+            (GL_LIGHTING, self.lighting.lighting),
             light(0),
             light(1),
             light(2),
@@ -62,21 +61,21 @@ impl Context {
             light(5),
             light(6),
             light(7),
-            (GL_COLOR_MATERIAL, s.color_material),
-            (GL_NORMALIZE, s.normalize),
-            (GL_RESCALE_NORMAL, s.rescale_normal),
-            (GL_CULL_FACE, s.cull),
-            (GL_POLYGON_OFFSET_FILL, s.polygon_offset_fill),
-            (GL_DEPTH_TEST, s.depth_test),
-            (GL_SCISSOR_TEST, s.scissor_test),
-            (GL_BLEND, s.blend),
-            (GL_ALPHA_TEST, s.alpha_test),
-            (GL_COLOR_LOGIC_OP, s.logic_op_enabled),
-            (GL_TEXTURE_2D, s.texture_2d),
-            (GL_TEXTURE_1D, s.texture_1d),
-            (GL_FOG, s.fog_enabled),
-            (GL_LINE_SMOOTH, s.line_smooth),
-            (GL_POINT_SMOOTH, s.point_smooth),
+            (GL_COLOR_MATERIAL, self.lighting.color_material),
+            (GL_NORMALIZE, self.lighting.normalize),
+            (GL_RESCALE_NORMAL, self.lighting.rescale_normal),
+            (GL_CULL_FACE, self.raster.cull),
+            (GL_POLYGON_OFFSET_FILL, self.raster.polygon_offset_fill),
+            (GL_DEPTH_TEST, self.raster.depth_test),
+            (GL_SCISSOR_TEST, self.raster.scissor_test),
+            (GL_BLEND, self.raster.blend),
+            (GL_ALPHA_TEST, self.raster.alpha_test),
+            (GL_COLOR_LOGIC_OP, self.raster.logic_op_enabled),
+            (GL_TEXTURE_2D, self.texturing.texture_2d),
+            (GL_TEXTURE_1D, self.texturing.texture_1d),
+            (GL_FOG, self.raster.fog_enabled),
+            (GL_LINE_SMOOTH, self.raster.line_smooth),
+            (GL_POINT_SMOOTH, self.raster.point_smooth),
             plane(0),
             plane(1),
             plane(2),
@@ -86,23 +85,23 @@ impl Context {
         ];
         StateSeen {
             enables,
-            front_face: if s.front_ccw { GL_CCW } else { GL_CW },
-            cull_face: s.cull_face.gl(),
-            shade_model: if s.flat { GL_FLAT } else { GL_SMOOTH },
-            polygon_mode: s.polygon_mode,
-            depth_func: s.depth_func.gl(),
-            depth_mask: s.depth_mask,
-            blend_func: (s.blend_func.0.gl(), s.blend_func.1.gl()),
-            alpha_func: (s.alpha_func.0.gl(), s.alpha_func.1),
-            line_width: s.line_width,
-            point_size: s.point_size,
-            bound_texture: s.bound_texture,
+            front_face: if self.raster.front_ccw { GL_CCW } else { GL_CW },
+            cull_face: self.raster.cull_face.gl(),
+            shade_model: if self.lighting.flat { GL_FLAT } else { GL_SMOOTH },
+            polygon_mode: self.raster.polygon_mode,
+            depth_func: self.raster.depth_func.gl(),
+            depth_mask: self.raster.depth_mask,
+            blend_func: (self.raster.blend_func.0.gl(), self.raster.blend_func.1.gl()),
+            alpha_func: (self.raster.alpha_func.0.gl(), self.raster.alpha_func.1),
+            line_width: self.raster.line_width,
+            point_size: self.raster.point_size,
+            bound_texture: self.texturing.bound_texture,
             color: self.imm.current.color,
             normal: self.imm.current.normal,
-            lights: s.lights,
-            materials: s.materials,
-            light_model: s.model,
-            color_material: (s.color_material_face.gl(), s.color_material_mode.gl()),
+            lights: self.lighting.lights,
+            materials: self.lighting.materials,
+            light_model: self.lighting.model,
+            color_material: (self.lighting.color_material_face.gl(), self.lighting.color_material_mode.gl()),
         }
     }
 }

@@ -9,13 +9,13 @@ use glray_gl::{
 };
 
 use crate::args;
-use crate::context::{Context, Out};
 use crate::error::{GlError, GlResult};
-use crate::immediate::TEXCOORD_UNITS;
+use crate::fixed::immediate::TEXCOORD_UNITS;
+use crate::fixed::{Context, Out};
 use crate::ops::{Attr, AttrForm, Op};
 use crate::primitive::QuadSplit;
-use glray_scene::draw_lighting::{color_materials, Lighting};
-use glray_scene::lighting::{eye_normal, light_face, ColorMaterial};
+use glray_scene::draw_lighting::color_materials;
+use glray_scene::lighting::{eye_normal, light_face};
 
 /// How many vertices of a glBegin of separate primitives are drawn at once (a multiple of 1,
 /// 2, 3 and 4, so that no primitive is cut; 3 MB of vertices).
@@ -209,17 +209,6 @@ impl Context {
         n
     }
 
-    /// The lighting state of the moment, as a frame keeps it.
-    pub(crate) fn lighting_state(&self) -> Lighting {
-        let s = &self.s;
-        Lighting::new(
-            s.lights.iter().filter(|l| l.enabled).copied().collect(),
-            s.model,
-            s.materials,
-            s.color_material.then_some(ColorMaterial { face: s.color_material_face, mode: s.color_material_mode }),
-        )
-    }
-
     /// The fixed-function vertex stage: eye position, lighting of both faces, texture
     /// coordinates (texgen, texture matrix).
     pub(crate) fn vertex_stage(&mut self, object: DVec4) -> Out {
@@ -229,31 +218,29 @@ impl Context {
         // texture coordinates, was a 320-byte copy per vertex).
         let cur = &self.imm.current;
         let (cur_normal, cur_color, cur_tex) = (cur.normal, cur.color, cur.texcoords[0]);
-        let s = &self.s;
         let mut normal = DVec3::Z;
-        let (colors, secondary) = if s.lighting {
+        let (colors, secondary) = if self.lighting.lighting {
             let nm = self.normal_matrix(&mv);
-            let s = &self.s;
-            normal = eye_normal(&nm, cur_normal, s.normalize, s.rescale_normal);
-            // (Not `lighting_state()`: that copies the lights, at every vertex.)
-            let color_material =
-                s.color_material.then_some(ColorMaterial { face: s.color_material_face, mode: s.color_material_mode });
-            let mats = color_materials(&s.materials, color_material, cur_color);
-            let s = &self.s;
+            normal = eye_normal(&nm, cur_normal, self.lighting.normalize, self.lighting.rescale_normal);
+            // (Not `LightingState::lighting()`: that copies the lights, at every vertex.)
+            let color_material = self.lighting.color_material();
+            let mats = color_materials(&self.lighting.materials, color_material, cur_color);
             let p = eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 };
-            let (f0, f1) = light_face(p, normal, &mats, &s.lights, &[], &s.model, 0);
-            let (b0, b1) =
-                if s.model.two_side { light_face(p, normal, &mats, &s.lights, &[], &s.model, 1) } else { (f0, f1) };
+            let (f0, f1) = light_face(p, normal, &mats, &self.lighting.lights, &[], &self.lighting.model, 0);
+            let (b0, b1) = if self.lighting.model.two_side {
+                light_face(p, normal, &mats, &self.lighting.lights, &[], &self.lighting.model, 1)
+            } else {
+                (f0, f1)
+            };
             ([f0, b0], [f1, b1])
         } else {
             let c = cur_color.clamp(DVec4::ZERO, DVec4::ONE);
             ([c, c], [DVec4::ZERO; 2])
         };
-        let sphere_map = self.s.texgen.iter().any(|g| g.enabled && g.mode == GL_SPHERE_MAP);
+        let sphere_map = self.texturing.texgen.iter().any(|g| g.enabled && g.mode == GL_SPHERE_MAP);
         let sphere_nm = if sphere_map { self.normal_matrix(&mv) } else { DMat3::IDENTITY };
-        let s = &self.s;
         let mut tex = cur_tex;
-        for (k, g) in s.texgen.iter().enumerate() {
+        for (k, g) in self.texturing.texgen.iter().enumerate() {
             if g.enabled {
                 tex[k] = match g.mode {
                     GL_OBJECT_LINEAR => g.object_plane.dot(object),
@@ -262,7 +249,8 @@ impl Context {
                         // The eye normal as lighting takes it: GL normalizes it only when
                         // asked to (GL_NORMALIZE, GL_RESCALE_NORMAL), and a normal shorter than
                         // 1 reflects less (xscreensaver's blocktube gives 0.7).
-                        let n = eye_normal(&sphere_nm, cur_normal, s.normalize, s.rescale_normal);
+                        let n =
+                            eye_normal(&sphere_nm, cur_normal, self.lighting.normalize, self.lighting.rescale_normal);
                         let u = (eye.truncate() / if eye.w != 0.0 { eye.w } else { 1.0 }).normalize_or_zero();
                         let r = u - 2.0 * n.dot(u) * n;
                         let m = 2.0 * (r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0)).sqrt();

@@ -26,20 +26,20 @@ use std::sync::Arc;
 
 use glam::{DVec3, DVec4, Vec3, Vec4};
 
-use crate::arrays::BufferDraw;
-use crate::context::Context;
-use crate::mesh_builder::{MeshBuilder, Run};
+use crate::fixed::arrays::BufferDraw;
+use crate::fixed::mesh_builder::{MeshBuilder, Run};
+use crate::fixed::vertex::Given;
+use crate::fixed::Context;
 use crate::primitive::QuadSplit;
-use crate::vertex::Given;
 use glray_core::hash::content_hash;
 use glray_scene::mesh::{Attribute, Mesh};
 
 /// How many vertices a run reaches before it is taken from the vertex stage and kept as a mesh
 /// (as many as a client-array draw needs to be kept).
-pub(crate) const MESH_FROM_VERTICES: usize = crate::client_draws::KEEP_FROM_ELEMENTS as usize;
+pub(crate) const MESH_FROM_VERTICES: usize = crate::fixed::arrays::KEEP_FROM_ELEMENTS as usize;
 
 // A run is taken before the vertex stage draws any of it (it draws a long one in chunks).
-const _: () = assert!(MESH_FROM_VERTICES <= crate::vertex::IMMEDIATE_CHUNK);
+const _: () = assert!(MESH_FROM_VERTICES <= crate::fixed::vertex::IMMEDIATE_CHUNK);
 
 /// What a vertex of a watched run was given: its position and the current values it took.
 #[derive(Clone, Copy)]
@@ -260,3 +260,115 @@ fn attribute_words<T: bytemuck::Pod>(words: &mut Vec<i64>, a: &Attribute<T>) {
 
 // Positions and attributes are hashed as their bytes.
 const _: () = assert!(std::mem::size_of::<Vec3>() == 12 && std::mem::size_of::<Vec4>() == 16);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fixed::tests::*;
+
+    use glray_gl::*;
+
+    #[test]
+    fn a_long_glbegin_is_drawn_whole_in_the_order_given_and_its_vertices_are_not_all_held() {
+        // 39,999 vertices of separate triangles (more than three chunks) and of a strip: every
+        // triangle, in order; for the first, fewer vertices held at once than given. Texture
+        // coordinates generated: a state no instance can be drawn with, so the vertex stage
+        // keeps the run (below, without it, the run is taken as a mesh).
+        let mut c = context();
+        call(&mut c, "glEnable", &[i(GL_TEXTURE_GEN_S as i64)]); // GL_TEXTURE_GEN_S
+        let n = 39_999;
+        let give = |c: &mut Context, mode: i64| {
+            call(c, "glBegin", &[i(mode)]);
+            for k in 0..n {
+                call(c, "glColor3f", &[f(k as f64 / n as f64), f(0.0), f(0.0)]);
+                let (x, y) = ((k % 3 == 1) as i32 as f64 * 0.5, (k % 3 == 2) as i32 as f64 * 0.5);
+                call(c, "glVertex2f", &[f(x - 0.5 + k as f64 / n as f64 * 0.1), f(y - 0.5)]);
+            }
+            call(c, "glEnd", &[]);
+        };
+        give(&mut c, 4); // GL_TRIANGLES
+        assert!(c.open.capacity() < n, "{}", c.open.capacity());
+        let frame = c.take_frame();
+        assert_eq!(frame.triangles.len(), n / 3);
+        for (t, tri) in frame.triangles.iter().enumerate() {
+            let first = (3 * t) as f32 / n as f32;
+            let reds: Vec<f32> = tri.colors.iter().map(|c| c.x).collect();
+            assert!(reds.iter().all(|r| (r - first).abs() < 3.0 / n as f32), "triangle {t}: {reds:?}");
+        }
+        assert!(frame.triangles.windows(2).all(|w| w[0].sequence <= w[1].sequence), "in drawing order");
+        give(&mut c, 5); // GL_TRIANGLE_STRIP
+        assert_eq!(c.take_frame().triangles.len(), n - 2);
+        // Without generated coordinates the run is taken from the vertex stage as one mesh,
+        // drawn as an instance: the same triangles, in order, with the same colours.
+        call(&mut c, "glDisable", &[i(0x0C60)]);
+        give(&mut c, 4);
+        let frame = c.take_frame();
+        assert_eq!((frame.triangles.len(), frame.instances.len()), (0, 1));
+        let all = frame.all_triangles();
+        assert_eq!(all.len(), n / 3);
+        for (t, tri) in all.iter().enumerate() {
+            let first = (3 * t) as f32 / n as f32;
+            let reds: Vec<f32> = tri.colors.iter().map(|c| c.x).collect();
+            assert!(reds.iter().all(|r| (r - first).abs() < 3.0 / n as f32), "instanced triangle {t}: {reds:?}");
+        }
+        assert_eq!(c.errors.take(), 0);
+    }
+    #[test]
+    fn a_glbegin_is_taken_as_a_mesh_from_its_4096th_vertex_and_kept_while_it_gives_the_same() {
+        use crate::fixed::immediate_meshes::MESH_FROM_VERTICES;
+        let mut c = context();
+        // Vertex k of separate triangles, none of them degenerate.
+        let corner = |c: &mut Context, k: usize| {
+            let (x, y) = ((k % 3 == 1) as i32 as f64 * 0.5, (k % 3 == 2) as i32 as f64 * 0.5);
+            call(c, "glVertex2f", &[f(x - 0.5 + k as f64 * 1e-5), f(y - 0.5)]);
+        };
+        let give = |c: &mut Context, vertices: usize, mode: i64, red: f64| {
+            call(c, "glBegin", &[i(mode)]);
+            for k in 0..vertices {
+                call(c, "glColor3f", &[f(red * (k % 2) as f64), f(0.0), f(0.0)]);
+                corner(c, k);
+            }
+            call(c, "glEnd", &[]);
+        };
+        let n = MESH_FROM_VERTICES - MESH_FROM_VERTICES % 3;
+        // One vertex short: the vertex stage's. Lines: never a mesh.
+        give(&mut c, n - 3, 4, 1.0);
+        let frame = c.take_frame();
+        assert_eq!((frame.instances.len(), frame.triangles.len()), (0, (n - 3) / 3));
+        give(&mut c, MESH_FROM_VERTICES + 10, 1, 1.0);
+        assert_eq!(c.take_frame().instances.len(), 0, "lines");
+        // Long enough: one mesh, the same one the next frame while the calls give the same.
+        give(&mut c, n + 3, 4, 1.0);
+        let first = c.take_frame();
+        assert_eq!((first.instances.len(), first.triangles.len()), (1, 0));
+        assert_eq!(first.instances[0].mesh.triangles.len(), n / 3 + 1);
+        give(&mut c, n + 3, 4, 1.0);
+        let second = c.take_frame();
+        assert!(Arc::ptr_eq(&first.instances[0].mesh, &second.instances[0].mesh), "kept by what it gives");
+        give(&mut c, n + 3, 4, 0.5);
+        let third = c.take_frame();
+        assert!(!Arc::ptr_eq(&second.instances[0].mesh, &third.instances[0].mesh), "new colours, a new mesh");
+        // A colour given once is the instance's, not the mesh's: the same mesh.
+        for red in [1.0, 0.5] {
+            call(&mut c, "glColor3f", &[f(red), f(0.0), f(0.0)]);
+            call(&mut c, "glBegin", &[i(4)]);
+            (0..n + 3).for_each(|k| corner(&mut c, k));
+            call(&mut c, "glEnd", &[]);
+        }
+        let frame = c.take_frame();
+        assert!(Arc::ptr_eq(&frame.instances[0].mesh, &frame.instances[1].mesh));
+        assert_eq!((frame.instances[0].color.x, frame.instances[1].color.x), (1.0, 0.5));
+        // A glMaterial inside after the run was taken: back to the vertex stage, whole.
+        call(&mut c, "glBegin", &[i(4)]);
+        for k in 0..n + 3 {
+            if k == n {
+                call(&mut c, "glMaterialf", &[i(0x0408), i(0x1601), f(10.0)]);
+            }
+            corner(&mut c, k);
+        }
+        call(&mut c, "glEnd", &[]);
+        let frame = c.take_frame();
+        assert_eq!((frame.instances.len(), frame.triangles.len()), (0, n / 3 + 1));
+        assert_eq!(c.errors.take(), 0);
+    }
+}

@@ -6,7 +6,11 @@
 use glam::{DMat4, DVec3, DVec4};
 use glray_gl::{GL_COLOR, GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE};
 
+use glray_core::trace::Value;
+
+use crate::args;
 use crate::error::{GlError, GlResult};
+use crate::ops::Op;
 
 /// Mesa's stack depths (MAX_MODELVIEW_STACK_DEPTH and friends), as glGet reports them.
 pub const MODELVIEW_DEPTH: usize = 32;
@@ -250,6 +254,59 @@ impl Matrices {
         }
         .to_cols_array()
     }
+}
+
+impl Matrices {
+    /// Follows a matrix command (`Concern::Matrices`).
+    pub(crate) fn command(&mut self, op: Op, ty: u32, a: &[Value]) -> GlResult {
+        match op {
+            Op::MatrixMode => self.matrix_mode(args::uint(a, 0))?,
+            Op::LoadIdentity => self.load_identity(),
+            Op::LoadMatrix => {
+                if let Some(m) = matrix_arg(a, ty) {
+                    self.load(m)
+                }
+            }
+            Op::MultMatrix => {
+                if let Some(m) = matrix_arg(a, ty) {
+                    self.mult(m)
+                }
+            }
+            Op::LoadTransposeMatrix => {
+                if let Some(m) = matrix_arg(a, ty) {
+                    self.load_transpose(m)
+                }
+            }
+            Op::MultTransposeMatrix => {
+                if let Some(m) = matrix_arg(a, ty) {
+                    self.mult_transpose(m)
+                }
+            }
+            Op::Rotate => self.rotate(args::float(a, 0), args::float(a, 1), args::float(a, 2), args::float(a, 3)),
+            Op::Translate => self.translate(args::float(a, 0), args::float(a, 1), args::float(a, 2)),
+            Op::Scale => self.scale(args::float(a, 0), args::float(a, 1), args::float(a, 2)),
+            Op::Frustum | Op::Ortho => {
+                let v: [f64; 6] = std::array::from_fn(|i| args::float(a, i));
+                if op == Op::Frustum {
+                    self.frustum(v[0], v[1], v[2], v[3], v[4], v[5])?
+                } else {
+                    self.ortho(v[0], v[1], v[2], v[3], v[4], v[5])?
+                }
+            }
+            Op::PushMatrix => self.push()?,
+            Op::PopMatrix => self.pop()?,
+            Op::ActiveTexture => self.active_texture(args::uint(a, 0))?,
+            _ => unreachable!("{op:?} is not a matrix command"),
+        }
+        Ok(())
+    }
+}
+
+/// A matrix argument of 16 values of type `ty` (column-major, as GL takes it).
+fn matrix_arg(a: &[Value], ty: u32) -> Option<DMat4> {
+    let v = args::floats(a, 0, ty, 16);
+    let m: [f64; 16] = v.try_into().ok()?;
+    Some(from_gl(&m))
 }
 
 #[cfg(test)]

@@ -7,7 +7,13 @@
 //! Integer forms of glColor/glNormal are normalised the way Mesa does (`convert`); integer
 //! glVertex/glTexCoord values are taken as they are.
 
+use crate::args;
+use crate::fixed::Context;
+use crate::fixed::Out;
+use crate::ops::Op;
+use crate::primitive::QuadSplit;
 use glam::{DVec3, DVec4};
+use glray_core::trace::Value;
 use glray_gl::GL_POLYGON;
 
 use crate::error::{GlError, GlResult};
@@ -123,6 +129,41 @@ impl Immediate {
 
     pub fn edge_flag(&mut self, edge: bool) {
         self.current.edge = edge;
+    }
+}
+
+impl Context {
+    /// Follows glBegin, glEnd, glRect or a per-vertex attribute command (`Concern::Immediate`).
+    pub(crate) fn immediate_command(&mut self, op: Op, ty: u32, a: &[Value]) -> GlResult {
+        match op {
+            Op::Attr(form) => self.attribute(form, a)?,
+            Op::Begin => {
+                let mode = args::uint(a, 0);
+                self.imm.begin(mode)?;
+                self.record_begin(mode);
+            }
+            Op::End => {
+                let mode = self.imm.end()?;
+                if !self.end_recording(mode) {
+                    self.draw_open(mode);
+                }
+            }
+            Op::Rect => {
+                let v = if a.len() == 2 {
+                    let p = args::floats(a, 0, ty, 2);
+                    let q = args::floats(a, 1, ty, 2);
+                    [p.first(), p.get(1), q.first(), q.get(1)].map(|x| x.copied().unwrap_or(0.0))
+                } else {
+                    [0, 1, 2, 3].map(|i| args::float(a, i))
+                };
+                let corners = [(v[0], v[1]), (v[2], v[1]), (v[2], v[3]), (v[0], v[3])];
+                let verts: Vec<Out> =
+                    corners.iter().map(|&(x, y)| self.vertex_stage(DVec4::new(x, y, 0.0, 1.0))).collect();
+                self.draw(GL_POLYGON, &verts, QuadSplit::Direct);
+            }
+            _ => unreachable!("{op:?} is not an immediate-mode command"),
+        }
+        Ok(())
     }
 }
 

@@ -7,14 +7,13 @@ use std::sync::Arc;
 
 use glam::{DMat4, DVec2, DVec4, Vec2, Vec3, Vec4};
 
-use crate::context::{vec4, Context, Out};
-use crate::mesh_builder::Compiled;
+use crate::fixed::mesh_builder::Compiled;
+use crate::fixed::{vec4, Context, Out};
 use crate::primitive::{assemble, QuadSplit};
 use glray_scene::camera::Viewport;
 use glray_scene::facing::{culled, facing_flip, window_facing};
 use glray_scene::frame::{Solid, View};
 use glray_scene::instance::Instance;
-use glray_scene::lighting::ColorMaterial;
 use glray_scene::surface::{Coverage, Surface, Texturing};
 use glray_scene::triangle::{Triangle, NO_LIGHTING};
 
@@ -58,28 +57,27 @@ impl Context {
     /// again when nothing changed); `polygons`: the draw fills polygons (glPolygonOffset
     /// applies to them only).
     pub(crate) fn surface(&mut self, polygons: bool) -> u32 {
-        let s = &self.s;
         // GL_TEXTURE_2D, enabled, takes precedence over GL_TEXTURE_1D.
-        let bound = if s.texture_2d { Some(s.bound_texture) } else { s.texture_1d.then_some(s.bound_texture_1d) };
+        let bound = self.texturing.enabled_texture();
         let texturing = bound.and_then(|name| {
             self.shared.textures.get(&name).filter(|t| t.complete()).map(|t| Texturing {
                 texture: t.clone(),
-                env_mode: s.env_mode,
-                env_color: s.env_color,
+                env_mode: self.texturing.env_mode,
+                env_color: self.texturing.env_color,
             })
         });
         let surface = Surface {
             texturing,
-            fog: s.fog_enabled.then_some(s.fog),
-            depth_test: s.depth_test,
-            depth_func: s.depth_func,
-            depth_mask: s.depth_mask,
-            blend: s.blend.then_some(s.blend_func),
-            logic_op: s.logic_op_enabled.then_some(s.logic_op),
-            alpha_test: s.alpha_test.then_some(s.alpha_func),
-            clip_planes: s.clip_planes.iter().filter(|p| p.0).map(|p| p.1).collect(),
-            polygon_offset: (polygons && s.polygon_offset_fill).then_some(s.polygon_offset),
-            color_mask: s.color_mask,
+            fog: self.raster.fog_enabled.then_some(self.raster.fog),
+            depth_test: self.raster.depth_test,
+            depth_func: self.raster.depth_func,
+            depth_mask: self.raster.depth_mask,
+            blend: self.raster.blend.then_some(self.raster.blend_func),
+            logic_op: self.raster.logic_op_enabled.then_some(self.raster.logic_op),
+            alpha_test: self.raster.alpha_test.then_some(self.raster.alpha_func),
+            clip_planes: self.raster.clip_planes.iter().filter(|p| p.0).map(|p| p.1).collect(),
+            polygon_offset: (polygons && self.raster.polygon_offset_fill).then_some(self.raster.polygon_offset),
+            color_mask: self.raster.color_mask,
             coverage: None,
         };
         self.add_surface(surface)
@@ -142,11 +140,11 @@ impl Context {
     /// surface, lighting and place in drawing order.
     fn draw_setup(&mut self, polygons: bool) -> Setup {
         let projection = *self.matrices.projection.top();
-        let viewport = self.s.viewport;
+        let viewport = self.raster.viewport;
         if self.frame.projection.is_none() {
             self.frame.projection = Some(projection);
             self.frame.viewport = Some(viewport);
-            self.frame.depth_range = self.s.depth_range;
+            self.frame.depth_range = self.raster.depth_range;
         }
         let view = View { projection, viewport };
         let camera = match self.frame.cameras.iter().rposition(|c| *c == view) {
@@ -157,21 +155,18 @@ impl Context {
             }
         };
         let surface = self.surface(polygons);
-        let lighting = if self.s.lighting {
+        let lighting = if self.lighting.lighting {
             // The last draw's lighting again when made of the same state (most draws): compared
             // before a new one is made, whose lights are copied and prepared (~1,400
             // instructions, most of a small draw's set-up).
-            let s = &self.s;
-            let color_material =
-                s.color_material.then_some(ColorMaterial { face: s.color_material_face, mode: s.color_material_mode });
-            let enabled = s.lights.iter().filter(|l| l.enabled);
-            let same = self
-                .frame
-                .lightings
-                .last()
-                .is_some_and(|l| l.is_made_of(enabled, &s.model, &s.materials, color_material));
+            let color_material = self.lighting.color_material();
+            let enabled = self.lighting.lights.iter().filter(|l| l.enabled);
+            let same =
+                self.frame.lightings.last().is_some_and(|l| {
+                    l.is_made_of(enabled, &self.lighting.model, &self.lighting.materials, color_material)
+                });
             if !same {
-                let l = self.lighting_state();
+                let l = self.lighting.lighting();
                 self.frame.lightings.push(l);
             }
             (self.frame.lightings.len() - 1) as u32
@@ -189,7 +184,7 @@ impl Context {
     pub(crate) fn clipped(&self, clip: DVec4, eye: DVec4) -> bool {
         let c = clip;
         [c.x, -c.x, c.y, -c.y, c.z, -c.z].iter().any(|&d| d > c.w)
-            || self.s.clip_planes.iter().any(|(on, plane)| *on && plane.dot(eye) < 0.0)
+            || self.raster.clip_planes.iter().any(|(on, plane)| *on && plane.dot(eye) < 0.0)
     }
 
     /// Whether a list's mesh can be drawn now as an instance: triangles filled, texture
@@ -203,8 +198,8 @@ impl Context {
     pub(crate) fn instances_now(&self) -> bool {
         let mv = self.matrices.modelview.top();
         !self.programmable
-            && self.s.polygon_mode == [GL_FILL, GL_FILL]
-            && !self.s.texgen.iter().any(|g| g.enabled)
+            && self.raster.polygon_mode == [GL_FILL, GL_FILL]
+            && !self.texturing.texgen.iter().any(|g| g.enabled)
             && mv.determinant().is_normal()
             && mv.row(3) == DVec4::W
     }
@@ -220,15 +215,14 @@ impl Context {
         let setup = self.draw_setup(true);
         let modelview = *self.matrices.modelview.top();
         let normal_matrix = self.normal_matrix(&modelview);
-        let s = &self.s;
         let cur = &self.imm.current;
         self.frame.instances.push(Instance {
             mesh: mesh.clone(),
             modelview,
             object_to_clip: setup.projection * modelview,
             normal_matrix,
-            normalize: s.normalize,
-            rescale_normal: s.rescale_normal,
+            normalize: self.lighting.normalize,
+            rescale_normal: self.lighting.rescale_normal,
             texture_matrix: *self.matrices.texture[0].top(),
             normal: cur.normal,
             color: cur.color,
@@ -237,9 +231,9 @@ impl Context {
             camera: setup.camera,
             sequence: setup.sequence,
             lighting: setup.lighting,
-            flat: s.flat,
-            front_ccw: s.front_ccw,
-            cull: s.cull.then_some(s.cull_face),
+            flat: self.lighting.flat,
+            front_ccw: self.raster.front_ccw,
+            cull: self.raster.culling(),
             mirrored: facing_flip(&modelview, &setup.projection),
         });
     }
@@ -257,7 +251,7 @@ impl Context {
         }
         // Polygons filled on both faces (a face drawn as lines or points is not offset: the
         // rare mixed case is taken as lines).
-        let polygons = asm.lines.is_empty() && asm.points.is_empty() && self.s.polygon_mode == [GL_FILL; 2];
+        let polygons = asm.lines.is_empty() && asm.points.is_empty() && self.raster.polygon_mode == [GL_FILL; 2];
         let Setup { projection, viewport, camera, surface, lighting, sequence } = self.draw_setup(polygons);
         let clip: Vec<DVec4> = verts.iter().map(|v| projection * v.eye).collect();
         // Mesa's clipping path cuts quads along 1-3 too: a glBegin/glEnd or glDrawArrays of
@@ -270,7 +264,7 @@ impl Context {
         } else {
             asm
         };
-        let flat = self.s.flat;
+        let flat = self.lighting.flat;
         let color = |v: &Out, face: usize| vec4(v.colors[face]);
         let secondary = |v: &Out, face: usize| v.secondary[face].truncate().as_vec3();
         let tex = |v: &Out| {
@@ -288,7 +282,7 @@ impl Context {
         };
         // Edges two triangles of one polygon share: the diagonals of the split.
         let mut diagonals = std::collections::HashSet::new();
-        if self.s.polygon_mode.contains(&GL_LINE) && matches!(mode, GL_QUADS | GL_QUAD_STRIP | GL_POLYGON) {
+        if self.raster.polygon_mode.contains(&GL_LINE) && matches!(mode, GL_QUADS | GL_QUAD_STRIP | GL_POLYGON) {
             let mut seen = std::collections::HashSet::new();
             for (index, (t, _)) in asm.triangles.iter().enumerate() {
                 let polygon = polygon_of(mode, index);
@@ -301,12 +295,12 @@ impl Context {
             }
         }
         for (index, &(t, provoking)) in asm.triangles.iter().enumerate() {
-            let Some(front) = window_facing(t.map(|i| clip[i as usize]), self.s.front_ccw) else { continue };
-            if culled(self.s.cull.then_some(self.s.cull_face), front) {
+            let Some(front) = window_facing(t.map(|i| clip[i as usize]), self.raster.front_ccw) else { continue };
+            if culled(self.raster.culling(), front) {
                 continue;
             }
             let face = if front { 0 } else { 1 };
-            match self.s.polygon_mode[face] {
+            match self.raster.polygon_mode[face] {
                 GL_LINE => {
                     // The edges of the polygon the program drew: a quad or polygon split into
                     // triangles keeps its diagonals hidden (GL's edge flags for the split).
@@ -360,18 +354,18 @@ impl Context {
         let mut solids = Vec::new();
         // Antialiased lines and points: quads half a pixel wider all round, their own surface
         // saying how much of each pixel they cover.
-        let (line_smooth, point_smooth) = (self.s.line_smooth, self.s.point_smooth);
+        let (line_smooth, point_smooth) = (self.raster.line_smooth, self.raster.point_smooth);
         let line_surface = if line_smooth && !lines.is_empty() {
-            self.covered_surface(surface, Coverage::Line(self.s.line_width as f32))
+            self.covered_surface(surface, Coverage::Line(self.raster.line_width as f32))
         } else {
             surface
         };
         let point_surface = if point_smooth && !points.is_empty() {
-            self.covered_surface(surface, Coverage::Point(self.s.point_size as f32))
+            self.covered_surface(surface, Coverage::Point(self.raster.point_size as f32))
         } else {
             surface
         };
-        let line_half = self.s.line_width / 2.0 + if line_smooth { 0.5 } else { 0.0 };
+        let line_half = self.raster.line_width / 2.0 + if line_smooth { 0.5 } else { 0.0 };
         for &([i, j], provoking) in &lines {
             let (ca, cb) = (clip[i as usize], clip[j as usize]);
             // The part in front of the near plane, as GL clips it: a floor grid's lines that
@@ -436,7 +430,8 @@ impl Context {
         // sizes) or corner (even ones), so that its edges fall between pixel centres, never on
         // one; an antialiased point is a disc of its own size, half a pixel wider all round for
         // its coverage.
-        let point_size = if point_smooth { self.s.point_size } else { (self.s.point_size - 0.5).ceil().max(1.0) };
+        let point_size =
+            if point_smooth { self.raster.point_size } else { (self.raster.point_size - 0.5).ceil().max(1.0) };
         let point_half = point_size / 2.0 + if point_smooth { 0.5 } else { 0.0 };
         let snap = |at: f64| {
             if point_smooth {
@@ -477,5 +472,100 @@ impl Context {
         }
         self.frame.triangles.extend(tris);
         self.frame.solids.extend(solids);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fixed::tests::*;
+    use glam::{Vec3, Vec4};
+
+    use glray_gl::*;
+
+    #[test]
+    fn culling_facing_and_flat_shading() {
+        let mut c = context();
+        call(&mut c, "glEnable", &[i(GL_CULL_FACE as i64)]);
+        triangle(&mut c, true);
+        triangle(&mut c, false);
+        assert_eq!(c.frame().triangles.len(), 1, "the clockwise (back) one is culled");
+        call(&mut c, "glFrontFace", &[i(GL_CW as i64)]);
+        triangle(&mut c, false);
+        assert_eq!(c.frame().triangles.len(), 2, "with GL_CW it is the front one");
+        // Flat shading takes the provoking (last) vertex's colour.
+        call(&mut c, "glShadeModel", &[i(GL_FLAT as i64)]);
+        call(&mut c, "glBegin", &[i(4)]);
+        for (k, (x, y)) in [(0.0, 0.0), (0.0, 1.0), (1.0, 0.0)].into_iter().enumerate() {
+            call(&mut c, "glColor3f", &[f(k as f64 / 2.0), f(0.0), f(0.0)]);
+            call(&mut c, "glVertex2f", &[f(x), f(y)]);
+        }
+        call(&mut c, "glEnd", &[]);
+        let t = c.frame().triangles.last().unwrap();
+        assert!(t.colors.iter().all(|col| col.x == 1.0), "{:?}", t.colors);
+    }
+    #[test]
+    fn polygon_mode_line_keeps_quad_diagonals_hidden() {
+        let mut c = context();
+        call(&mut c, "glPolygonMode", &[i(GL_FRONT_AND_BACK as i64), i(GL_LINE as i64)]);
+        call(&mut c, "glBegin", &[i(7)]); // GL_QUADS
+        for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            call(&mut c, "glVertex2f", &[f(x), f(y)]);
+        }
+        call(&mut c, "glEnd", &[]);
+        assert_eq!(c.frame().triangles.len(), 8, "four edges, two triangles each");
+    }
+    #[test]
+    fn lines_and_points_are_also_solids_as_thick_as_on_the_screen() {
+        // 100 pixels over 2 eye units: a pixel is 0.02.
+        let mut c = context();
+        call(&mut c, "glLineWidth", &[f(4.0)]);
+        call(&mut c, "glBegin", &[i(1)]); // GL_LINES
+        call(&mut c, "glVertex2f", &[f(-0.5), f(0.0)]);
+        call(&mut c, "glVertex2f", &[f(0.5), f(0.0)]);
+        call(&mut c, "glEnd", &[]);
+        call(&mut c, "glPointSize", &[f(6.0)]);
+        call(&mut c, "glBegin", &[i(0)]); // GL_POINTS
+        call(&mut c, "glVertex2f", &[f(0.25), f(0.5)]);
+        call(&mut c, "glEnd", &[]);
+        let s = &c.frame().solids;
+        assert_eq!(s.len(), 2);
+        assert_eq!((s[0].a, s[0].b), (Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0)));
+        assert!((s[0].radius - 0.04).abs() < 1e-6, "two pixels: {}", s[0].radius);
+        assert_eq!((s[1].a, s[1].b), (Vec3::new(0.25, 0.5, 0.0), Vec3::new(0.25, 0.5, 0.0)));
+        assert!((s[1].radius - 0.06).abs() < 1e-6, "three pixels: {}", s[1].radius);
+        assert_ne!(s[0].sequence, s[1].sequence);
+    }
+    #[test]
+    fn a_line_reaching_behind_the_viewer_keeps_its_part_in_front() {
+        // A perspective camera (near plane at 1); a line from 4 in front to 4 behind the eye,
+        // red to blue. GL clips it at the near plane; glray had dropped it whole.
+        let mut c = context();
+        call(&mut c, "glMatrixMode", &[i(0x1701)]);
+        call(&mut c, "glLoadIdentity", &[]);
+        call(&mut c, "glFrustum", &[f(-1.0), f(1.0), f(-1.0), f(1.0), f(1.0), f(100.0)]);
+        call(&mut c, "glMatrixMode", &[i(0x1700)]);
+        call(&mut c, "glBegin", &[i(1)]); // GL_LINES
+        call(&mut c, "glColor3f", &[f(1.0), f(0.0), f(0.0)]);
+        call(&mut c, "glVertex3f", &[f(0.0), f(-0.5), f(-4.0)]);
+        call(&mut c, "glColor3f", &[f(0.0), f(0.0), f(1.0)]);
+        call(&mut c, "glVertex3f", &[f(0.0), f(-0.5), f(4.0)]);
+        call(&mut c, "glEnd", &[]);
+        let (t, s) = (&c.frame().triangles, &c.frame().solids);
+        assert_eq!((t.len(), s.len()), (2, 1));
+        // The part from z = -4 to the near plane, z = -1: three eighths of the way.
+        assert_eq!(s[0].a, Vec3::new(0.0, -0.5, -4.0));
+        assert!((s[0].b - Vec3::new(0.0, -0.5, -1.0)).length() < 1e-5, "{}", s[0].b);
+        for p in t.iter().flat_map(|t| t.positions) {
+            assert!(p.z <= -1.0 + 1e-5 && p.z >= -4.0 - 1e-4, "{p}");
+        }
+        let far_end = t.iter().flat_map(|t| t.colors).fold(Vec4::ZERO, |m, c| m.max(c));
+        assert!((far_end.z - 0.375).abs() < 1e-5 && far_end.x == 1.0, "{far_end}");
+        // All of it behind: nothing.
+        call(&mut c, "glBegin", &[i(1)]);
+        call(&mut c, "glVertex3f", &[f(0.0), f(0.0), f(0.5)]);
+        call(&mut c, "glVertex3f", &[f(0.0), f(0.0), f(4.0)]);
+        call(&mut c, "glEnd", &[]);
+        assert_eq!(c.frame().triangles.len(), 2);
     }
 }
