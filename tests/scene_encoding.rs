@@ -8,7 +8,7 @@ use std::path::Path;
 use glray_capture::events::Capture;
 use glray_core::trace::Reader;
 use glray_render::{Effects, Options, Renderer};
-use glray_scene::encode::{decode, encode, DecodeError, Shared, MAGIC, VERSION};
+use glray_scene::encode::{decode, encode, DecodeError, ObjectStore, MAGIC, VERSION};
 use glray_scene::frame::Frame;
 
 /// Every frame of a trace, as capture hands them out.
@@ -42,7 +42,7 @@ fn every_frame_of_the_trace_suite_round_trips_to_the_same_frame_and_image() {
     let mut checked = 0;
     let mut instanced = 0;
     for trace in traces() {
-        let (mut sender, mut receiver) = (Shared::default(), Shared::default());
+        let (mut sender, mut receiver) = (ObjectStore::default(), ObjectStore::default());
         let (mut here, mut there) = (Renderer::new(options), Renderer::new(options));
         for (n, frame) in frames_of(&trace).into_iter().enumerate() {
             // The meshes this message must carry: those not sent with an earlier frame.
@@ -85,10 +85,10 @@ fn every_frame_of_the_trace_suite_round_trips_to_the_same_frame_and_image() {
 fn damaged_and_foreign_messages_are_refused_with_the_reason() {
     let trace = traces().into_iter().find(|t| t.ends_with("osmesa-lists.trace")).unwrap();
     let frame = frames_of(&trace).into_iter().find(|f| !f.instances.is_empty()).unwrap();
-    let bytes = encode(&frame, &mut Shared::default());
+    let bytes = encode(&frame, &mut ObjectStore::default());
     assert_eq!(&bytes[..8], MAGIC);
 
-    let receiver = || Shared::default();
+    let receiver = || ObjectStore::default();
     assert_eq!(decode(b"not a scene at all", &mut receiver()), Err(DecodeError::NotAScene));
     let mut other = bytes.clone();
     other[8..10].copy_from_slice(&(VERSION + 1).to_le_bytes());
@@ -101,7 +101,7 @@ fn damaged_and_foreign_messages_are_refused_with_the_reason() {
     assert!(cut.unwrap_err().to_string().contains("near byte"));
 
     // A frame whose meshes were never sent: the sender believes the receiver holds them.
-    let mut believed = Shared::default();
+    let mut believed = ObjectStore::default();
     let _ = encode(&frame, &mut believed);
     let second = encode(&frame, &mut believed);
     let missing = decode(&second, &mut receiver());

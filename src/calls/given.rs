@@ -42,7 +42,7 @@ fn form(cmd: usize) -> Option<AttrForm> {
 
 /// One attribute command made and not followed yet.
 #[derive(Clone, Copy)]
-pub struct Given {
+pub struct TypedCall {
     pub form: AttrForm,
     /// A glMultiTexCoord's unit (0 for the others).
     pub target: u32,
@@ -52,7 +52,7 @@ pub struct Given {
     pub raw: [f64; 4],
 }
 
-impl Given {
+impl TypedCall {
     pub fn components(&self) -> &[f64] {
         &self.raw[..self.form.n.min(4)]
     }
@@ -64,7 +64,7 @@ const BATCH: usize = 256;
 /// A thread's calls not followed yet.
 struct Batch {
     len: usize,
-    calls: [Option<Given>; BATCH],
+    calls: [Option<TypedCall>; BATCH],
 }
 
 impl Drop for Batch {
@@ -122,7 +122,7 @@ fn keep(form: AttrForm, target: u32, raw: [f64; 4]) -> bool {
     let full = PENDING.try_with(|p| {
         let Ok(mut b) = p.try_borrow_mut() else { return None };
         let at = b.len;
-        b.calls[at] = Some(Given { form, target, unseen, raw });
+        b.calls[at] = Some(TypedCall { form, target, unseen, raw });
         b.len += 1;
         Some(b.len == BATCH)
     });

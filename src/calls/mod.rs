@@ -10,8 +10,8 @@
 //! each frame end, every few MiB, and at exit.
 
 mod client_arrays;
+mod encoding;
 pub mod given;
-mod out;
 pub mod sizes;
 
 use glray_gl::{
@@ -23,7 +23,7 @@ use std::ffi::{c_void, CStr};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, OnceLock};
 
-use out::Out;
+use encoding::Encoding;
 
 use crate::abi::commands::{cmd, Class, COMMANDS};
 use crate::abi::real;
@@ -266,18 +266,18 @@ struct ThreadState {
     /// Whether the current context is an OSMesa one (its frames end at glFinish).
     osmesa: bool,
     /// Arguments of the last GLX/EGL MakeCurrent, to re-query the size at swaps.
-    surface: Option<(Kind, u64, u64)>,
+    surface: Option<(SurfaceApi, u64, u64)>,
 }
 
 #[derive(Clone, Copy)]
-enum Kind {
+enum SurfaceApi {
     Glx,
     Egl,
 }
 
 pub struct Recorder {
     /// Where events go: trace bytes, or straight to capture when no file is written.
-    pub e: Out,
+    pub e: Encoding,
     /// The trace file, if recording to one.
     file: Option<TraceFile>,
     /// How much of `e` capture has been given.
@@ -300,7 +300,7 @@ pub struct Recorder {
 impl Recorder {
     fn new(file: Option<TraceFile>, live: Option<crate::feed::Live>) -> Recorder {
         Recorder {
-            e: Out::new(file.is_some(), live),
+            e: Encoding::new(file.is_some(), live),
             file,
             fed: 0,
             fed_names: 0,
@@ -335,7 +335,7 @@ impl Recorder {
     /// Hands the events recorded since the last call to capture.
     fn feed_capture(&mut self) {
         let (fed, named) = (self.fed, self.fed_names);
-        if let Out::Bytes(e, Some(live)) = &mut self.e {
+        if let Encoding::Bytes(e, Some(live)) = &mut self.e {
             let bytes = &e.bytes()[fed..];
             if !bytes.is_empty() {
                 self.fed_names = crate::feed::feed(live, bytes, named);
@@ -563,11 +563,11 @@ impl Recorder {
                     self.e.no_return();
                 }
             }
-            cmd::glXMakeCurrent if ret != 0 => self.bound(Kind::Glx, args[0], args[1], args[2]),
+            cmd::glXMakeCurrent if ret != 0 => self.bound(SurfaceApi::Glx, args[0], args[1], args[2]),
             cmd::glXMakeContextCurrent | cmd::glXMakeCurrentReadSGI if ret != 0 => {
-                self.bound(Kind::Glx, args[0], args[1], args[3])
+                self.bound(SurfaceApi::Glx, args[0], args[1], args[3])
             }
-            cmd::eglMakeCurrent if ret != 0 => self.bound(Kind::Egl, args[0], args[1], args[3]),
+            cmd::eglMakeCurrent if ret != 0 => self.bound(SurfaceApi::Egl, args[0], args[1], args[3]),
             cmd::OSMesaMakeCurrent if ret != 0 => {
                 let thread = self.thread;
                 let st = self.state();
@@ -585,7 +585,7 @@ impl Recorder {
         }
     }
 
-    fn bound(&mut self, kind: Kind, dpy: u64, drawable: u64, ctx: u64) {
+    fn bound(&mut self, kind: SurfaceApi, dpy: u64, drawable: u64, ctx: u64) {
         let thread = self.thread;
         let st = self.state();
         st.osmesa = false;
@@ -625,13 +625,13 @@ pub(crate) fn bound_buffer(binding: u32) -> i32 {
     real::get_int(binding)
 }
 
-fn surface_size(kind: Kind, dpy: u64, drawable: u64) -> (u32, u32) {
+fn surface_size(kind: SurfaceApi, dpy: u64, drawable: u64) -> (u32, u32) {
     let (mut w, mut h) = (0u32, 0u32);
     // SAFETY: size queries of the drawable just made current, with out-parameters of the
     // right type (unsigned int for GLX, EGLint for EGL).
     unsafe {
         match kind {
-            Kind::Glx => {
+            SurfaceApi::Glx => {
                 real::glXQueryDrawable(
                     dpy as usize as *mut c_void,
                     drawable as _,
@@ -645,7 +645,7 @@ fn surface_size(kind: Kind, dpy: u64, drawable: u64) -> (u32, u32) {
                     (&mut h as *mut u32).cast(),
                 );
             }
-            Kind::Egl => {
+            SurfaceApi::Egl => {
                 let (mut ew, mut eh) = (0i32, 0i32);
                 let surface = drawable as usize as *mut c_void;
                 real::eglQuerySurface(dpy as usize as *mut c_void, surface, EGL_WIDTH, (&mut ew as *mut i32).cast());

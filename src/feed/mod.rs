@@ -59,7 +59,7 @@ pub struct Live {
     last: HashMap<u32, glray_render::Rendered>,
     frames: u64,
     /// GLRAY_STATS, and the time capture took since the last frame (measured only for it).
-    stats: Option<stats::Sink>,
+    stats: Option<stats::StatsSink>,
     capture_time: std::time::Duration,
     /// The threads that trace frames: glray's own, not rayon's global pool, so that a forked
     /// child (which has none of its parent's threads) can be given new ones (`forked`);
@@ -100,7 +100,7 @@ pub fn configure(config: &Config) -> Live {
         shown: Default::default(),
         fell_back: Default::default(),
         frames: 0,
-        stats: config.stats().and_then(|spec| stats::Sink::open(spec).map_err(|e| glray_core::warn!("{e}")).ok()),
+        stats: config.stats().and_then(|spec| stats::StatsSink::open(spec).map_err(|e| glray_core::warn!("{e}")).ok()),
         capture_time: std::time::Duration::ZERO,
         pool: tracer_pool(),
     };

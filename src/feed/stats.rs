@@ -6,7 +6,7 @@ use std::fs::File;
 use std::io::Write;
 use std::time::Duration;
 
-pub enum Sink {
+pub enum StatsSink {
     Stderr,
     File(File),
 }
@@ -31,18 +31,18 @@ fn mb(bytes: u64) -> f64 {
     bytes as f64 / (1 << 20) as f64
 }
 
-impl Sink {
+impl StatsSink {
     /// `stderr`, or a file to append to.
-    pub fn open(spec: &str) -> Result<Sink, String> {
+    pub fn open(spec: &str) -> Result<StatsSink, String> {
         if spec == "stderr" {
-            return Ok(Sink::Stderr);
+            return Ok(StatsSink::Stderr);
         }
         let f = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
             .open(spec)
             .map_err(|e| format!("stats: {spec}: {e}"))?;
-        Ok(Sink::File(f))
+        Ok(StatsSink::File(f))
     }
 
     pub fn write(&mut self, s: &FrameStats) {
@@ -50,7 +50,7 @@ impl Sink {
         let trace = r.trace.as_secs_f64();
         let mrays = if trace > 0.0 { r.rays as f64 / trace / 1e6 } else { 0.0 };
         let result = match self {
-            Sink::Stderr => writeln!(
+            StatsSink::Stderr => writeln!(
                 std::io::stderr(),
                 "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms{}{}, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
                  present {:.2} ms; {} triangles, {} samples per pixel{}{}",
@@ -79,7 +79,7 @@ impl Sink {
                     b => format!("; {:.1} MB kept for the next frame", mb(b)),
                 }
             ),
-            Sink::File(f) => writeln!(
+            StatsSink::File(f) => writeln!(
                 f,
                 "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
                  \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1}}}",

@@ -33,8 +33,8 @@ impl MeshBvh {
 }
 
 /// A tree for a new mesh: a gone mesh's to refit, or the one made for it (refitted or built),
-/// how it was built, its cost then once it has been refitted (`Kept::built_cost`), the shape
-/// it fits once that has been asked (`Kept::shape`), and whether it came from a gone mesh.
+/// how it was built, its cost then once it has been refitted (`KeptTree::built_cost`), the shape
+/// it fits once that has been asked (`KeptTree::shape`), and whether it came from a gone mesh.
 struct Tree {
     bvh: MeshBvh,
     quality: Quality,
@@ -46,7 +46,7 @@ struct Tree {
 /// What `Meshes::prepare` made: how many trees it built fast (`bvh_choice`), how many it
 /// refitted.
 #[derive(Clone, Copy, Default)]
-pub struct Made {
+pub struct TreesMade {
     pub fast_builds: u32,
     pub refits: u32,
 }
@@ -66,7 +66,7 @@ fn refitted(bvh: MeshBvh, mesh: &Mesh, built_cost: Option<f32>) -> Option<(MeshB
 const REFIT_LIMIT: f32 = 1.5;
 
 /// A kept mesh's BVH, how it was built, and in how many frames the mesh has been drawn.
-struct Kept {
+struct KeptTree {
     mesh: Weak<Mesh>,
     bvh: Arc<MeshBvh>,
     quality: Quality,
@@ -83,7 +83,7 @@ struct Kept {
 /// draws), kept across frames for as long as capture holds the mesh.
 #[derive(Default)]
 pub struct Meshes {
-    built: HashMap<u64, Kept>,
+    built: HashMap<u64, KeptTree>,
     /// Whether the program replaces its meshes frame after frame: the last mesh of `BIG_MESH`
     /// triangles or more that went was drawn in one frame only, and none has been drawn in two
     /// frames since (smaller meshes, a label or a cursor made anew beside a kept dataset, tell
@@ -91,14 +91,14 @@ pub struct Meshes {
     replacing: bool,
     /// The BVHs of meshes gone since the last frame was traced, until it is: a new mesh of
     /// as many triangles (the next time step of the same mesh, most often) gets one refitted.
-    gone: Vec<(u64, Kept)>,
+    gone: Vec<(u64, KeptTree)>,
 }
 
 /// Whether a mesh drawn in its second frame, whose BVH `auto` built fast, gets an SAH tree now:
 /// the program keeps it (it stopped on a time step), and every frame from now on walks the
 /// tree (with effects, a still picture's 64 passes; at 10M triangles a fast tree's AO frame is
 /// ~140 ms slower, an SAH build ~2 s once).
-fn rebuilt_for_keeps(kept: &Kept, choice: BvhBuild) -> bool {
+fn rebuilt_for_keeps(kept: &KeptTree, choice: BvhBuild) -> bool {
     choice == BvhBuild::Auto && kept.quality == Quality::Fast && kept.frames == 2
 }
 
@@ -106,8 +106,8 @@ impl Meshes {
     /// The BVH of each of the frame's instances' meshes: built (in parallel) for meshes not
     /// seen before, as `choice` says for a tree the next frame builds again when the program
     /// replaces its meshes (`replacing`); those of meshes capture no longer holds are dropped,
-    /// each handed first to a new mesh of as many triangles to refit (`Made`).
-    pub(crate) fn prepare(&mut self, frame: &Frame, choice: BvhBuild, ray_work: f64) -> (Vec<Arc<MeshBvh>>, Made) {
+    /// each handed first to a new mesh of as many triangles to refit (`TreesMade`).
+    pub(crate) fn prepare(&mut self, frame: &Frame, choice: BvhBuild, ray_work: f64) -> (Vec<Arc<MeshBvh>>, TreesMade) {
         self.prune();
         let mut new: Vec<&Arc<Mesh>> =
             frame.instances.iter().map(|i| &i.mesh).filter(|m| !self.built.contains_key(&m.id)).collect();
@@ -154,14 +154,14 @@ impl Meshes {
                 (*m, Tree { bvh: MeshBvh::build(m, quality), quality, built_cost: None, shape: None, refitted: false })
             })
             .collect();
-        let made = Made {
+        let made = TreesMade {
             fast_builds: bvhs.iter().filter(|(_, t)| t.quality == Quality::Fast && !t.refitted).count() as u32,
             refits: bvhs.iter().filter(|(_, t)| t.refitted).count() as u32,
         };
         for (m, Tree { bvh, quality, built_cost, shape, .. }) in bvhs {
             let triangles = m.triangles.len();
             let bvh = Arc::new(bvh);
-            let kept = Kept { mesh: Arc::downgrade(m), bvh, quality, triangles, frames: 0, built_cost, shape };
+            let kept = KeptTree { mesh: Arc::downgrade(m), bvh, quality, triangles, frames: 0, built_cost, shape };
             self.built.insert(m.id, kept);
         }
         let mut drawn: Vec<&Arc<Mesh>> = frame.instances.iter().map(|i| &i.mesh).collect();
@@ -195,7 +195,7 @@ impl Meshes {
         let mut ids: Vec<u64> =
             self.built.iter().filter(|(_, k)| k.mesh.strong_count() == 0).map(|(&id, _)| id).collect();
         ids.sort_unstable();
-        let gone: Vec<(u64, Kept)> = ids.into_iter().filter_map(|id| self.built.remove_entry(&id)).collect();
+        let gone: Vec<(u64, KeptTree)> = ids.into_iter().filter_map(|id| self.built.remove_entry(&id)).collect();
         // The latest mesh first (ids grow as meshes are made).
         if let Some((_, kept)) = gone.iter().filter(|g| g.1.triangles >= BIG_MESH).max_by_key(|g| g.0) {
             self.set_replacing(kept.frames == 1);

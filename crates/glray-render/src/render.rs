@@ -226,7 +226,7 @@ const AHEAD: usize = 8;
 
 /// A 4x2 block of pixels whose camera rays are traced together (`Tracer::centers`), and what
 /// they hit where `traced`.
-struct Block {
+struct PixelBlock {
     pixels: [(usize, usize); 8],
     /// A bit for each pixel not to shade: one repeated (a block cut by the piece's last columns
     /// or row), or outside the viewport.
@@ -412,7 +412,7 @@ impl Job<'_> {
                 let mut scratch = Scratch::default();
                 // The piece's camera rays first, then the shading, with the cache lines a hit's
                 // shading reads (big meshes miss on every hit) loaded ahead of it.
-                let mut blocks: Vec<Block> = Vec::with_capacity((right - left).div_ceil(4) * (last - y0 + 2) / 2);
+                let mut blocks: Vec<PixelBlock> = Vec::with_capacity((right - left).div_ceil(4) * (last - y0 + 2) / 2);
                 for_each_block(left..right, rows.clone(), |x, ya, yb| {
                     if inside(ya) || inside(yb) {
                         let pixels: [(usize, usize); 8] =
@@ -423,7 +423,7 @@ impl Job<'_> {
                             let repeated = (k % 4 > 0 && px == pixels[k - 1].0) || (k >= 4 && py == pixels[0].1);
                             skip | (u8::from(repeated || !inside(py)) << k)
                         });
-                        blocks.push(Block { pixels, skip, traced: false, hits: [None; 8] });
+                        blocks.push(PixelBlock { pixels, skip, traced: false, hits: [None; 8] });
                     }
                 });
                 for b in &mut blocks {
@@ -434,7 +434,7 @@ impl Job<'_> {
                     prefetch,
                     blocks.iter().filter(|b| b.traced).flat_map(|b| b.hits.iter().flatten()).map(|h| h.id),
                 );
-                for Block { pixels, skip, traced, hits } in &blocks {
+                for PixelBlock { pixels, skip, traced, hits } in &blocks {
                     for (k, &(px, py)) in pixels.iter().enumerate() {
                         let center = traced.then_some(hits[k]);
                         if let Some(Some(_)) = center {

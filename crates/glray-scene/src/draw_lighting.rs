@@ -8,7 +8,7 @@ use std::borrow::Cow;
 use glam::DVec4;
 use serde::{Deserialize, Serialize};
 
-use crate::lighting::{prepare, ColorMaterial, Light, LightModel, Material, Prepared};
+use crate::lighting::{prepare, ColorMaterial, Light, LightModel, Material, PreparedLight};
 use crate::sunlit::Sunlit;
 
 /// The lighting state of a draw, so that the lighting equation can also run per pixel.
@@ -26,7 +26,7 @@ pub struct Lighting {
     color_material: Option<ColorMaterial>,
     /// `lighting::prepare` of the lights and model: what every vertex would otherwise work out
     /// again. Private, so that every `Lighting` is made by `new`, which derives it.
-    prepared: Vec<Prepared>,
+    prepared: Vec<PreparedLight>,
     /// Whether the lighting reads a vertex's position (`reads_position`), derived in `new`.
     positional: bool,
     /// The equation in single precision when every light is at infinity (`sunlit`), derived
@@ -88,7 +88,7 @@ impl Lighting {
     }
 
     /// The lights made ready for many vertices (`lighting::prepare`), one entry per light.
-    pub fn prepared(&self) -> &[Prepared] {
+    pub fn prepared(&self) -> &[PreparedLight] {
         &self.prepared
     }
 

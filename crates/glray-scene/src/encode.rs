@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::frame::Frame;
 use crate::mesh::Mesh;
-pub use crate::objects::Shared;
+pub use crate::objects::ObjectStore;
 use crate::texture::Texture;
 
 /// The first bytes of every message.
@@ -67,8 +67,8 @@ struct Objects {
 
 /// `frame` as a message for a receiver that already holds what `sent` holds: the meshes and
 /// textures it lacks go with it (and are noted in `sent`, which must then be the receiver's
-/// `Shared` as it will be).
-pub fn encode(frame: &Frame, sent: &mut Shared) -> Vec<u8> {
+/// `ObjectStore` as it will be).
+pub fn encode(frame: &Frame, sent: &mut ObjectStore) -> Vec<u8> {
     let mut meshes = Vec::new();
     for i in &frame.instances {
         if sent.add_mesh(&i.mesh) {
@@ -96,7 +96,7 @@ pub fn encode(frame: &Frame, sent: &mut Shared) -> Vec<u8> {
 }
 
 /// A frame from a message, its meshes and textures taken from (and added to) `shared`.
-pub fn decode(bytes: &[u8], shared: &mut Shared) -> Result<Frame, DecodeError> {
+pub fn decode(bytes: &[u8], shared: &mut ObjectStore) -> Result<Frame, DecodeError> {
     if bytes.len() < HEADER || &bytes[..MAGIC.len()] != MAGIC {
         return Err(DecodeError::NotAScene);
     }

@@ -157,7 +157,7 @@ pub fn eye_normal(nm: &DMat3, n: DVec3, normalize: bool, rescale: bool) -> DVec3
 /// square roots and divisions per light and vertex otherwise; the tracer lights every hit's
 /// three corners). See `prepare`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Prepared {
+pub struct PreparedLight {
     /// The light is directional (`direction` holds its unit direction).
     directional: bool,
     /// `half` holds the half vector (a directional light and a viewer at infinity).
@@ -167,7 +167,7 @@ pub struct Prepared {
 }
 
 /// `lights` made ready for many vertices under `model`, one entry per light, in order.
-pub fn prepare(lights: &[Light], model: &LightModel) -> Vec<Prepared> {
+pub fn prepare(lights: &[Light], model: &LightModel) -> Vec<PreparedLight> {
     lights
         .iter()
         .map(|l| {
@@ -175,7 +175,7 @@ pub fn prepare(lights: &[Light], model: &LightModel) -> Vec<Prepared> {
             let direction = if directional { l.position.truncate().normalize_or_zero() } else { DVec3::ZERO };
             let fixed_half = directional && !model.local_viewer;
             let half = if fixed_half { (direction + DVec3::Z).normalize_or_zero() } else { DVec3::ZERO };
-            Prepared { directional, fixed_half, direction, half }
+            PreparedLight { directional, fixed_half, direction, half }
         })
         .collect()
 }
@@ -202,7 +202,7 @@ pub fn light_vertex_prepared(
     normal: DVec3,
     m: &Material,
     lights: &[Light],
-    prepared: &[Prepared],
+    prepared: &[PreparedLight],
     model: &LightModel,
 ) -> (DVec4, DVec4) {
     let mut primary = m.emission.truncate() + m.ambient.truncate() * model.ambient.truncate();
@@ -271,7 +271,7 @@ pub fn light_face(
     normal: DVec3,
     materials: &[Material; 2],
     lights: &[Light],
-    prepared: &[Prepared],
+    prepared: &[PreparedLight],
     model: &LightModel,
     face: usize,
 ) -> (DVec4, DVec4) {

@@ -1,6 +1,6 @@
 //! The meshes and textures a frame draws with, shared by id: what a receiver holds of those
-//! sent to it (`Shared`), and the serde helpers that write an `Arc<Mesh>` or `Arc<Texture>`
-//! field as its id and read it back from the `Shared` of the message being read (`encode`).
+//! sent to it (`ObjectStore`), and the serde helpers that write an `Arc<Mesh>` or `Arc<Texture>`
+//! field as its id and read it back from the `ObjectStore` of the message being read (`encode`).
 
 use std::cell::{Cell, RefCell};
 use std::collections::{HashMap, HashSet};
@@ -14,12 +14,12 @@ use crate::texture::Texture;
 /// What a receiver holds of the meshes and textures sent to it, by id (a mesh's `id`, a
 /// texture's `version`); and what a sender knows its receiver holds.
 #[derive(Default)]
-pub struct Shared {
+pub struct ObjectStore {
     meshes: HashMap<u64, Arc<Mesh>>,
     textures: HashMap<u64, Arc<Texture>>,
 }
 
-impl Shared {
+impl ObjectStore {
     pub fn mesh(&self, id: u64) -> Option<&Arc<Mesh>> {
         self.meshes.get(&id)
     }
@@ -71,7 +71,7 @@ impl Shared {
 thread_local! {
     /// The store a message being read on this thread takes its objects from (serde's derives
     /// take no context: the shared objects reach `shared_mesh` and `shared_texture` here).
-    static READING: RefCell<Option<Shared>> = const { RefCell::new(None) };
+    static READING: RefCell<Option<ObjectStore>> = const { RefCell::new(None) };
     /// The object a read missed, for its error.
     static MISSING: Cell<Option<(&'static str, u64)>> = const { Cell::new(None) };
 }
@@ -80,7 +80,7 @@ thread_local! {
 fn found<T, E: serde::de::Error>(
     what: &'static str,
     id: u64,
-    get: impl FnOnce(&Shared) -> Option<Arc<T>>,
+    get: impl FnOnce(&ObjectStore) -> Option<Arc<T>>,
 ) -> Result<Arc<T>, E> {
     let found = READING.with(|r| r.borrow().as_ref().and_then(get));
     found.ok_or_else(|| {

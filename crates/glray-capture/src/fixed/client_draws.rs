@@ -3,7 +3,7 @@
 //! A program that draws its data from client arrays (glVertexPointer on its own memory, then
 //! glDrawElements) hands GL the same bytes frame after frame, and GL cannot know that they are
 //! the same. Taken as new triangles every frame, 10M of them cost glray ~20 s of vertex stage
-//! and a BVH build per frame, where llvmpipe takes 1.4 s. Kept by a hash of every byte the draw
+//! and a BVH build per frame, where llvmpipe takes 1.4 s. ListArg by a hash of every byte the draw
 //! reads (`Context::client_draw_key`), the draw becomes one mesh drawn as an instance, like a
 //! buffer object's, and its BVH is built once.
 //!

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use glam::{DMat4, DVec2, DVec4, Vec2, Vec3, Vec4};
 
 use crate::fixed::mesh_builder::Compiled;
-use crate::fixed::{vec4, Context, Out};
+use crate::fixed::{vec4, Context, EyeVertex};
 use crate::primitive::{assemble, QuadSplit};
 use glray_scene::camera::Viewport;
 use glray_scene::facing::{culled, facing_flip, window_facing};
@@ -239,7 +239,7 @@ impl Context {
     }
 
     /// Assembles one draw's vertices into the frame's triangles, its quads cut as `quads` says.
-    pub(crate) fn draw(&mut self, mode: u32, verts: &[Out], quads: QuadSplit) {
+    pub(crate) fn draw(&mut self, mode: u32, verts: &[EyeVertex], quads: QuadSplit) {
         self.revision += 1;
         if self.programmable {
             self.frame.unsupported_draws += 1;
@@ -258,20 +258,20 @@ impl Context {
         // quads with any vertex outside the view volume (or a clip plane) is cut as an
         // indexed draw is. (Mesa decides by everything it draws at once, which may be several
         // glBegin/glEnd with the same state; glray looks at one.)
-        let outside = |(c, v): (&DVec4, &Out)| self.clipped(*c, v.eye);
+        let outside = |(c, v): (&DVec4, &EyeVertex)| self.clipped(*c, v.eye);
         let asm = if mode == GL_QUADS && quads == QuadSplit::Direct && clip.iter().zip(verts).any(outside) {
             assemble(mode, verts.len(), QuadSplit::Indexed).unwrap_or(asm)
         } else {
             asm
         };
         let flat = self.lighting.flat;
-        let color = |v: &Out, face: usize| vec4(v.colors[face]);
-        let secondary = |v: &Out, face: usize| v.secondary[face].truncate().as_vec3();
-        let tex = |v: &Out| {
+        let color = |v: &EyeVertex, face: usize| vec4(v.colors[face]);
+        let secondary = |v: &EyeVertex, face: usize| v.secondary[face].truncate().as_vec3();
+        let tex = |v: &EyeVertex| {
             let q = if v.tex.w != 0.0 { v.tex.w } else { 1.0 };
             Vec2::new((v.tex.x / q) as f32, (v.tex.y / q) as f32)
         };
-        let eye3 = |v: &Out| (v.eye.truncate() / if v.eye.w != 0.0 { v.eye.w } else { 1.0 }).as_vec3();
+        let eye3 = |v: &EyeVertex| (v.eye.truncate() / if v.eye.w != 0.0 { v.eye.w } else { 1.0 }).as_vec3();
         let mut tris = Vec::new();
         let mut lines: Vec<([u32; 2], u32)> = asm.lines.clone();
         let mut points: Vec<u32> = asm.points.clone();

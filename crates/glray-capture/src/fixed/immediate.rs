@@ -9,7 +9,7 @@
 
 use crate::args;
 use crate::fixed::Context;
-use crate::fixed::Out;
+use crate::fixed::EyeVertex;
 use crate::ops::Op;
 use crate::primitive::QuadSplit;
 use glam::{DVec3, DVec4};
@@ -157,7 +157,7 @@ impl Context {
                     [0, 1, 2, 3].map(|i| args::float(a, i))
                 };
                 let corners = [(v[0], v[1]), (v[2], v[1]), (v[2], v[3]), (v[0], v[3])];
-                let verts: Vec<Out> =
+                let verts: Vec<EyeVertex> =
                     corners.iter().map(|&(x, y)| self.vertex_stage(DVec4::new(x, y, 0.0, 1.0))).collect();
                 self.draw(GL_POLYGON, &verts, QuadSplit::Direct);
             }

@@ -13,8 +13,8 @@ use crate::fixed::mesh_builder::MeshBuilder;
 use crate::fixed::vertex::decode_attribute;
 use crate::fixed::vertex::Given;
 use crate::fixed::Context;
+use crate::fixed::EyeVertex;
 use crate::fixed::Fetched;
-use crate::fixed::Out;
 use crate::ops::Attr;
 use crate::ops::AttrForm;
 use crate::ops::Op;
@@ -180,7 +180,7 @@ impl<T> DisplayLists<T> {
 
 /// An argument kept by a display list.
 #[derive(Debug, Clone)]
-pub(crate) enum Kept {
+pub(crate) enum ListArg {
     Int(i64),
     Float(f64),
     Bytes(Vec<u8>),
@@ -190,28 +190,28 @@ pub(crate) enum Kept {
 /// What a display list holds.
 #[derive(Debug, Clone)]
 pub(crate) enum Item {
-    Call(Op, u32, Vec<Kept>),
+    Call(Op, u32, Vec<ListArg>),
     /// A glBegin/glEnd, or an array draw resolved to its vertices at compile time.
     Mesh(Arc<Compiled>),
 }
 
-fn keep(v: &Value) -> Kept {
+fn keep(v: &Value) -> ListArg {
     match v {
-        Value::Int(x) => Kept::Int(*x),
-        Value::UInt(x) | Value::Opaque(x) | Value::Offset(x) => Kept::Int(*x as i64),
-        Value::F32(x) => Kept::Float(*x as f64),
-        Value::F64(x) => Kept::Float(*x),
-        Value::Blob(b) | Value::Str(b) => Kept::Bytes(b.to_vec()),
-        _ => Kept::Null,
+        Value::Int(x) => ListArg::Int(*x),
+        Value::UInt(x) | Value::Opaque(x) | Value::Offset(x) => ListArg::Int(*x as i64),
+        Value::F32(x) => ListArg::Float(*x as f64),
+        Value::F64(x) => ListArg::Float(*x),
+        Value::Blob(b) | Value::Str(b) => ListArg::Bytes(b.to_vec()),
+        _ => ListArg::Null,
     }
 }
 
-fn unkeep(k: &Kept) -> Value<'_> {
+fn unkeep(k: &ListArg) -> Value<'_> {
     match k {
-        Kept::Int(x) => Value::Int(*x),
-        Kept::Float(x) => Value::F64(*x),
-        Kept::Bytes(b) => Value::Blob(b),
-        Kept::Null => Value::Null,
+        ListArg::Int(x) => Value::Int(*x),
+        ListArg::Float(x) => Value::F64(*x),
+        ListArg::Bytes(b) => Value::Blob(b),
+        ListArg::Null => Value::Null,
     }
 }
 
@@ -349,9 +349,9 @@ impl Context {
         }
         let (closed, mode, given) = b.split_open();
         let attr = |attr, n| Op::Attr(AttrForm { attr, n, ty: GL_DOUBLE, vector: false });
-        let call = |op, v: &[f64]| Item::Call(op, GL_DOUBLE, v.iter().map(|x| Kept::Float(*x)).collect());
+        let call = |op, v: &[f64]| Item::Call(op, GL_DOUBLE, v.iter().map(|x| ListArg::Float(*x)).collect());
         let mut items: Vec<Item> = closed.map(|m| Item::Mesh(Arc::new(m))).into_iter().collect();
-        items.push(Item::Call(Op::Begin, GL_FLOAT, vec![Kept::Int(mode as i64)]));
+        items.push(Item::Call(Op::Begin, GL_FLOAT, vec![ListArg::Int(mode as i64)]));
         items.extend(given.into_iter().map(|g| match g {
             Given::Vertex(p) => call(attr(Attr::Vertex, 4), &p.to_array()),
             Given::Normal(n) => call(attr(Attr::Normal, 3), &n.to_array()),
@@ -415,7 +415,7 @@ impl Context {
             }
             if compiled.runs.is_empty() {
                 // An indexed mesh: its triangles.
-                let corners: Vec<Out> = mesh.triangles.iter().flatten().map(|&i| outs[i as usize]).collect();
+                let corners: Vec<EyeVertex> = mesh.triangles.iter().flatten().map(|&i| outs[i as usize]).collect();
                 self.draw(GL_TRIANGLES, &corners, compiled.quads);
             }
             for r in &compiled.runs {

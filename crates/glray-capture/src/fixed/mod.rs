@@ -60,12 +60,12 @@ use lists::{DisplayLists, Item};
 use matrices::Matrices;
 use mesh_builder::{Compiled, MeshBuilder};
 use raster::Raster;
-use texturing::Texturing;
+use texturing::TextureUnit;
 
 /// A vertex after the vertex stage: eye position, lit colours of both faces, texture
 /// coordinates.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Out {
+pub(crate) struct EyeVertex {
     pub(crate) eye: DVec4,
     pub(crate) colors: [DVec4; 2],
     pub(crate) secondary: [DVec4; 2],
@@ -98,10 +98,10 @@ pub struct Shared {
 
 /// What glPushAttrib saves (glPopAttrib takes back the groups its mask names).
 #[derive(Debug, Clone)]
-pub(crate) struct Saved {
+pub(crate) struct PushedAttribs {
     lighting: LightingState,
     raster: Raster,
-    texturing: Texturing,
+    texturing: TextureUnit,
     current: Current,
 }
 
@@ -119,7 +119,7 @@ pub struct Context {
     pub matrices: Matrices,
     pub(crate) imm: Immediate,
     /// Vertices of the open glBegin, after the vertex stage.
-    pub(crate) open: Vec<Out>,
+    pub(crate) open: Vec<EyeVertex>,
     /// Display lists, textures and buffers: shared with the context's share group.
     pub(crate) shared: Shared,
     pub(crate) nesting: usize,
@@ -128,9 +128,9 @@ pub struct Context {
     /// Rasterization and per-fragment state.
     pub(crate) raster: Raster,
     /// Texture unit 0's bindings, environment and coordinate generation.
-    pub(crate) texturing: Texturing,
+    pub(crate) texturing: TextureUnit,
     /// glPushAttrib's stack: the mask, and the state it saved.
-    pub(crate) attrib_stack: Vec<(u32, Saved)>,
+    pub(crate) attrib_stack: Vec<(u32, PushedAttribs)>,
     pub(crate) client: Client,
     /// Client arrays of the next draw (the trace's arrays event that precedes it).
     pub(crate) arrays: Vec<ArrayData<'static>>,
@@ -173,7 +173,7 @@ impl Default for Context {
             nesting: 0,
             lighting: LightingState::default(),
             raster: Raster::default(),
-            texturing: Texturing::default(),
+            texturing: TextureUnit::default(),
             attrib_stack: Vec::new(),
             client: Client { unpack: Unpack::default(), ..Client::default() },
             arrays: Vec::new(),
@@ -415,7 +415,7 @@ impl Context {
                 if self.attrib_stack.len() >= MAX_ATTRIB_DEPTH {
                     return Err(GlError::StackOverflow);
                 }
-                let saved = Saved {
+                let saved = PushedAttribs {
                     lighting: self.lighting.clone(),
                     raster: self.raster.clone(),
                     texturing: self.texturing.clone(),

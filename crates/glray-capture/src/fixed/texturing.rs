@@ -1,4 +1,4 @@
-//! Texturing (Mesa's texobj.c, teximage.c, texparam.c, texenv.c, texgen.c): the texture
+//! TextureUnit (Mesa's texobj.c, teximage.c, texparam.c, texenv.c, texgen.c): the texture
 //! objects a share group holds, which are bound and enabled, their images and sampling state,
 //! the texture environment and texture coordinate generation. Their commands, and what
 //! glPopAttrib takes back. Texture objects shared with other contexts are changed in place only
@@ -36,7 +36,7 @@ pub(crate) struct TexGen {
 
 /// A context's texturing state (texture unit 0), with GL's initial values.
 #[derive(Debug, Clone)]
-pub(crate) struct Texturing {
+pub(crate) struct TextureUnit {
     pub(crate) texture_2d: bool,
     pub(crate) bound_texture: u32,
     /// GL_TEXTURE_1D's enable and binding (a 2D texture, enabled, takes precedence).
@@ -47,10 +47,10 @@ pub(crate) struct Texturing {
     pub(crate) texgen: [TexGen; 2],
 }
 
-impl Default for Texturing {
+impl Default for TextureUnit {
     fn default() -> Self {
         let texgen = TexGen { enabled: false, mode: GL_EYE_LINEAR, object_plane: DVec4::X, eye_plane: DVec4::X };
-        Texturing {
+        TextureUnit {
             texture_2d: false,
             bound_texture: 0,
             texture_1d: false,
@@ -62,8 +62,8 @@ impl Default for Texturing {
     }
 }
 
-impl Texturing {
-    /// Follows a texturing command (`Concern::Texturing`) on the share group's `objects`, with
+impl TextureUnit {
+    /// Follows a texturing command (`Concern::TextureUnit`) on the share group's `objects`, with
     /// the unpack state of the moment (images) and the modelview (eye planes).
     pub(crate) fn command(
         &mut self,
@@ -183,7 +183,7 @@ impl Texturing {
     }
 
     /// glPopAttrib: takes back what the groups in `mask` saved.
-    pub(crate) fn restore(&mut self, mask: u32, s: &Texturing) {
+    pub(crate) fn restore(&mut self, mask: u32, s: &TextureUnit) {
         if mask & (GL_TEXTURE_BIT | GL_ENABLE_BIT) != 0 {
             self.texture_2d = s.texture_2d;
             self.texture_1d = s.texture_1d;

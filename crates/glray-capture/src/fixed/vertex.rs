@@ -11,7 +11,7 @@ use glray_gl::{
 use crate::args;
 use crate::error::{GlError, GlResult};
 use crate::fixed::immediate::TEXCOORD_UNITS;
-use crate::fixed::{Context, Out};
+use crate::fixed::{Context, EyeVertex};
 use crate::ops::{Attr, AttrForm, Op};
 use crate::primitive::QuadSplit;
 use glray_scene::draw_lighting::color_materials;
@@ -211,7 +211,7 @@ impl Context {
 
     /// The fixed-function vertex stage: eye position, lighting of both faces, texture
     /// coordinates (texgen, texture matrix).
-    pub(crate) fn vertex_stage(&mut self, object: DVec4) -> Out {
+    pub(crate) fn vertex_stage(&mut self, object: DVec4) -> EyeVertex {
         let mv = *self.matrices.modelview.top();
         let eye = mv * object;
         // The three current values a vertex reads (the whole of `current`, with every unit's
@@ -265,7 +265,7 @@ impl Context {
             }
         }
         let tex = *self.matrices.texture[0].top() * tex;
-        Out { eye, colors, secondary, tex, normal, base: cur_color }
+        EyeVertex { eye, colors, secondary, tex, normal, base: cur_color }
     }
 }
 

@@ -448,22 +448,22 @@ fn halve(records: &[Record]) -> (Part, Part) {
 /// building, a leaf's reference is `LEAF | its first record` and `lens` holds its length; the
 /// leaves themselves are made at the end, when the records are in their final order.
 #[derive(Default)]
-pub(super) struct Out {
+pub(super) struct NodesOut {
     pub nodes: Vec<Node>,
     pub lens: Vec<[u8; WIDTH]>,
 }
 
-impl Out {
+impl NodesOut {
     /// Room for the nodes over `records` records: trees here have about one node per 13
     /// triangles (eight children, leaves of 3.6 on average), so the vectors do not copy their
     /// nodes as they grow. Pages reserved and never written cost no memory.
-    pub fn for_records(records: usize) -> Out {
+    pub fn for_records(records: usize) -> NodesOut {
         let nodes = records / 8 + 1;
-        Out { nodes: pages::huge_vec(nodes), lens: Vec::with_capacity(nodes) }
+        NodesOut { nodes: pages::huge_vec(nodes), lens: Vec::with_capacity(nodes) }
     }
 
     /// Appends a subtree built elsewhere; returns its root's reference here.
-    pub fn append(&mut self, sub: Out, root: u32) -> u32 {
+    pub fn append(&mut self, sub: NodesOut, root: u32) -> u32 {
         let n0 = self.nodes.len() as u32;
         let moved = |c: u32| if c & LEAF != 0 { c } else { c + n0 };
         self.nodes.extend(sub.nodes.into_iter().map(|mut n| {
@@ -594,7 +594,7 @@ pub(super) fn pending(children: usize, below: usize) -> usize {
 /// Builds the subtree over `records` (see `node`) into `out` on this thread: the reference of
 /// its root (an inner node), and the most subtrees a walk of it can leave pending (worked out
 /// here, as the tree is made: a pass over the finished tree was 3% of a build).
-fn subtree(records: &mut [Record], todo: Todo, out: &mut Out) -> (u32, usize) {
+fn subtree(records: &mut [Record], todo: Todo, out: &mut NodesOut) -> (u32, usize) {
     let (node, lens, parts) = node(records, todo);
     let children = leaf_children(&lens) + parts.len();
     let index = out.nodes.len();
@@ -614,10 +614,10 @@ fn subtree(records: &mut [Record], todo: Todo, out: &mut Out) -> (u32, usize) {
 /// smaller ones are built whole on one thread and appended in one step. (Subtrees returning
 /// their nodes to their parents instead copied every node once per parallel level, and the
 /// vectors' growth left ~100 MB of freed pages in the allocator at 10M triangles: peak memory.)
-fn shared_subtree(records: &mut [Record], todo: Todo, whole: usize, shared: &Mutex<Out>) -> (u32, usize) {
+fn shared_subtree(records: &mut [Record], todo: Todo, whole: usize, shared: &Mutex<NodesOut>) -> (u32, usize) {
     let lock = || shared.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
     if records.len() < whole {
-        let mut local = Out::for_records(records.len());
+        let mut local = NodesOut::for_records(records.len());
         let (root, most) = subtree(records, todo, &mut local);
         return (lock().append(local, root), most);
     }
@@ -703,7 +703,7 @@ pub(super) fn sah(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> 
         return Built::small(&ids, corners);
     }
     let centroids = Centroids::of(&records);
-    let shared = Mutex::new(Out::for_records(records.len()));
+    let shared = Mutex::new(NodesOut::for_records(records.len()));
     let whole = whole(records.len());
     let todo = Todo { first: 0, centroids, split: None };
     let (root, most_pending) = shared_subtree(&mut records, todo, whole, &shared);
@@ -721,7 +721,7 @@ pub(super) fn sah(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -> 
 /// In parallel over runs of nodes, each run numbering on from its first node's first leaf (one
 /// thread numbering them all was 4-5% of a build), into vectors of the exact length
 /// (collecting a parallel iterator's pieces and joining them raised the 10M peak by 55 MB).
-pub(super) fn number_leaves(out: &mut Out, index: impl Fn(usize) -> u32 + Sync) -> (Vec<[u32; 4]>, Vec<u8>) {
+pub(super) fn number_leaves(out: &mut NodesOut, index: impl Fn(usize) -> u32 + Sync) -> (Vec<[u32; 4]>, Vec<u8>) {
     let mut total = 0;
     let firsts: Vec<u32> = out
         .lens

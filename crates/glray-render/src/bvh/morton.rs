@@ -17,7 +17,7 @@ use glam::{Vec3, Vec3A};
 use glray_core::pages;
 use rayon::prelude::*;
 
-use super::build::{make_leaves, number_leaves, pending, whole, Bounds, Built, Out};
+use super::build::{make_leaves, number_leaves, pending, whole, Bounds, Built, NodesOut};
 use super::node::Node;
 use super::{LEAF, LEAF_SIZE, MAX_BLOCKS, WIDTH};
 
@@ -180,7 +180,7 @@ fn children(keys: &[Keyed]) -> (Kids, [u8; WIDTH]) {
 }
 
 /// Puts the node over `made` children at `index` of `out`: its box and pending count.
-fn finish(out: &mut Out, index: usize, made: &[Made]) -> (Bounds, usize) {
+fn finish(out: &mut NodesOut, index: usize, made: &[Made]) -> (Bounds, usize) {
     let mut node = Node::new(made.iter().map(|m| (m.1.lo, m.1.hi)));
     for (lane, m) in made.iter().enumerate() {
         node.child[lane] = m.0;
@@ -191,7 +191,7 @@ fn finish(out: &mut Out, index: usize, made: &[Made]) -> (Bounds, usize) {
 }
 
 /// The subtree over `keys` (see `children`) into `out` on this thread.
-fn subtree(keys: &[Keyed], first: usize, corners: &impl Fn(usize) -> [Vec3; 3], out: &mut Out) -> Made {
+fn subtree(keys: &[Keyed], first: usize, corners: &impl Fn(usize) -> [Vec3; 3], out: &mut NodesOut) -> Made {
     let (kids, lens) = children(keys);
     let index = out.nodes.len();
     out.nodes.push(Node::new([]));
@@ -215,11 +215,11 @@ fn shared_subtree(
     first: usize,
     corners: &(impl Fn(usize) -> [Vec3; 3] + Sync),
     whole: usize,
-    shared: &Mutex<Out>,
+    shared: &Mutex<NodesOut>,
 ) -> Made {
     let lock = || shared.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
     if keys.len() < whole {
-        let mut local = Out::for_records(keys.len());
+        let mut local = NodesOut::for_records(keys.len());
         let (root, bounds, most) = subtree(keys, first, corners, &mut local);
         return (lock().append(local, root), bounds, most);
     }
@@ -282,7 +282,7 @@ pub(super) fn build(count: usize, corners: impl Fn(usize) -> [Vec3; 3] + Sync) -
         let ids: Vec<u32> = keys.iter().map(|&k| index(k)).collect();
         return Built::small(&ids, corners);
     }
-    let shared = Mutex::new(Out::for_records(keys.len()));
+    let shared = Mutex::new(NodesOut::for_records(keys.len()));
     let (root, _, most_pending) = shared_subtree(&keys, 0, &corners, whole(keys.len()), &shared);
     let mut out = shared.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner());
     let (ids, counts) = number_leaves(&mut out, |k| index(keys[k]));

@@ -22,7 +22,7 @@ const AHEAD: usize = 8;
 
 /// A block made again: its triangles' box, how many triangles it holds, whether any moved.
 #[derive(Clone, Copy)]
-struct Block {
+struct LeafBlock {
     bounds: Bounds,
     triangles: u32,
     moved: bool,
@@ -45,7 +45,7 @@ impl TriBvh {
         // Leaves are in the tree's order, their triangles' corners wherever the mesh has them:
         // a miss or two for each (a 10M refit's leaves took twice as long without the loads
         // started ahead, the corners' a few blocks after the indices').
-        let mut blocks: Vec<Option<Block>> = vec![None; self.leaves.len()];
+        let mut blocks: Vec<Option<LeafBlock>> = vec![None; self.leaves.len()];
         self.leaves.par_chunks_mut(RUN).zip(blocks.par_chunks_mut(RUN)).for_each(|(tris, out)| {
             let live = |t: &Tri4| t.id.into_iter().take_while(|&i| i != EMPTY && (i as usize) < count);
             for j in 0..tris.len() {
@@ -208,9 +208,9 @@ impl<'a, T: Copy> Slots<'a, T> {
     }
 }
 
-/// Block `tri` made again from its triangles' corners now (`refit`); None where a corner is
+/// LeafBlock `tri` made again from its triangles' corners now (`refit`); None where a corner is
 /// not finite or a triangle is not one of the mesh's `count`.
-fn refit_block(tri: &mut Tri4, count: usize, corners: &(impl Fn(usize) -> [Vec3; 3] + Sync)) -> Option<Block> {
+fn refit_block(tri: &mut Tri4, count: usize, corners: &(impl Fn(usize) -> [Vec3; 3] + Sync)) -> Option<LeafBlock> {
     let id = tri.id;
     let ids = &id[..id.iter().take_while(|&&i| i != EMPTY).count()];
     let mut bounds = Bounds::EMPTY;
@@ -228,7 +228,7 @@ fn refit_block(tri: &mut Tri4, count: usize, corners: &(impl Fn(usize) -> [Vec3;
     let made = Tri4::new(ids, |i| corners(i as usize));
     let moved = bits(&made) != bits(tri);
     *tri = made;
-    Some(Block { bounds, triangles: ids.len() as u32, moved })
+    Some(LeafBlock { bounds, triangles: ids.len() as u32, moved })
 }
 
 /// A block's corner and edges, bit for bit.

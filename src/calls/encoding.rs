@@ -1,6 +1,6 @@
-//! Where the recorder's events go. With a trace file (`Out::Bytes`) they are encoded in the
+//! Where the recorder's events go. With a trace file (`Encoding::Bytes`) they are encoded in the
 //! trace format, and capture (when ray tracing too) reads them back from those bytes, so that
-//! the file and the ray tracer see exactly the same calls. Without one (`Out::Events`, what
+//! the file and the ray tracer see exactly the same calls. Without one (`Encoding::Events`, what
 //! `glray run` does by default) each event goes to capture as it is made: encoding every call
 //! only to decode it again was ~40% of what following a glVertex cost.
 //!
@@ -16,42 +16,42 @@ use crate::feed::Live;
 
 // One per process (the recorder's): the events' state inline saves a load on every call.
 #[allow(clippy::large_enum_variant)]
-pub enum Out {
+pub enum Encoding {
     /// Encoded; capture (the live ray tracer's state, when ray tracing) reads them back.
     Bytes(Encoder, Option<Live>),
     Events(Events),
 }
 
-impl Out {
+impl Encoding {
     /// `Events` when the events go to capture (`live`) alone, else `Bytes`.
-    pub fn new(to_file: bool, live: Option<Live>) -> Out {
+    pub fn new(to_file: bool, live: Option<Live>) -> Encoding {
         match live {
-            Some(live) if !to_file => Out::Events(Events::new(Sink::CAPTURE, Some(live))),
-            live => Out::Bytes(Encoder::new(), live),
+            Some(live) if !to_file => Encoding::Events(Events::new(Sink::CAPTURE, Some(live))),
+            live => Encoding::Bytes(Encoder::new(), live),
         }
     }
 
     /// The live ray tracer's state, when ray tracing.
     pub fn live(&mut self) -> Option<&mut Live> {
         match self {
-            Out::Bytes(_, live) => live.as_mut(),
-            Out::Events(d) => d.live.as_mut(),
+            Encoding::Bytes(_, live) => live.as_mut(),
+            Encoding::Events(d) => d.live.as_mut(),
         }
     }
 
     /// Takes the live ray tracer's state away (for a new recorder: a forked child's).
     pub fn take_live(&mut self) -> Option<Live> {
         match self {
-            Out::Bytes(_, live) => live.take(),
-            Out::Events(d) => d.live.take(),
+            Encoding::Bytes(_, live) => live.take(),
+            Encoding::Events(d) => d.live.take(),
         }
     }
 
     /// Encoded bytes not flushed yet (none for `Events`).
     pub fn bytes(&self) -> &[u8] {
         match self {
-            Out::Bytes(e, _) => e.bytes(),
-            Out::Events(_) => &[],
+            Encoding::Bytes(e, _) => e.bytes(),
+            Encoding::Events(_) => &[],
         }
     }
 
@@ -60,20 +60,20 @@ impl Out {
     }
 
     pub fn clear(&mut self) {
-        if let Out::Bytes(e, _) = self {
+        if let Encoding::Bytes(e, _) = self {
             e.clear()
         }
     }
 
     pub fn flush_to(&mut self, w: &mut dyn Write) -> io::Result<()> {
         match self {
-            Out::Bytes(e, _) => e.flush_to(w),
-            Out::Events(_) => Ok(()),
+            Encoding::Bytes(e, _) => e.flush_to(w),
+            Encoding::Events(_) => Ok(()),
         }
     }
 
     pub fn end(&mut self) {
-        if let Out::Bytes(e, _) = self {
+        if let Encoding::Bytes(e, _) = self {
             e.end()
         }
     }
@@ -81,68 +81,68 @@ impl Out {
     /// Names the next command number.
     pub fn name(&mut self, name: &[u8]) {
         match self {
-            Out::Bytes(e, _) => e.name(name),
-            Out::Events(d) => d.name(name),
+            Encoding::Bytes(e, _) => e.name(name),
+            Encoding::Events(d) => d.name(name),
         }
     }
 
     pub fn begin_call(&mut self, cmd: usize, thread: u32, nargs: u8) {
         match self {
-            Out::Bytes(e, _) => e.begin_call(cmd, thread, nargs),
-            Out::Events(d) => d.begin_call(cmd, thread, nargs),
+            Encoding::Bytes(e, _) => e.begin_call(cmd, thread, nargs),
+            Encoding::Events(d) => d.begin_call(cmd, thread, nargs),
         }
     }
 
     #[inline(always)]
     pub fn int(&mut self, v: i64) {
         match self {
-            Out::Bytes(e, _) => e.int(v),
-            Out::Events(d) => d.value(Value::Int(v)),
+            Encoding::Bytes(e, _) => e.int(v),
+            Encoding::Events(d) => d.value(Value::Int(v)),
         }
     }
 
     #[inline(always)]
     pub fn uint(&mut self, v: u64) {
         match self {
-            Out::Bytes(e, _) => e.uint(v),
-            Out::Events(d) => d.value(Value::UInt(v)),
+            Encoding::Bytes(e, _) => e.uint(v),
+            Encoding::Events(d) => d.value(Value::UInt(v)),
         }
     }
 
     #[inline(always)]
     pub fn f32(&mut self, v: f32) {
         match self {
-            Out::Bytes(e, _) => e.f32(v),
-            Out::Events(d) => d.value(Value::F32(v)),
+            Encoding::Bytes(e, _) => e.f32(v),
+            Encoding::Events(d) => d.value(Value::F32(v)),
         }
     }
 
     #[inline(always)]
     pub fn f64(&mut self, v: f64) {
         match self {
-            Out::Bytes(e, _) => e.f64(v),
-            Out::Events(d) => d.value(Value::F64(v)),
+            Encoding::Bytes(e, _) => e.f64(v),
+            Encoding::Events(d) => d.value(Value::F64(v)),
         }
     }
 
     pub fn null(&mut self) {
         match self {
-            Out::Bytes(e, _) => e.null(),
-            Out::Events(d) => d.value(Value::Null),
+            Encoding::Bytes(e, _) => e.null(),
+            Encoding::Events(d) => d.value(Value::Null),
         }
     }
 
     pub fn opaque(&mut self, v: u64) {
         match self {
-            Out::Bytes(e, _) => e.opaque(v),
-            Out::Events(d) => d.value(Value::Opaque(v)),
+            Encoding::Bytes(e, _) => e.opaque(v),
+            Encoding::Events(d) => d.value(Value::Opaque(v)),
         }
     }
 
     pub fn offset(&mut self, v: u64) {
         match self {
-            Out::Bytes(e, _) => e.offset(v),
-            Out::Events(d) => d.value(Value::Offset(v)),
+            Encoding::Bytes(e, _) => e.offset(v),
+            Encoding::Events(d) => d.value(Value::Offset(v)),
         }
     }
 
@@ -155,9 +155,9 @@ impl Out {
     #[inline(always)]
     pub unsafe fn blob(&mut self, b: &[u8]) {
         match self {
-            Out::Bytes(e, _) => e.blob(b),
+            Encoding::Bytes(e, _) => e.blob(b),
             // SAFETY: the caller keeps `b` until the call ends, when `Events` lets it go.
-            Out::Events(d) => d.value(Value::Blob(unsafe { until_the_call_ends(b) })),
+            Encoding::Events(d) => d.value(Value::Blob(unsafe { until_the_call_ends(b) })),
         }
     }
 
@@ -167,9 +167,9 @@ impl Out {
     /// As for `blob`.
     pub unsafe fn string(&mut self, b: &[u8]) {
         match self {
-            Out::Bytes(e, _) => e.string(b),
+            Encoding::Bytes(e, _) => e.string(b),
             // SAFETY: as for `blob`.
-            Out::Events(d) => d.value(Value::Str(unsafe { until_the_call_ends(b) })),
+            Encoding::Events(d) => d.value(Value::Str(unsafe { until_the_call_ends(b) })),
         }
     }
 
@@ -179,9 +179,11 @@ impl Out {
     /// As for `blob`, for each string (not `list` itself, which is copied).
     pub unsafe fn strings(&mut self, list: &[&[u8]]) {
         match self {
-            Out::Bytes(e, _) => e.strings(list),
+            Encoding::Bytes(e, _) => e.strings(list),
             // SAFETY: as for `blob`.
-            Out::Events(d) => d.value(Value::Strings(list.iter().map(|s| unsafe { until_the_call_ends(s) }).collect())),
+            Encoding::Events(d) => {
+                d.value(Value::Strings(list.iter().map(|s| unsafe { until_the_call_ends(s) }).collect()))
+            }
         }
     }
 
@@ -189,36 +191,36 @@ impl Out {
     #[inline(always)]
     pub fn no_return(&mut self) {
         match self {
-            Out::Bytes(e, _) => e.no_return(),
-            Out::Events(d) => d.end(false),
+            Encoding::Bytes(e, _) => e.no_return(),
+            Encoding::Events(d) => d.end(false),
         }
     }
 
     pub fn frame(&mut self, number: u64) {
         match self {
-            Out::Bytes(e, _) => e.frame(number),
-            Out::Events(d) => d.event(&Event::Frame { number }),
+            Encoding::Bytes(e, _) => e.frame(number),
+            Encoding::Events(d) => d.event(&Event::Frame { number }),
         }
     }
 
     pub fn drawable(&mut self, thread: u32, id: u64, width: u32, height: u32) {
         match self {
-            Out::Bytes(e, _) => e.drawable(thread, id, width, height),
-            Out::Events(d) => d.event(&Event::Drawable { thread, id, width, height }),
+            Encoding::Bytes(e, _) => e.drawable(thread, id, width, height),
+            Encoding::Events(d) => d.event(&Event::Drawable { thread, id, width, height }),
         }
     }
 
     pub fn arrays(&mut self, thread: u32, arrays: &[ArrayData]) {
         match self {
-            Out::Bytes(e, _) => e.arrays(thread, arrays),
-            Out::Events(d) => d.event(&Event::Arrays { thread, arrays: arrays.to_vec() }),
+            Encoding::Bytes(e, _) => e.arrays(thread, arrays),
+            Encoding::Events(d) => d.event(&Event::Arrays { thread, arrays: arrays.to_vec() }),
         }
     }
 
     /// Forgets a call begun and never ended (none is, but its values must not outlive the
     /// recorder's turn).
     pub fn discard_call(&mut self) {
-        if let Out::Events(d) = self {
+        if let Encoding::Events(d) = self {
             d.call = None;
             d.values.clear();
         }
@@ -230,7 +232,7 @@ impl Out {
 /// glVertex3fv), and lets them go when the call ends.
 ///
 /// # Safety
-/// `b` must stay valid until the call ends (see `Out::blob`).
+/// `b` must stay valid until the call ends (see `Encoding::blob`).
 unsafe fn until_the_call_ends(b: &[u8]) -> &'static [u8] {
     // SAFETY: the caller's promise; `Events` never keeps a value past the call.
     unsafe { std::slice::from_raw_parts(b.as_ptr(), b.len()) }
@@ -356,7 +358,7 @@ mod tests {
 
     /// Calls of every kind of value, with and without memory and return values, between
     /// the other events.
-    fn record(out: &mut Out) {
+    fn record(out: &mut Encoding) {
         // SAFETY (the memory values below): everything they borrow outlives this function,
         // which ends every call it begins.
         let program = [1u8, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12];
@@ -408,11 +410,11 @@ mod tests {
     #[test]
     fn events_made_directly_are_the_events_read_back_from_the_trace_bytes() {
         SEEN.with(|s| s.borrow_mut().clear());
-        let mut direct = Out::Events(Events::new(TEST, None));
+        let mut direct = Encoding::Events(Events::new(TEST, None));
         record(&mut direct);
         let direct: Vec<String> = SEEN.with(|s| s.borrow_mut().drain(..).collect());
 
-        let mut bytes = Out::new(true, None);
+        let mut bytes = Encoding::new(true, None);
         record(&mut bytes);
         let mut reader = Reader::events(bytes.bytes(), 0);
         let mut decoded = Vec::new();
@@ -442,7 +444,7 @@ mod tests {
     #[test]
     fn a_call_never_ended_is_forgotten() {
         SEEN.with(|s| s.borrow_mut().clear());
-        let mut out = Out::Events(Events::new(TEST, None));
+        let mut out = Encoding::Events(Events::new(TEST, None));
         out.begin_call(0, 0, 2);
         out.uint(1);
         out.discard_call();
