@@ -46,6 +46,8 @@ pub struct Live {
     /// The tracer, with the BVHs of display-list meshes kept across frames.
     renderer: glray_render::Renderer,
     dump: Option<PathBuf>,
+    /// The most frames dumped (setting `dump_frames`; None: every one).
+    dump_frames: Option<u64>,
     /// GLRAY_PRESENT.
     present: present::Way,
     /// The frame revision each thread presented last.
@@ -94,6 +96,7 @@ pub fn configure(config: &Config) -> Live {
         trigger,
         renderer: glray_render::Renderer::new(glray_render::Options::from_config(config).unwrap_or_default()),
         dump: config.dump_scene().map(PathBuf::from),
+        dump_frames: config.dump_frames(),
         present: present::Way::from_setting(config.present()),
         presented: HashMap::new(),
         last: HashMap::new(),
@@ -223,16 +226,26 @@ fn follow_live(capture: &mut Capture, cmd: usize, thread: u32, args: &[Value], r
 /// Called after this thread made a context current: capture follows only compatibility
 /// contexts (a core profile has no fixed-function GL; its frames stay the real GL's).
 pub fn made_current() {
-    if ON.load(Ordering::Relaxed) && crate::abi::profile::core() && !TOLD_CORE.with(|t| t.replace(true)) {
-        glray_core::info!(
-            "a core-profile context is current: glray follows fixed-function GL, so its frames are the real GL's"
+    if ON.load(Ordering::Relaxed) && crate::abi::profile::core() {
+        tell_left_alone("it made a core-profile context current");
+    }
+}
+
+/// Says once per process, at the default log level, that this program's frames are not ray
+/// traced and why: a user who runs a program under glray and gets the real GL's pictures back
+/// must not have to guess (ParaView's shaders, a core profile). Whichever reason comes first
+/// is told; threads and contexts after it add nothing.
+fn tell_left_alone(why: &str) {
+    static TOLD: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    if !TOLD.swap(true, Ordering::Relaxed) {
+        glray_core::warn!(
+            "frames are left to the real GL, not ray traced: {why}, and glray ray traces fixed-function \
+             GL only (see docs/compatibility.md)"
         );
     }
 }
 
 thread_local! {
-    /// This thread was told that core profiles are left to the real GL.
-    static TOLD_CORE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     /// The real GL did not get this thread's open glBegin: its vertices and glEnd skip it too.
     static SKIPPED_BEGIN: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     /// The real GL did not get this thread's last call (capture, following it next, reports
@@ -383,11 +396,10 @@ impl Live {
         let frame = ctx.frame();
         if frame.unsupported_draws > 0 {
             if self.fell_back.insert(thread) {
-                glray_core::info!(
-                    "frames with shader draws ({} in this one) are left to the real GL; glray ray traces \
-                     fixed-function frames",
+                tell_left_alone(&format!(
+                    "it draws with shaders ({} draws in its first such frame)",
                     frame.unsupported_draws
-                );
+                ));
             }
             // The real GL rasterizes everything again from the next frame on.
             self.shown.remove(&thread);
@@ -406,8 +418,22 @@ impl Live {
             None => renderer.render(frame, w, h, last),
         };
         if let Some(dir) = &self.dump {
-            if let Err(e) = dump::write(dir, self.frames, frame) {
-                glray_core::warn!("dump_scene: {e}");
+            match self.dump_frames {
+                Some(most) if self.frames >= most => {
+                    if self.frames == most {
+                        glray_core::warn!(
+                            "dump_scene: the first {} written to {}; dump_frames (GLRAY_DUMP_FRAMES) writes more \
+                             (0: every frame)",
+                            glray_core::log::plural(most, "frame"),
+                            dir.display()
+                        );
+                    }
+                }
+                _ => {
+                    if let Err(e) = dump::write(dir, self.frames, frame) {
+                        glray_core::warn!("dump_scene: {e}");
+                    }
+                }
             }
         }
         let number = self.frames;

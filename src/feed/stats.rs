@@ -53,7 +53,7 @@ impl StatsSink {
             StatsSink::Stderr => writeln!(
                 std::io::stderr(),
                 "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms{}{}, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
-                 present {:.2} ms; {} triangles, {} samples per pixel{}{}",
+                 present {:.2} ms; {}, {} per pixel{}{}",
                 s.frame,
                 s.width,
                 s.height,
@@ -71,8 +71,8 @@ impl StatsSink {
                 r.rays,
                 mrays,
                 ms(s.present),
-                r.triangles,
-                r.samples,
+                glray_core::log::plural(r.triangles, "triangle"),
+                glray_core::log::plural(u64::from(r.samples), "sample"),
                 if r.reused { " (unchanged: the last picture shown again)" } else { "" },
                 match r.kept_bytes {
                     0 => String::new(),
