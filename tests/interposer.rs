@@ -325,6 +325,13 @@ fn glray_run_sets_up_both_ways_and_refuses_bad_settings() {
     let out = show(&["run", "--", "/nonexistent/program"], &[]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("/nonexistent/program"), "{}", stderr(&out));
+    // Without `--` too: the first word that is not glray's own flag starts the program, and
+    // every word after it (flags included) is the program's.
+    let out = show(&["run", "--set", "log=info", "sh", "-c", script, "--set"], &[]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(stdout(&out).trim(), format!("{}||info", libglray().display()), "run without --");
+    let out = show(&["run", "--set", "log=info", "sh", "-c", "echo \"$0 $1\"", "--record", "x"], &[]);
+    assert_eq!(stdout(&out).trim(), "--record x", "the program's flags stay the program's");
 }
 
 #[test]
@@ -361,6 +368,29 @@ fn glray_info_shows_every_setting_with_its_source_and_the_real_gl() {
     assert!(line("real_egl").contains("[default]"));
     for s in glray_core::config::SETTINGS {
         assert!(text.contains(&glray_core::config::env_name(s.key)), "info omits {}", s.key);
+    }
+    // Every value is shown as it is in force: an effect left to the preset shows the preset's,
+    // an empty path what it means.
+    let out = run_ok(
+        Command::new(glray_bin()).args(["info", "--set", "preset=full", "--set", "ao_samples=8"]),
+        "glray info preset=full",
+    );
+    let text = stdout(&out);
+    let line = |key: &str| {
+        let l =
+            text.lines().find(|l| l.trim_start().starts_with(&format!("{key} "))).unwrap_or_else(|| panic!("{text}"));
+        l.split_whitespace().collect::<Vec<_>>().join(" ")
+    };
+    assert!(line("ao_samples").starts_with("ao_samples = 8 [glray run flag]"), "{}", line("ao_samples"));
+    assert!(line("samples").starts_with("samples = 4 [preset full]"), "{}", line("samples"));
+    assert!(line("shadows").starts_with("shadows = true [preset full]"), "{}", line("shadows"));
+    assert!(line("reflections").starts_with("reflections = 1 [preset full]"), "{}", line("reflections"));
+    assert!(line("record").starts_with("record = (none) [default]"), "{}", line("record"));
+    assert!(line("dump_scene").starts_with("dump_scene = (none) [default]"), "{}", line("dump_scene"));
+    assert!(line("real_egl").starts_with("real_egl = (auto) [default]"), "{}", line("real_egl"));
+    assert!(line("dump_frames").starts_with("dump_frames = 10 [default]"), "{}", line("dump_frames"));
+    for s in glray_core::config::SETTINGS {
+        assert!(!line(s.key).contains("= ["), "a blank value: {}", line(s.key));
     }
 
     std::fs::write(&file, "presett = \"gl\"\n").unwrap();

@@ -20,9 +20,11 @@ fn replay(trace: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
     run_ok(&mut c, &format!("glray replay {}", trace.display()))
 }
 
-/// `glray compare A B` with the default thresholds (no pixel off by more than 5%).
+/// `glray compare A B` with no pixel off by more than 5% (the default fuzz).
 fn compare_ok(a: &Path, b: &Path, extra: &[&str]) {
-    let out = run_ok(Command::new(glray_bin()).arg("compare").arg(a).arg(b).args(extra), "glray compare");
+    let mut c = Command::new(glray_bin());
+    c.arg("compare").arg(a).arg(b).args(["--max-differing", "0"]).args(extra);
+    let out = run_ok(&mut c, "glray compare");
     assert!(stdout(&out).contains("pass"), "{}", stdout(&out));
 }
 
@@ -63,21 +65,49 @@ fn frames_can_be_chosen() {
 #[test]
 fn ray_traced_replays_trace_only_the_frames_a_chosen_one_needs() {
     let dir = scratch("traced-frames");
-    let trace = suite().join("osmesa-all.trace");
+    // A moving scene (the suite's), and a still one: an idle program's frames, all the same.
+    let moving = suite().join("osmesa-all.trace");
+    let still = dir.join("still.trace");
+    let mut record = command(Way::Preload, &[], &example("osmesa_scene"), 60);
+    record.arg(dir.join("still.png")).arg("3").env("SCENE_STILL", "1").env("GLRAY_RECORD", &still);
+    run_ok(&mut record, "osmesa_scene recording, still");
     let run = |preset: &str, out: &str, frames: &[&str]| {
+        let trace = if preset == "gl" { &moving } else { &still };
         let mut c = glray(&["replay", "--renderer", "glray", "--out"]);
-        c.arg(dir.join(out)).arg(&trace).args(frames).env("GLRAY_PRESET", preset);
-        stdout(&run_ok(&mut c, "glray replay --renderer glray"))
+        c.arg(dir.join(out)).arg(trace).args(frames).env("GLRAY_PRESET", preset);
+        let o = run_ok(&mut c, "glray replay --renderer glray");
+        (stdout(&o), stderr(&o))
+    };
+    let calls = |out: &str| -> u64 {
+        let n = out.strip_prefix("ray traced ").and_then(|s| s.split(' ').next()).unwrap_or_else(|| panic!("{out}"));
+        n.parse().unwrap_or_else(|e| panic!("{out}: {e}"))
     };
     // The GL look: frames 0 and 1 clear and are not written, so they are not traced, and
     // frame 2 is the same picture as when every frame is.
-    assert!(run("gl", "chosen", &["--frames", "2"]).contains("(1 frames traced)"));
-    assert!(run("gl", "all", &[]).contains("(3 frames traced)"));
+    let (chosen, _) = run("gl", "chosen", &["--frames", "2"]);
+    assert!(chosen.contains(": 1 frame (") && chosen.contains("(1 frame traced, 1 pass)"), "{chosen}");
+    let (all, _) = run("gl", "all", &[]);
+    assert!(all.contains("(3 frames traced, 3 passes)"), "{all}");
     assert_same_file(&dir.join("all/frame-0002.png"), &dir.join("chosen/frame-0002.png"), "the GL look");
-    // Ambient occlusion refines over unchanged frames: frame 2 holds frames 0 and 1's samples.
-    assert!(run("ao", "ao-chosen", &["--frames", "2"]).contains("(3 frames traced)"));
-    run("ao", "ao-all", &[]);
+    // Ambient occlusion refines over unchanged frames (the still scene): frame 2 holds frames 0
+    // and 1's samples,
+    // gathered at frame 2 alone (three passes, said on standard error), not by tracing
+    // frames 0 and 1: the same picture as the replay of every frame.
+    let (ao_chosen, said) = run("ao", "ao-chosen", &["--frames", "2"]);
+    assert!(ao_chosen.contains("(1 frame traced, 3 passes)"), "{ao_chosen}");
+    assert!(said.contains("frame 2: gathering 3 passes (3 samples per pixel)"), "{said}");
+    let (ao_all, said) = run("ao", "ao-all", &[]);
+    assert!(ao_all.contains("(3 frames traced, 3 passes)"), "{ao_all}");
+    assert!(!said.contains("gathering"), "{said}");
     assert_same_file(&dir.join("ao-all/frame-0002.png"), &dir.join("ao-chosen/frame-0002.png"), "ao");
+    // `--frames 0`: one frame traced, one pass, and the trace read no further than frame 0.
+    let (first, _) = run("ao", "ao-first", &["--frames", "0"]);
+    assert!(first.contains(": 1 frame (") && first.contains("(1 frame traced, 1 pass)"), "{first}");
+    assert!(calls(&first) < calls(&ao_all), "stops after frame 0: {first} / {ao_all}");
+    assert_same_file(&dir.join("ao-all/frame-0000.png"), &dir.join("ao-first/frame-0000.png"), "ao frame 0");
+    // Without a terminal, a replay shorter than the plain lines' period prints no progress.
+    let (_, said) = run("ao", "ao-quiet", &["--frames", "1"]);
+    assert!(!said.contains("replay: frame"), "{said}");
 }
 
 /// Records `program args` under glray (with `way`'s preloads), replays into OSMesa, and returns
@@ -264,6 +294,64 @@ fn compare_reports_and_its_exit_status_follows_the_thresholds() {
     let missing = glray(&["compare"]).arg(&a).arg(dir.join("missing.png")).output().unwrap();
     assert_eq!(missing.status.code(), Some(2));
     assert!(stderr(&missing).contains("missing.png"));
+    // The defaults are the documented rule: up to 2% of pixels may differ by more than 5%.
+    // Two images 1.5% apart pass with no flags, 2.5% apart fail; percentages are accepted.
+    let image = |name: &str, off: usize| {
+        let mut rgb = vec![100u8; 100 * 100 * 3];
+        rgb[..off * 3].fill(200);
+        let path = dir.join(name);
+        glray_core::image::Image { width: 100, height: 100, rgb }.write_png(&path).unwrap();
+        path
+    };
+    let (base, near, far) = (image("base.png", 0), image("near.png", 150), image("far.png", 250));
+    assert_eq!(glray(&["compare"]).arg(&base).arg(&near).output().unwrap().status.code(), Some(0));
+    let out = glray(&["compare"]).arg(&base).arg(&far).output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", stdout(&out));
+    assert!(stdout(&out).contains("250 of 10000 pixels differ by more than 5.0% (2.500%)"), "{}", stdout(&out));
+    let pct = glray(&["compare", "--max-differing", "3%"]).arg(&base).arg(&far).output().unwrap();
+    assert_eq!(pct.status.code(), Some(0), "{}", stderr(&pct));
+    // A bad value is refused naming its flag, and only it.
+    let bad = glray(&["compare", "--max-differing", "5"]).arg(&base).arg(&far).output().unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    let err = stderr(&bad);
+    assert!(err.contains("--max-differing") && err.contains("5%") && !err.contains("--fuzz"), "{err}");
+}
+
+#[test]
+fn bench_makes_the_anchors_mesh_or_reads_an_obj() {
+    // No mesh given: the anchors' isosurface, generated (N = 26 for about 20K triangles).
+    let small = ["--frames", "1", "--builds", "1", "--width", "64", "--height", "36", "--json"];
+    let out = run_ok(glray(&["bench", "--triangles", "20K"]).args(small), "glray bench --triangles 20K");
+    let json = stdout(&out);
+    assert!(json.contains("\"mesh\":\"isosurface N=26 (generated)\""), "{json}");
+    let field = |json: &str, key: &str| -> f64 {
+        let rest = json.split(&format!("\"{key}\":")).nth(1).unwrap_or_else(|| panic!("{key}: {json}"));
+        rest.split([',', '}']).next().unwrap().parse().unwrap()
+    };
+    let triangles = field(&json, "triangles");
+    assert!((18_000.0..22_000.0).contains(&triangles), "{json}");
+    assert!(field(&json, "hits") > 100.0, "the camera sees the mesh: {json}");
+    // An OBJ of a user's own: a far-away, huge octahedron, moved to where the camera looks.
+    let dir = scratch("bench-obj");
+    let obj = dir.join("octahedron.obj");
+    let mut text = String::new();
+    for v in [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]] {
+        text += &format!("v {} {} {}\n", 500 + 100 * v[0], -300 + 100 * v[1], 100 * v[2]);
+    }
+    text += "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
+    std::fs::write(&obj, text).unwrap();
+    let out = run_ok(glray(&["bench", "--mesh"]).arg(&obj).args(small), "glray bench --mesh octahedron.obj");
+    let json = stdout(&out);
+    assert_eq!(field(&json, "triangles"), 8.0, "{json}");
+    assert!(field(&json, "hits") > 100.0, "the camera sees the mesh: {json}");
+    // A bad file and a bad count say what is wrong.
+    std::fs::write(&obj, "v 0 0 0\nf 1 2 3\n").unwrap();
+    let bad = glray(&["bench", "--mesh"]).arg(&obj).output().unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(stderr(&bad).contains("octahedron.obj: line 2: an index out of range"), "{}", stderr(&bad));
+    let bad = glray(&["bench", "--triangles", "lots"]).output().unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(stderr(&bad).contains("--triangles") && stderr(&bad).contains("100K"), "{}", stderr(&bad));
 }
 
 #[test]

@@ -25,9 +25,10 @@ pub fn guard<R>(name: &CStr, f: impl FnOnce() -> R) -> R {
 mod tests {
     #[test]
     fn a_panic_becomes_zero() {
-        let r: u32 = super::guard(c"glTest", || panic!("boom"));
+        let (r, said): (u32, _) = glray_core::log::captured(|| super::guard(c"glTest", || panic!("boom")));
         assert_eq!(r, 0);
-        let p: *mut u8 = super::guard(c"glTest", || panic!("boom"));
+        assert_eq!(said, "glray: error: internal error in glTest: boom; the call returned 0\n");
+        let (p, _): (*mut u8, _) = glray_core::log::captured(|| super::guard(c"glTest", || panic!("boom")));
         assert!(p.is_null());
         assert_eq!(super::guard(c"glTest", || 7u8), 7);
     }

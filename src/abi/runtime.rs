@@ -10,6 +10,11 @@ use glray_core::reallib::{self, FileId, RealKind, RealLib};
 
 pub struct Runtime {
     pub config: Config,
+    /// What was wrong with the settings (glray then passes everything through), told at the
+    /// process's first GL call (`real`), not as the library loads: under a plain LD_PRELOAD
+    /// every process of a command loads glray (`timeout`, a shell, a launcher script), and the
+    /// user should read it once, from the program that draws.
+    bad_settings: Option<String>,
     /// glray's own file, as the loader found it (the preload path or the drop-in name).
     pub own_path: Option<CString>,
     pub own_file: Option<FileId>,
@@ -28,16 +33,15 @@ pub fn get() -> &'static Runtime {
 }
 
 fn init() -> Runtime {
-    let config = match Config::from_process_env() {
-        Ok(c) => c,
+    let (config, bad_settings) = match Config::from_process_env() {
+        Ok(c) => (c, None),
         Err(e) => {
-            // Never stop the host: say what is wrong, loudly, and change nothing it draws.
-            glray_core::log::set_level(glray_core::log::Level::Error);
-            glray_core::error!("{e}; glray runs as a pure pass-through until this is fixed");
-            Config::resolve(&[], &[("enable".into(), "false".into())]).expect("defaults are valid")
+            // Never stop the host: change nothing it draws, and say what is wrong (`real`).
+            let off = Config::resolve(&[], &[("enable".into(), "false".into())]).expect("defaults are valid");
+            (off, Some(e.to_string()))
         }
     };
-    glray_core::log::set_level(config.log_level());
+    glray_core::log::set_level(if bad_settings.is_some() { glray_core::log::Level::Error } else { config.log_level() });
 
     let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
     // SAFETY: dladdr on the address of one of our own functions.
@@ -51,7 +55,7 @@ fn init() -> Runtime {
         own_path.as_ref().map_or("?".into(), |p| p.to_string_lossy()),
         if config.enable() { "" } else { " (pass-through: enable = false)" }
     );
-    Runtime { config, own_path, own_file, own_base: info.dli_fbase }
+    Runtime { config, bad_settings, own_path, own_file, own_base: info.dli_fbase }
 }
 
 /// The real library of `kind`, opened on first use; None (logged once) if it cannot be found.
@@ -60,6 +64,7 @@ pub fn real(kind: RealKind) -> Option<&'static RealLib> {
     let slot = &LIBS[RealKind::ALL.iter().position(|k| *k == kind).unwrap()];
     slot.get_or_init(|| {
         let rt = get();
+        tell_bad_settings(rt);
         match reallib::open(kind, rt.config.real_path(kind.setting()), rt.own_file) {
             Ok(lib) => {
                 glray_core::debug!("real {} is {}", kind.soname(), lib.path);
@@ -72,4 +77,14 @@ pub fn real(kind: RealKind) -> Option<&'static RealLib> {
         }
     })
     .as_ref()
+}
+
+/// Says, once, what is wrong with the settings: at the first GL, GLX, EGL or OSMesa call that
+/// needs a real library, so in the process that draws and not in every process the command
+/// started.
+fn tell_bad_settings(rt: &Runtime) {
+    static TOLD: std::sync::Once = std::sync::Once::new();
+    if let Some(e) = &rt.bad_settings {
+        TOLD.call_once(|| glray_core::error!("{e}; glray runs as a pure pass-through until this is fixed"));
+    }
 }

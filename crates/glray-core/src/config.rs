@@ -186,6 +186,13 @@ pub const SETTINGS: &[Setting] = &[
               coordinates) and scene-NNNN.json (triangles, draws, camera). Empty: no dump.",
     },
     Setting {
+        key: "dump_frames",
+        kind: Kind::Int(0, 1 << 30),
+        default: "10",
+        doc: "How many frames `dump_scene` writes: the first N ray-traced ones (a program drawing 60 \
+              frames a second would fill a disk). 0: every frame.",
+    },
+    Setting {
         key: "real_opengl",
         kind: Kind::Path,
         default: "",
@@ -309,7 +316,32 @@ fn validate(s: &Setting, value: &str, place: &dyn Fn() -> String) -> Result<Stri
 
 fn unknown_key(key: &str, place: &str) -> ConfigError {
     let keys: Vec<&str> = SETTINGS.iter().map(|s| s.key).collect();
-    ConfigError(format!("unknown setting `{key}` ({place}); known settings: {}", keys.join(", ")))
+    let guess = nearest(key, keys.iter().copied()).map(|k| format!("did you mean `{k}`? ")).unwrap_or_default();
+    ConfigError(format!("unknown setting `{key}` ({place}); {guess}known settings: {}", keys.join(", ")))
+}
+
+/// The candidate a misspelt `word` most likely meant: the closest by edit distance (letters
+/// added, dropped or changed, case aside), if it is close (a third of the word's letters at most).
+fn nearest<'a>(word: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    let word = word.to_ascii_lowercase();
+    let best = candidates.map(|c| (edit_distance(&word, &c.to_ascii_lowercase()), c)).min_by_key(|(d, _)| *d)?;
+    (best.0 > 0 && best.0 <= word.len().div_ceil(3)).then_some(best.1)
+}
+
+/// Levenshtein distance over bytes (setting names are ASCII).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b = b.as_bytes();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.bytes().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let next = (diagonal + usize::from(ca != *cb)).min(row[j] + 1).min(row[j + 1] + 1);
+            diagonal = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
 }
 
 /// The config file in effect: $GLRAY_CONFIG if set, else $XDG_CONFIG_HOME/glray/config.toml or
@@ -363,7 +395,13 @@ impl Config {
             let place = format!("environment variable {name}");
             let s = setting(&key).ok_or_else(|| {
                 let keys: Vec<String> = SETTINGS.iter().map(|s| env_name(s.key)).collect();
-                ConfigError(format!("unknown setting {name} ({place}); known: {}, {CONFIG_ENV}", keys.join(", ")))
+                let guess = nearest(name, keys.iter().map(String::as_str).chain([CONFIG_ENV]))
+                    .map(|k| format!("did you mean {k}? "))
+                    .unwrap_or_default();
+                ConfigError(format!(
+                    "unknown setting {name} ({place}); {guess}known: {}, {CONFIG_ENV}",
+                    keys.join(", ")
+                ))
             })?;
             let v = validate(s, value, &|| place.clone())?;
             values.insert(s.key, (v, Source::Env(name.clone())));
@@ -462,6 +500,11 @@ impl Config {
         Some(self.get("dump_scene")).filter(|p| !p.is_empty())
     }
 
+    /// How many frames `dump_scene` writes (None: every one).
+    pub fn dump_frames(&self) -> Option<u64> {
+        self.get("dump_frames").parse().ok().filter(|n| *n > 0)
+    }
+
     /// The user's path for a real library, if set.
     pub fn real_path(&self, key: &str) -> Option<&str> {
         Some(self.get(key)).filter(|p| !p.is_empty())
@@ -474,6 +517,19 @@ mod tests {
 
     fn vars(v: &[(&str, &str)]) -> Vec<(String, String)> {
         v.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect()
+    }
+
+    #[test]
+    fn a_misspelt_setting_gets_a_suggestion() {
+        let env = |k: &str| vars(&[("HOME", "/nonexistent"), (k, "1")]);
+        let e = Config::resolve(&env("GLRAY_AO_SAMPLE"), &[]).unwrap_err().0;
+        assert!(e.starts_with("unknown setting GLRAY_AO_SAMPLE (environment variable GLRAY_AO_SAMPLE); did you mean GLRAY_AO_SAMPLES? known:"), "{e}");
+        let e = Config::resolve(&vars(&[("HOME", "/nonexistent")]), &[("preest".into(), "gl".into())]).unwrap_err().0;
+        assert!(e.contains("did you mean `preset`?"), "{e}");
+        // Nothing close: no guess.
+        let e = Config::resolve(&env("GLRAY_WHATEVER"), &[]).unwrap_err().0;
+        assert!(!e.contains("did you mean"), "{e}");
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
     }
 
     #[test]

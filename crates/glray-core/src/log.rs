@@ -52,7 +52,33 @@ pub fn enabled(level: Level) -> bool {
 pub fn write(level: Level, msg: std::fmt::Arguments) {
     if enabled(level) {
         let line = format!("glray: {}: {msg}\n", level.word());
-        let _ = std::io::stderr().write_all(line.as_bytes());
+        let kept = CAPTURED.try_with(|c| c.borrow_mut().as_mut().map(|kept| kept.push_str(&line)).is_some());
+        if kept != Ok(true) {
+            let _ = std::io::stderr().write_all(line.as_bytes());
+        }
+    }
+}
+
+thread_local! {
+    /// This thread's messages, kept instead of written while `captured` runs.
+    static CAPTURED: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` with the messages this thread writes kept rather than printed, and returns them:
+/// a test that expects an error reads it instead of printing it among passing tests' output.
+pub fn captured<R>(f: impl FnOnce() -> R) -> (R, String) {
+    let before = CAPTURED.with(|c| c.borrow_mut().replace(String::new()));
+    let r = f();
+    let kept = CAPTURED.with(|c| std::mem::replace(&mut *c.borrow_mut(), before)).unwrap_or_default();
+    (r, kept)
+}
+
+/// "1 frame", "2 frames", "3 passes".
+pub fn plural(n: u64, word: &str) -> String {
+    match (n, word.ends_with('s')) {
+        (1, _) => format!("1 {word}"),
+        (_, true) => format!("{n} {word}es"),
+        (_, false) => format!("{n} {word}s"),
     }
 }
 
@@ -64,3 +90,14 @@ macro_rules! warn { ($($t:tt)*) => { $crate::log::write($crate::log::Level::Warn
 macro_rules! info { ($($t:tt)*) => { $crate::log::write($crate::log::Level::Info, format_args!($($t)*)) } }
 #[macro_export]
 macro_rules! debug { ($($t:tt)*) => { $crate::log::write($crate::log::Level::Debug, format_args!($($t)*)) } }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn counts_are_said_in_the_right_number() {
+        use super::plural;
+        assert_eq!(plural(1, "frame"), "1 frame");
+        assert_eq!(plural(0, "sample"), "0 samples");
+        assert_eq!(plural(3, "pass"), "3 passes");
+    }
+}

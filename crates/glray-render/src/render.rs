@@ -120,15 +120,9 @@ impl Renderer {
         glray_core::reuse::frame_begins();
         self.meshes.prune();
         let effects = self.options.effects;
-        // Only a cleared frame is all its own: one drawn over the last depends on it.
-        let key = (effects.progressive && frame.cleared).then(|| signature(frame, width, height, &self.options));
-        let pass = match (&self.accumulation, key) {
-            (Some(a), Some(k)) if a.key == k => a.passes,
-            _ => 0,
-        };
-        // The GL look has its whole picture after one pass; effects converge over `MAX_PASSES`.
-        let converged = if effects.beyond_gl() { MAX_PASSES } else { 1 };
-        if pass >= converged {
+        let key = self.accumulation_key(frame, width, height);
+        let pass = key.map_or(0, |k| self.passes(k));
+        if pass >= self.converged_passes() {
             // Nothing traced: the trees set aside for refits go (as after any frame below).
             self.meshes.forget_gone();
             let a = self.accumulation.as_ref().expect("accumulated");
@@ -193,6 +187,35 @@ impl Renderer {
             }
         }
         rendered
+    }
+
+    /// The key under which progressive refinement adds up the passes of `frame` rendered at
+    /// `width` x `height`, the same for every frame that shows the same scene; None when each
+    /// render of it is a picture of its own (progressive is off, or the frame draws over the
+    /// last one: only a cleared frame is all its own).
+    pub fn accumulation_key(&self, frame: &Frame, width: u32, height: u32) -> Option<u64> {
+        (self.options.effects.progressive && frame.cleared).then(|| signature(frame, width, height, &self.options))
+    }
+
+    /// The passes added up so far under `key` (0: none; the next render starts afresh).
+    pub fn passes(&self, key: u64) -> u32 {
+        self.accumulation.as_ref().filter(|a| a.key == key).map_or(0, |a| a.passes)
+    }
+
+    /// The passes after which a picture has all its samples and is shown again untraced: one
+    /// for the GL look, `MAX_PASSES` with effects.
+    pub fn converged_passes(&self) -> u32 {
+        if self.options.effects.beyond_gl() {
+            MAX_PASSES
+        } else {
+            1
+        }
+    }
+
+    /// Forgets the samples added up: the next render starts a picture afresh (a replay that
+    /// skipped frames showing another scene since).
+    pub fn restart(&mut self) {
+        self.accumulation = None;
     }
 
     /// What the last `render` took.

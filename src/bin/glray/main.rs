@@ -9,6 +9,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use glray_core::config::{env_name, Config, Kind, SETTINGS};
+use glray_core::log::plural;
 use glray_core::reallib::{self, FileId, RealKind};
 
 mod apitrace;
@@ -16,6 +17,8 @@ mod bench;
 #[allow(dead_code)]
 #[path = "../../abi/commands.rs"]
 mod commands;
+mod meshgen;
+mod progress;
 mod raytrace;
 mod replay;
 
@@ -55,8 +58,9 @@ enum Command {
         /// libglray.so to use (default: the one installed beside this command).
         #[arg(long, value_name = "PATH")]
         library: Option<PathBuf>,
-        /// The program and its arguments.
-        #[arg(required = true, last = true, value_name = "PROGRAM ARGS")]
+        /// The program and its arguments (`--` before them is optional: every word from the
+        /// program's name on is the program's).
+        #[arg(required = true, trailing_var_arg = true, allow_hyphen_values = true, value_name = "PROGRAM ARGS")]
         program: Vec<OsString>,
     },
     /// Print the version, the library, the real GL libraries found and every setting in force
@@ -73,11 +77,13 @@ enum Command {
     Compare {
         a: PathBuf,
         b: PathBuf,
-        /// A channel may be off by this share of 255 before its pixel counts as differing.
-        #[arg(long, default_value_t = 0.05)]
+        /// A channel may be off by this share of 255 before its pixel counts as differing
+        /// (0.05 or 5%).
+        #[arg(long, default_value = "0.05", value_name = "SHARE", value_parser = parse_share)]
         fuzz: f64,
-        /// The largest share of differing pixels that passes (0.02 = 2%).
-        #[arg(long, default_value_t = 0.0)]
+        /// The largest share of differing pixels that passes (0.02 or 2%: the rule glray's
+        /// GL look is held to against Mesa, docs/compatibility.md).
+        #[arg(long, default_value = "0.02", value_name = "SHARE", value_parser = parse_share)]
         max_differing: f64,
         /// The lowest PSNR in dB that passes (default: no PSNR threshold).
         #[arg(long)]
@@ -105,12 +111,18 @@ enum Command {
         #[arg(long)]
         readpixels: bool,
     },
-    /// Benchmark the tracer on an anchors mesh (../shared/anchors: meshgen's ISOMESH1 files),
-    /// with the anchors' camera and light: BVH build, primary and ambient-occlusion frames,
-    /// peak memory, in embree_bench's terms.
+    /// Benchmark the tracer on the anchors' isosurface (made here, or read from a file), with
+    /// the anchors' camera and light: BVH build, primary and ambient-occlusion frames, peak
+    /// memory, in embree_bench's terms.
     Bench {
+        /// The mesh: an anchors file (meshgen's ISOMESH1 .bin) or a Wavefront .obj (moved and
+        /// scaled to where the camera looks). Default: the anchors' isosurface, generated.
         #[arg(long, value_name = "FILE")]
-        mesh: PathBuf,
+        mesh: Option<PathBuf>,
+        /// The size of the generated isosurface (without --mesh): the anchors' 100K, 1M or
+        /// 10M, or any count (250K, 2.5M, 40000).
+        #[arg(long, default_value = "1M", value_name = "COUNT", value_parser = parse_count, conflicts_with = "mesh")]
+        triangles: u64,
         #[arg(long, default_value_t = 1280)]
         width: u32,
         #[arg(long, default_value_t = 720)]
@@ -171,9 +183,10 @@ fn main() -> ExitCode {
             replay(&trace, renderer, &out, frames, readpixels)
         }
         Command::Dump { trace, calls } => dump(&trace, calls),
-        Command::Bench { mesh, width, height, ao, threads, frames, builds, bvh, json, out } => {
+        Command::Bench { mesh, triangles, width, height, ao, threads, frames, builds, bvh, json, out } => {
             bench::run(&bench::Args {
-                mesh: &mesh,
+                mesh: mesh.as_deref(),
+                triangles,
                 bvh: glray_render::options::BvhBuild::from_setting(&bvh).unwrap_or_default(),
                 width,
                 height,
@@ -249,15 +262,17 @@ fn replay_glray(
 ) -> Result<(), String> {
     // The preset and effect settings in force; `off` (nothing ray traced live) replays the GL look.
     let options = glray_render::Options::from_config(config).unwrap_or_default();
-    let s = raytrace::run(data, out, frames, readpixels, &options).map_err(|e| format!("{}: {e}", trace.display()))?;
+    let s = raytrace::run(data, out, frames, readpixels, &options, false)
+        .map_err(|e| format!("{}: {e}", trace.display()))?;
     println!(
-        "ray traced {} calls: {} frames ({} triangles) written to {}{} ({} frames traced)",
-        s.calls,
-        s.frames_written,
-        s.triangles,
+        "ray traced {}: {} ({}) written to {}{} ({} traced, {})",
+        plural(s.calls, "call"),
+        plural(s.frames_written, "frame"),
+        plural(s.triangles, "triangle"),
         out.display(),
-        if readpixels { format!(", {} glReadPixels images", s.readpixels_written) } else { String::new() },
-        s.frames_traced
+        if readpixels { format!(", {}", plural(s.readpixels_written, "glReadPixels image")) } else { String::new() },
+        plural(s.frames_traced, "frame"),
+        plural(s.passes_traced, "pass")
     );
     Ok(())
 }
@@ -297,11 +312,15 @@ fn replay_osmesa(
     let mut r = replay::Replayer::new(out, frames, readpixels, config.real_path("real_osmesa"))?;
     let summary = r.run(data).map_err(|e| format!("{}: {e}", trace.display()))?;
     println!(
-        "replayed {} calls: {} frames written to {}{}",
-        summary.calls,
-        summary.frames_written,
+        "replayed {}: {} written to {}{}",
+        plural(summary.calls, "call"),
+        plural(summary.frames_written, "frame"),
         out.display(),
-        if readpixels { format!(", {} glReadPixels images", summary.readpixels_written) } else { String::new() }
+        if readpixels {
+            format!(", {}", plural(summary.readpixels_written, "glReadPixels image"))
+        } else {
+            String::new()
+        }
     );
     if !summary.missing.is_empty() {
         eprintln!("glray: warning: OSMesa lacks {} (those calls were skipped)", summary.missing.join(", "));
@@ -407,9 +426,6 @@ fn compare(
 ) -> ExitCode {
     use glray_core::image::{compare, Image};
     let result = (|| -> Result<bool, String> {
-        if !(0.0..=1.0).contains(&fuzz) || !(0.0..=1.0).contains(&max_differing) {
-            return Err(format!("--fuzz ({fuzz}) and --max-differing ({max_differing}) are shares between 0 and 1"));
-        }
         let c = compare(&Image::read(a)?, &Image::read(b)?, fuzz)?;
         if let Some(d) = diff {
             c.diff.write_png(d)?;
@@ -448,6 +464,40 @@ fn compare(
             ExitCode::from(2)
         }
     }
+}
+
+/// A count such as 40000, 100K, 2.5M (`glray bench --triangles`).
+fn parse_count(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let (number, scale) = match t.char_indices().last() {
+        Some((i, 'k' | 'K')) => (&t[..i], 1e3),
+        Some((i, 'm' | 'M')) => (&t[..i], 1e6),
+        _ => (t, 1.0),
+    };
+    match number.parse::<f64>() {
+        Ok(v) if v * scale >= 1.0 && v * scale <= 1e9 => Ok((v * scale).round() as u64),
+        _ => Err("a count between 1 and 1000M, such as 40000, 100K or 2.5M".into()),
+    }
+}
+
+/// A share between 0 and 1, given as such (0.02) or as a percentage (2%): `glray compare`'s
+/// thresholds. Clap names the flag whose value this refuses.
+fn parse_share(text: &str) -> Result<f64, String> {
+    let (number, scale) = match text.trim().strip_suffix('%') {
+        Some(pct) => (pct.trim(), 100.0),
+        None => (text.trim(), 1.0),
+    };
+    let share = number.parse::<f64>().map(|v| v / scale).ok().filter(|v| (0.0..=1.0).contains(v));
+    share.ok_or_else(|| {
+        if scale == 1.0 && number.parse::<f64>().is_ok_and(|v| (1.0..=100.0).contains(&v)) {
+            format!(
+                "a share between 0 and 1 (did you mean {text}%, that is {}?)",
+                number.parse::<f64>().unwrap() / 100.0
+            )
+        } else {
+            "a share between 0 and 1, such as 0.02, or a percentage such as 2%".to_string()
+        }
+    })
 }
 
 fn parse_flags(set: &[String]) -> Result<Vec<(String, String)>, String> {
@@ -633,11 +683,44 @@ fn info(set: &[String], library: Option<PathBuf>) -> Result<(), String> {
         Some(f) => println!("config file: {}", f.display()),
         None => println!("config file: none (set GLRAY_CONFIG, or create ~/.config/glray/config.toml)"),
     }
-    println!("settings (KEY = VALUE  [source]  environment variable):");
-    for (s, value, source) in config.entries() {
-        let shown = if s.kind == Kind::Path && value.is_empty() { "(auto)" } else { value };
-        println!("  {:<17} = {:<8} [{source}]  {}", s.key, shown, env_name(s.key));
+    println!("settings (KEY = VALUE  [where it came from]  environment variable):");
+    for (key, value, source) in effective_settings(&config) {
+        println!("  {key:<17} = {value:<8} [{source}]  {}", env_name(key));
     }
-    debug_assert_eq!(config.entries().len(), SETTINGS.len());
     Ok(())
+}
+
+/// Every setting's value in force and where it came from: the default, a file, the
+/// environment or a flag; for an effect setting left empty, the preset's value ("preset ao");
+/// for an empty path, what that means ("(none)", or "(auto)" for the real libraries, which
+/// glray finds itself).
+fn effective_settings(config: &Config) -> Vec<(&'static str, String, String)> {
+    let effects = glray_render::Options::from_config(config).map(|o| o.effects);
+    let preset = config.preset();
+    let entries = config.entries();
+    debug_assert_eq!(entries.len(), SETTINGS.len());
+    entries
+        .into_iter()
+        .map(|(s, value, source)| {
+            let from_preset = |v: String| (v, format!("preset {preset}"));
+            let (value, source) = match (value, &effects) {
+                ("", Some(e)) if s.kind != Kind::Path => match s.key {
+                    "ao_samples" => from_preset(e.ao_samples.to_string()),
+                    "ao_distance" => from_preset(e.ao_distance.to_string()),
+                    "ao_intensity" => from_preset(e.ao_intensity.to_string()),
+                    "shadows" => from_preset(e.shadows.to_string()),
+                    "reflections" => from_preset(e.reflections.to_string()),
+                    "reflectivity" => from_preset(e.reflectivity.to_string()),
+                    "samples" => from_preset(e.samples.to_string()),
+                    _ => (String::new(), source.to_string()),
+                },
+                // Preset off: nothing is ray traced, so no effect applies.
+                ("", None) if s.kind != Kind::Path => ("(off)".into(), format!("preset {preset}")),
+                ("", _) if s.key.starts_with("real_") => ("(auto)".into(), source.to_string()),
+                ("", _) => ("(none)".into(), source.to_string()),
+                (v, _) => (v.to_string(), source.to_string()),
+            };
+            (s.key, value, source)
+        })
+        .collect()
 }

@@ -95,6 +95,11 @@ impl FrameSet {
     pub fn contains(&self, n: u64) -> bool {
         self.0.as_ref().is_none_or(|r| r.iter().any(|(a, b)| (*a..=*b).contains(&n)))
     }
+
+    /// The last frame asked for (None: every frame): a replay has nothing to do past it.
+    pub fn last(&self) -> Option<u64> {
+        self.0.as_ref().map(|r| r.iter().map(|(_, b)| *b).max().unwrap_or(0))
+    }
 }
 
 struct Drawable {
@@ -310,7 +315,14 @@ impl Replayer {
                     self.thread = thread;
                     self.set_arrays(&arrays).map_err(at)?;
                 }
-                Event::Frame { number } => self.frame(number).map_err(at)?,
+                Event::Frame { number } => {
+                    self.frame(number).map_err(at)?;
+                    // Past the last frame asked for, nothing more is written (glReadPixels
+                    // images are, at any frame).
+                    if !self.readpixels && self.frames.last().is_some_and(|last| number >= last) {
+                        break;
+                    }
+                }
                 Event::Name { number } => {
                     debug_assert_eq!(number, map.len());
                     map.push(lookup(reader.name(number)));
