@@ -10,11 +10,14 @@
 //! - `feed`: the live feed: capture follows the calls, and at a frame's trigger the frame is
 //!   ray traced;
 //! - `present`: the ray-traced picture put into the real framebuffer;
+//! - `distribute`: in an MPI rank, frames shared with the other ranks (image-parallel), MPI's
+//!   start and end interposed, glray's MPI edge loaded on demand;
 //! - `start`: at load, the settings are read and the sinks started.
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
 pub mod abi;
 mod calls;
+mod distribute;
 mod feed;
 mod present;
 mod record;

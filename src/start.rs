@@ -8,6 +8,7 @@ use crate::feed;
 use crate::record::TraceFile;
 
 fn start() {
+    crate::distribute::at_load();
     let config = &runtime::get().config;
     let capture = config.enable() && config.preset() != "off";
     let live = capture.then(|| feed::configure(config));

@@ -67,12 +67,16 @@ pub struct Live {
     /// child (which has none of its parent's threads) can be given new ones (`forked`);
     /// published for capture's work too (`glray_core::threads`).
     pool: Option<&'static rayon::ThreadPool>,
+    threads: usize,
+    /// In an MPI rank: frames shared with the other ranks.
+    distribution: crate::distribute::Distribution,
 }
 
 /// The tracer's threads (None, logged, if the system gives none: frames are then traced on
 /// rayon's global pool).
-fn tracer_pool() -> Option<&'static rayon::ThreadPool> {
+fn tracer_pool(threads: usize) -> Option<&'static rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
         .thread_name(|i| format!("glray-trace-{i}"))
         .build()
         .map_err(|e| glray_core::warn!("cannot start the tracer's threads ({e}); using rayon's"))
@@ -105,7 +109,9 @@ pub fn configure(config: &Config) -> Live {
         frames: 0,
         stats: config.stats().and_then(|spec| stats::StatsSink::open(spec).map_err(|e| glray_core::warn!("{e}")).ok()),
         capture_time: std::time::Duration::ZERO,
-        pool: tracer_pool(),
+        pool: tracer_pool(crate::distribute::tracer_threads(config)),
+        threads: crate::distribute::tracer_threads(config),
+        distribution: crate::distribute::Distribution::configure(config),
     };
     ON.store(true, Ordering::Relaxed);
     live
@@ -383,7 +389,7 @@ impl Live {
     /// not dropped (`glray_core::threads` never drops one): that would signal threads that
     /// are not there.
     pub fn forked(&mut self) {
-        self.pool = tracer_pool();
+        self.pool = tracer_pool(self.threads);
     }
 
     fn present(&mut self, thread: u32) {
@@ -413,9 +419,17 @@ impl Live {
             return;
         }
         let (renderer, last) = (&mut self.renderer, self.last.get(&thread));
-        let rendered = match &self.pool {
-            Some(pool) => pool.install(|| renderer.render(frame, w, h, last)),
-            None => renderer.render(frame, w, h, last),
+        // In an MPI rank, shared with the other ranks (None: traced here alone).
+        let shared = self.distribution.frame(frame, last, renderer, self.pool);
+        let (rendered, ranks) = match shared {
+            Some(s) => (s.picture, Some(stats::RankStats { rank: s.rank, ranks: s.ranks, report: s.report })),
+            None => {
+                let rendered = match &self.pool {
+                    Some(pool) => pool.install(|| renderer.render(frame, w, h, last)),
+                    None => renderer.render(frame, w, h, last),
+                };
+                (rendered, None)
+            }
         };
         if let Some(dir) = &self.dump {
             match self.dump_frames {
@@ -455,6 +469,7 @@ impl Live {
                 capture: std::mem::take(&mut self.capture_time),
                 render: self.renderer.stats(),
                 present: start.elapsed(),
+                ranks,
             });
         }
         self.shown.insert(thread);

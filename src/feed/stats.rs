@@ -21,6 +21,47 @@ pub struct FrameStats {
     pub capture: Duration,
     pub render: glray_render::Stats,
     pub present: Duration,
+    /// In an MPI rank sharing frames: its part.
+    pub ranks: Option<RankStats>,
+}
+
+/// A rank's part in a shared frame.
+pub struct RankStats {
+    pub rank: usize,
+    pub ranks: usize,
+    pub report: glray_distribute::FrameReport,
+}
+
+impl RankStats {
+    fn text(&self) -> String {
+        let r = &self.report;
+        format!(
+            "; rank {} of {}: {} of {} tiles, {:.2} MB sent, {:.2} MB received, waited {:.2} ms{}",
+            self.rank,
+            self.ranks,
+            r.tiles,
+            r.tiles_total,
+            mb(r.bytes_sent),
+            mb(r.bytes_received),
+            ms(r.wait),
+            r.imbalance.map_or(String::new(), |i| format!(", imbalance {i:.2} (slowest / mean)"))
+        )
+    }
+
+    fn json(&self) -> String {
+        let r = &self.report;
+        format!(
+            ",\"rank\":{},\"ranks\":{},\"tiles\":{},\"tiles_total\":{},\"bytes_sent\":{},\"bytes_received\":{},\"wait_ms\":{:.3},\"imbalance\":{}",
+            self.rank,
+            self.ranks,
+            r.tiles,
+            r.tiles_total,
+            r.bytes_sent,
+            r.bytes_received,
+            ms(r.wait),
+            r.imbalance.map_or("null".to_string(), |i| format!("{i:.3}"))
+        )
+    }
 }
 
 fn ms(d: Duration) -> f64 {
@@ -53,7 +94,7 @@ impl StatsSink {
             StatsSink::Stderr => writeln!(
                 std::io::stderr(),
                 "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms{}{}, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
-                 present {:.2} ms; {}, {} per pixel{}{}",
+                 present {:.2} ms; {}, {} per pixel{}{}{}",
                 s.frame,
                 s.width,
                 s.height,
@@ -77,12 +118,13 @@ impl StatsSink {
                 match r.kept_bytes {
                     0 => String::new(),
                     b => format!("; {:.1} MB kept for the next frame", mb(b)),
-                }
+                },
+                s.ranks.as_ref().map_or(String::new(), RankStats::text)
             ),
             StatsSink::File(f) => writeln!(
                 f,
                 "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
-                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1}}}",
+                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1}{}}}",
                 s.frame,
                 s.thread,
                 s.width,
@@ -98,7 +140,8 @@ impl StatsSink {
                 r.reused,
                 r.fast_builds,
                 r.refits,
-                mb(r.kept_bytes)
+                mb(r.kept_bytes),
+                s.ranks.as_ref().map_or(String::new(), RankStats::json)
             ),
         };
         if let Err(e) = result {

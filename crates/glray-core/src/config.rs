@@ -40,6 +40,7 @@ pub const PRESETS: &[&str] = &["off", "gl", "ao", "full"];
 pub const TRIGGERS: &[&str] = &["auto", "swap", "finish", "flush", "readpixels"];
 pub const LIGHTING: &[&str] = &["vertex", "pixel"];
 pub const PRESENTS: &[&str] = &["auto", "pixels", "shader"];
+pub const DISTRIBUTIONS: &[&str] = &["auto", "local", "replicated", "data-parallel"];
 /// The values of `bvh` (glray-render's `bvh_choice::BvhBuild`).
 pub const BVH_BUILDS: &[&str] = &["auto", "sah", "fast"];
 
@@ -191,6 +192,37 @@ pub const SETTINGS: &[Setting] = &[
         default: "10",
         doc: "How many frames `dump_scene` writes: the first N ray-traced ones (a program drawing 60 \
               frames a second would fill a disk). 0: every frame.",
+    },
+    Setting {
+        key: "distribute",
+        kind: Kind::Choice(DISTRIBUTIONS),
+        default: "auto",
+        doc: "How the ranks of an MPI job share frames (docs/distributed.md): `replicated`, every rank traces \
+              tiles of the whole image against every rank's scene (image-parallel: shadows, AO and reflections \
+              see all the data); `data-parallel`, each rank traces only what it drew, for the host's \
+              compositor; `local`, no MPI at all. `auto`: `replicated` in an MPI rank, `local` otherwise.",
+    },
+    Setting {
+        key: "threads",
+        kind: Kind::Int(0, 4096),
+        default: "0",
+        doc: "Tracer threads in each process. 0: every core, shared among the ranks of an MPI job that run \
+              on the same node.",
+    },
+    Setting {
+        key: "mpi_timeout",
+        kind: Kind::Float(0.0, 86400.0),
+        default: "",
+        doc: "Seconds a rank waits for another before it stops image-parallel tracing with a message naming \
+              that rank (each rank then traces its own data). Empty: 120 s on the first frame, then the last \
+              frame's time plus 10 s.",
+    },
+    Setting {
+        key: "mpi_library",
+        kind: Kind::Path,
+        default: "",
+        doc: "glray's MPI edge, libglray_mpi.so, loaded only in an MPI rank (default: the one beside \
+              libglray.so).",
     },
     Setting {
         key: "real_opengl",
@@ -503,6 +535,53 @@ impl Config {
     /// How many frames `dump_scene` writes (None: every one).
     pub fn dump_frames(&self) -> Option<u64> {
         self.get("dump_frames").parse().ok().filter(|n| *n > 0)
+    }
+
+    /// `distribute`, with `auto` decided: `in_mpi` says whether this process is an MPI rank.
+    pub fn distribute(&self, in_mpi: bool) -> &str {
+        match self.get("distribute") {
+            "auto" if in_mpi => "replicated",
+            "auto" => "local",
+            other => other,
+        }
+    }
+
+    /// Tracer threads asked for (None: decide from the cores and ranks).
+    pub fn threads(&self) -> Option<usize> {
+        self.get("threads").parse().ok().filter(|n| *n > 0)
+    }
+
+    /// `mpi_timeout` in seconds, when set.
+    pub fn mpi_timeout(&self) -> Option<f64> {
+        self.get("mpi_timeout").parse().ok()
+    }
+
+    /// A number that is the same in two processes exactly when the settings that shape a picture
+    /// are: what the ranks of an MPI job must agree on (not where logs, traces and statistics go,
+    /// nor threads or the MPI library).
+    pub fn picture_settings(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        const APART: &[&str] = &[
+            "log",
+            "record",
+            "stats",
+            "dump_scene",
+            "dump_frames",
+            "threads",
+            "mpi_timeout",
+            "mpi_library",
+            "real_opengl",
+            "real_glx",
+            "real_egl",
+            "real_osmesa",
+            "present",
+        ];
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        env!("CARGO_PKG_VERSION").hash(&mut h);
+        for s in SETTINGS.iter().filter(|s| !APART.contains(&s.key)) {
+            (s.key, self.get(s.key)).hash(&mut h);
+        }
+        h.finish()
     }
 
     /// The user's path for a real library, if set.

@@ -37,6 +37,7 @@ pub mod sampling;
 pub mod scene;
 mod signature;
 mod smooth;
+pub mod tiles;
 mod tracer;
 
 pub use options::{Effects, Options};

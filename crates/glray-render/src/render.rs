@@ -20,6 +20,7 @@ use crate::progress::Progress;
 use crate::resolve::closest_hit_suffices;
 use crate::scene::{Hit, Scene};
 use crate::signature::signature;
+use crate::tiles::{TileGrid, TileWork};
 use crate::tracer::{count, Scratch, Tracer};
 
 /// A rendered frame, laid out as GL's framebuffer: rows bottom-up.
@@ -141,12 +142,60 @@ impl Renderer {
             pass,
             progress: self.progress,
             flatten_below: self.flatten_below,
+            work: None,
         };
-        let (mut rendered, linear, stats) = job.run(&mut self.meshes, key.is_some() && effects.beyond_gl());
+        let (rendered, linear, stats) = job.run(&mut self.meshes, key.is_some() && effects.beyond_gl());
         // A frame that built its scene took what it could refit; one that did not (no camera)
         // has no use for the trees either.
         self.meshes.forget_gone();
         self.stats = Stats { kept_bytes: glray_core::reuse::kept_bytes() as u64, ..stats };
+        self.add_pass(key, rendered, linear)
+    }
+
+    /// Traces this rank's share of `frame` (pass `pass` of its progressive refinement): the
+    /// tiles `work` hands out, each handed back as it is done, with its colours before
+    /// rounding when the passes are added up (`linear`). Nothing is added up here: the rank
+    /// that gathers the tiles does that (`add_pass`). Only for a frame that clears and is drawn
+    /// in one view (`shares`).
+    pub fn render_tiles(
+        &mut self,
+        frame: &Frame,
+        width: u32,
+        height: u32,
+        pass: u32,
+        linear: bool,
+        work: &dyn TileWork,
+    ) -> Stats {
+        glray_core::reuse::frame_begins();
+        self.meshes.prune();
+        let mut job = Job {
+            frame,
+            width,
+            height,
+            previous: None,
+            options: &self.options,
+            pass,
+            progress: false,
+            flatten_below: self.flatten_below,
+            work: Some(work),
+        };
+        let (_, _, stats) = job.run(&mut self.meshes, linear);
+        self.meshes.forget_gone();
+        self.stats = Stats { kept_bytes: glray_core::reuse::kept_bytes() as u64, ..stats };
+        self.stats
+    }
+
+    /// Whether `frame` can be traced in shares (`render_tiles`): it clears (no picture under
+    /// it) and is drawn through one viewport.
+    pub fn shares(frame: &Frame) -> bool {
+        frame.cleared && frame.by_viewport().is_none()
+    }
+
+    /// Adds one pass gathered from tiles (`rendered`, and its colours before rounding when
+    /// `linear` is given) to the passes added up under `key`, and returns the picture of them
+    /// all: what `render` does after tracing a whole frame.
+    pub fn add_pass(&mut self, key: Option<u64>, mut rendered: Rendered, linear: Option<Vec<Vec4>>) -> Rendered {
+        let samples = self.options.effects.samples.max(1);
         match (key, linear) {
             (Some(key), Some(linear)) => {
                 let (passes, sum) = match self.accumulation.take() {
@@ -162,13 +211,13 @@ impl Renderer {
                 for (px, s) in rendered.rgba.chunks_mut(4).zip(&sum) {
                     px.copy_from_slice(&to_u8(*s / passes as f32));
                 }
-                self.stats.samples = passes * effects.samples.max(1);
+                self.stats.samples = passes * samples;
                 self.accumulation = Some(Accumulation { key, passes, sum, last: rendered.clone() });
             }
             (Some(key), None) => {
                 // The GL look: shown again as long as nothing changes. The copy goes into the
                 // last one's buffers (no fresh pages: this is every frame of a moving camera).
-                self.stats.samples = effects.samples.max(1);
+                self.stats.samples = samples;
                 let last = match self.accumulation.take() {
                     Some(Accumulation { mut last, .. }) => {
                         // Field by field: a derived `clone_from` would allocate anew.
@@ -183,10 +232,15 @@ impl Renderer {
             }
             _ => {
                 self.accumulation = None;
-                self.stats.samples = effects.samples.max(1);
+                self.stats.samples = samples;
             }
         }
         rendered
+    }
+
+    /// The picture added up under `key`, when it has all its passes (shown again untraced).
+    pub fn converged(&self, key: u64) -> Option<&Rendered> {
+        self.accumulation.as_ref().filter(|a| a.key == key && a.passes >= self.converged_passes()).map(|a| &a.last)
     }
 
     /// The key under which progressive refinement adds up the passes of `frame` rendered at
@@ -339,6 +393,8 @@ struct Job<'a> {
     pass: u32,
     progress: bool,
     flatten_below: usize,
+    /// Only the tiles handed out here, when tracing a share of the frame (`render_tiles`).
+    work: Option<&'a dyn TileWork>,
 }
 
 impl Job<'_> {
@@ -496,7 +552,29 @@ impl Job<'_> {
         // Called, not inlined into rayon's loop: inlined, the pixel loop compiled ~1% slower,
         // and a piece's work is one frame of a profile.
         let process: &(dyn Fn(Piece) + Sync) = &process;
-        pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), w, secondary).into_par_iter().for_each(process);
+        match self.work {
+            None => pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), w, secondary)
+                .into_par_iter()
+                .for_each(process),
+            Some(work) => {
+                // Chunk by chunk as they are handed out: each chunk's pieces on every thread,
+                // then its tiles cut out and handed back.
+                let grid = TileGrid::new(width, height);
+                let mut wanted = vec![false; grid.count() as usize];
+                while let Some(chunk) = work.next() {
+                    let chunk: Vec<u32> = chunk.into_iter().filter(|&t| t < grid.count()).collect();
+                    chunk.iter().for_each(|&t| wanted[t as usize] = true);
+                    pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), w, true)
+                        .into_par_iter()
+                        .filter(|p| wanted[grid.tile_at(p.x0, p.y0) as usize])
+                        .for_each(process);
+                    for &t in &chunk {
+                        wanted[t as usize] = false;
+                        work.done(grid.cut(t, &rgba, &depth, colors.as_deref()));
+                    }
+                }
+            }
+        }
         progress.finish();
         stats.trace = start.elapsed();
         stats.rays = rays.load(Ordering::Relaxed);
@@ -736,12 +814,73 @@ mod tests {
         assert_eq!(one, run(8));
     }
 
+    /// Hands out a frame's tiles in chunks of `chunk` from the last, and keeps what comes back.
+    struct Chunks {
+        left: std::sync::Mutex<Vec<u32>>,
+        chunk: usize,
+        back: std::sync::Mutex<Vec<crate::tiles::TilePixels>>,
+    }
+
+    impl crate::tiles::TileWork for Chunks {
+        fn next(&self) -> Option<Vec<u32>> {
+            let mut left = self.left.lock().unwrap();
+            let at = left.len().saturating_sub(self.chunk);
+            (at < left.len()).then(|| left.split_off(at))
+        }
+        fn done(&self, pixels: crate::tiles::TilePixels) {
+            self.back.lock().unwrap().push(pixels);
+        }
+    }
+
+    #[test]
+    fn a_frame_traced_in_handed_out_tiles_is_the_frame_traced_whole() {
+        use glray_core::trace::Value::Int;
+        let mut calls = box_list();
+        calls.push(("glClear", vec![Int(0x4100)]));
+        for k in 0..5 {
+            calls.extend(box_calls(-3.0 + 1.5 * k as f64, [0.9, 0.2 + 0.15 * k as f64, 0.3]));
+        }
+        let c = followed_at(150, 100, &calls);
+        let frame = c.frame().clone();
+        assert!(!frame.is_empty() && Renderer::shares(&frame));
+        for preset in ["gl", "full"] {
+            let options = Options { effects: Effects::preset(preset).unwrap(), ..Options::default() };
+            let mut whole = Renderer::new(options);
+            let key = whole.accumulation_key(&frame, 150, 100);
+            let expected = whole.render(&frame, 150, 100, None);
+            let grid = crate::tiles::TileGrid::new(150, 100);
+            let work =
+                Chunks { left: std::sync::Mutex::new((0..grid.count()).collect()), chunk: 2, back: Default::default() };
+            let linear = options.effects.beyond_gl();
+            let mut shared = Renderer::new(options);
+            shared.render_tiles(&frame, 150, 100, 0, linear, &work);
+            let (mut rgba, mut depth) = (vec![0u8; 4 * 150 * 100], vec![0f32; 150 * 100]);
+            let mut colors = vec![Vec4::ZERO; 150 * 100];
+            let back = work.back.into_inner().unwrap();
+            assert_eq!(back.len(), grid.count() as usize);
+            for t in &back {
+                assert!(grid.paste(t, &mut rgba, &mut depth, linear.then_some(&mut colors[..])));
+            }
+            let gathered = Rendered { width: 150, height: 100, rgba, depth };
+            let gathered = shared.add_pass(key, gathered, linear.then_some(colors));
+            assert!(gathered == expected, "{preset}: the tiles gathered are the whole frame's picture");
+        }
+    }
+
     /// Follows calls (scalar arguments: integers, or floats as F64) in a fresh context with
     /// a perspective camera; returns the context.
     fn followed(calls: &[(&str, Vec<glray_core::trace::Value<'static>>)]) -> glray_capture::fixed::Context {
+        followed_at(48, 48, calls)
+    }
+
+    fn followed_at(
+        width: u32,
+        height: u32,
+        calls: &[(&str, Vec<glray_core::trace::Value<'static>>)],
+    ) -> glray_capture::fixed::Context {
         use glray_core::trace::Value;
         let mut c = glray_capture::fixed::Context::default();
-        c.set_drawable(48, 48);
+        c.set_drawable(width, height);
         let setup: Vec<(&str, Vec<Value>)> = vec![
             ("glMatrixMode", vec![Value::Int(0x1701)]),
             ("glFrustum", [-0.5, 0.5, -0.5, 0.5, 1.0, 20.0].map(Value::F64).to_vec()),

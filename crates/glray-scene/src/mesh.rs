@@ -13,8 +13,6 @@
 //! tracer keys its BVHs by it, and the byte encoding (`encode`) sends a mesh once and then only
 //! its id.
 
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use glam::{DVec4, Vec3, Vec4};
 use glray_core::threads::{collect_pieces, map_pieces, piece_of};
 use serde::{Deserialize, Serialize};
@@ -132,8 +130,7 @@ fn last_corners(triangles: &[[u32; 3]]) -> Vec<u32> {
 
 /// A new mesh's id.
 fn next_id() -> u64 {
-    static NEXT_ID: AtomicU64 = AtomicU64::new(1);
-    NEXT_ID.fetch_add(1, Ordering::Relaxed)
+    crate::ids::next()
 }
 
 impl Mesh {

@@ -100,8 +100,7 @@ impl LodRange {
 
 /// A version no texture has had (`Texture::version`).
 fn next_version() -> u64 {
-    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
-    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    crate::ids::next()
 }
 
 impl Texture {

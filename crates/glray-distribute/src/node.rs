@@ -1,0 +1,621 @@
+//! One rank's part in a frame (`Node::frame`), image-parallel over a replicated scene:
+//!
+//! 1. every rank sends the frame it captured to every other (meshes and textures the others
+//!    lack go with it, once: `glray_scene::encode`), and merges all of them in rank order
+//!    (`glray_scene::merge`): every rank holds the same whole scene;
+//! 2. rank 0, the master, hands out tiles (`Master`); each rank traces what it is given on its
+//!    threads, asking for more while it traces, and sends each finished tile straight to rank
+//!    0, the display;
+//! 3. rank 0 puts the tiles together, adds the pass to the ones before (progressive
+//!    refinement) and returns the picture; every other rank returns none.
+//!
+//! The thread that calls `frame` is the one that moves messages (the tracing runs on the
+//! tracer's threads), and every wait on another rank has a time limit: a rank that stops
+//! answering ends the frame with a `Fault` naming it, never a hang.
+
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use glray_render::tiles::{TileGrid, TilePixels, TileWork};
+use glray_render::{Rendered, Renderer};
+use glray_scene::encode::{decode, encode, ObjectStore};
+use glray_scene::frame::Frame;
+
+use crate::master::{imbalance, Master};
+use crate::protocol::{tile_message, tile_pixels, Message, RankReport};
+use crate::transport::Transport;
+
+/// How long a rank waits for another on the first frame (each rank loads its data and builds
+/// its meshes before it; their sizes differ) unless told (`Limits::fixed`).
+pub const FIRST_FRAME_LIMIT: Duration = Duration::from_secs(120);
+/// Beyond the last frame's time, how long a rank waits for another on later frames.
+pub const SLACK: Duration = Duration::from_secs(10);
+
+/// Why a frame could not be traced across the ranks.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Fault {
+    /// These ranks sent nothing for this long while they were waited for.
+    Silent { ranks: Vec<usize>, waited: Duration, frame: u64, waiting_for: &'static str },
+    /// A rank whose glray is set differently (its pictures would not match).
+    Refused { rank: usize, why: String },
+    /// A message from a rank could not be read.
+    Damaged { rank: usize, why: String },
+    /// The message layer failed.
+    Transport(String),
+}
+
+impl std::fmt::Display for Fault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Fault::Silent { ranks, waited, frame, waiting_for } => {
+                let names: Vec<String> = ranks.iter().map(|r| r.to_string()).collect();
+                write!(
+                    f,
+                    "rank{} {} did not answer within {:.1} s (frame {frame}, waiting for {waiting_for}): it stopped, \
+                     died or skipped the frame",
+                    if ranks.len() > 1 { "s" } else { "" },
+                    names.join(", "),
+                    waited.as_secs_f64()
+                )
+            }
+            Fault::Refused { rank, why } => write!(f, "rank {rank} refused: {why}"),
+            Fault::Damaged { rank, why } => write!(f, "rank {rank} sent {why}"),
+            Fault::Transport(e) => write!(f, "MPI failed: {e}"),
+        }
+    }
+}
+
+/// What one frame took on this rank (and, on rank 0, across the ranks).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameReport {
+    pub frame: u64,
+    /// Tiles this rank traced, of all the frame's.
+    pub tiles: u32,
+    pub tiles_total: u32,
+    pub rays: u64,
+    pub bytes_sent: u64,
+    pub bytes_received: u64,
+    /// Time spent waiting for other ranks: for their scenes, for tiles, at the end.
+    pub wait: Duration,
+    /// Slowest rank's tracing time over the mean (rank 0 only).
+    pub imbalance: Option<f64>,
+    /// The picture was the last one's again (converged), or traced by rank 0 alone.
+    pub untraced: bool,
+}
+
+/// What every rank must agree on: the version of glray and every setting that shapes the
+/// picture, as one number (`settings`), and a description to name them when they differ.
+#[derive(Debug, Clone)]
+pub struct Agreement {
+    pub settings: u64,
+}
+
+/// How long a rank waits for another: `fixed` (the setting `mpi_timeout`) or, when not set,
+/// `FIRST_FRAME_LIMIT`, then the last frame's time plus `SLACK`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Limits {
+    pub fixed: Option<Duration>,
+}
+
+/// A rank of the job: its messages, what it has sent and been sent, the master's queue.
+pub struct Node<T: Transport> {
+    transport: T,
+    frame: u64,
+    agreement: Agreement,
+    limits: Limits,
+    /// What every other rank holds of this rank's meshes and textures.
+    sent: ObjectStore,
+    /// What this rank holds of each rank's.
+    held: Vec<ObjectStore>,
+    /// Messages of frames this rank has not reached yet.
+    ahead: VecDeque<(usize, Message)>,
+    master: Master,
+    /// The accumulation key of the last frame and the passes traced under it.
+    run: Option<(u64, u32)>,
+    last_frame: Option<Duration>,
+    bytes_sent: u64,
+    bytes_received: u64,
+}
+
+/// How long the message loop sleeps when there is nothing to do.
+const IDLE: Duration = Duration::from_micros(50);
+
+impl<T: Transport> Node<T> {
+    pub fn new(transport: T, agreement: Agreement, limits: Limits) -> Node<T> {
+        let size = transport.size();
+        Node {
+            transport,
+            frame: 0,
+            agreement,
+            limits,
+            sent: ObjectStore::default(),
+            held: (0..size).map(|_| ObjectStore::default()).collect(),
+            ahead: VecDeque::new(),
+            master: Master::new(size),
+            run: None,
+            last_frame: None,
+            bytes_sent: 0,
+            bytes_received: 0,
+        }
+    }
+
+    pub fn rank(&self) -> usize {
+        self.transport.rank()
+    }
+
+    pub fn size(&self) -> usize {
+        self.transport.size()
+    }
+
+    /// The time limit of any wait on another rank this frame.
+    pub fn limit(&self) -> Duration {
+        self.limits.fixed.unwrap_or_else(|| self.last_frame.map_or(FIRST_FRAME_LIMIT, |t| t + SLACK))
+    }
+
+    fn send(&mut self, to: usize, message: &Message) -> Result<(), Fault> {
+        let bytes = message.encode();
+        self.bytes_sent += bytes.len() as u64;
+        self.transport.send(to, bytes).map_err(Fault::Transport)
+    }
+
+    /// The next message of frame `frame`, if one is here: those of earlier frames (a frame
+    /// this rank gave up on) are dropped, those of later ones kept for then.
+    fn receive(&mut self, frame: u64) -> Result<Option<(usize, Message)>, Fault> {
+        if let Some(k) = self.ahead.iter().position(|(_, m)| m.frame() == frame) {
+            return Ok(self.ahead.remove(k));
+        }
+        while let Some((from, bytes)) = self.transport.poll().map_err(Fault::Transport)? {
+            self.bytes_received += bytes.len() as u64;
+            let message = Message::decode(&bytes).map_err(|why| Fault::Damaged { rank: from, why })?;
+            match message.frame() {
+                f if f == frame => return Ok(Some((from, message))),
+                f if f > frame => self.ahead.push_back((from, message)),
+                _ => {}
+            }
+        }
+        Ok(None)
+    }
+
+    /// Traces `mine` (this rank's captured frame) with every other rank's: rank 0 gets the
+    /// picture, the others None. `previous` is the picture under a frame that does not clear.
+    pub fn frame(
+        &mut self,
+        mine: &Frame,
+        previous: Option<&Rendered>,
+        renderer: &mut Renderer,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Result<(Option<Rendered>, FrameReport), Fault> {
+        let frame = self.frame;
+        self.frame += 1;
+        let started = Instant::now();
+        let (sent0, received0) = (self.bytes_sent, self.bytes_received);
+        let mut report = FrameReport { frame, ..FrameReport::default() };
+        let (merged, waited) = self.exchange(frame, mine)?;
+        report.wait += waited;
+        let (w, h) = merged.size();
+        let key = renderer.accumulation_key(&merged, w, h);
+        let pass = match (key, self.run) {
+            (Some(k), Some((run, n))) if k == run => n,
+            _ => 0,
+        };
+        let me = self.rank();
+        let picture = if w == 0 || h == 0 || merged.is_empty() {
+            // Nothing to trace anywhere; rank 0 shows what the frame cleared to.
+            report.untraced = true;
+            (me == 0).then(|| renderer.render(&merged, w, h, previous))
+        } else if pass >= renderer.converged_passes() || !Renderer::shares(&merged) {
+            // Converged (the last picture again), or a frame drawn over the last or in several
+            // viewports: rank 0 renders it alone, as one process would.
+            report.untraced = true;
+            (me == 0).then(|| renderer.render(&merged, w, h, previous))
+        } else {
+            self.run = key.map(|k| (k, pass + 1));
+            let linear = key.is_some() && renderer.options.effects.beyond_gl();
+            let shared = Shared { frame, merged: &merged, pass, linear };
+            self.trace(&shared, renderer, pool, &mut report)?
+        };
+        if !report.untraced {
+            self.last_frame = Some(started.elapsed());
+        }
+        report.bytes_sent = self.bytes_sent - sent0;
+        report.bytes_received = self.bytes_received - received0;
+        Ok((picture, report))
+    }
+
+    /// Step 1: every rank's frame to every rank, merged in rank order; and the time waited.
+    fn exchange(&mut self, frame: u64, mine: &Frame) -> Result<(Frame, Duration), Fault> {
+        let (me, size) = (self.rank(), self.size());
+        if size > 1 {
+            let scene = encode(mine, &mut self.sent);
+            let message = Message::Scene { frame, settings: self.agreement.settings, scene };
+            for r in (0..size).filter(|&r| r != me) {
+                self.send(r, &message)?;
+            }
+        }
+        // What the others hold of ours is what this frame draws (the rest they forget, below).
+        let (meshes, textures) = ids_of(mine);
+        self.sent.retain(&meshes, &textures);
+        let mut scenes: Vec<Option<Vec<u8>>> = vec![None; size];
+        // The master's first tiles may come before the last scene: kept for the tracing.
+        let mut early = Vec::new();
+        let begun = Instant::now();
+        let mut last_heard = Instant::now();
+        while scenes.iter().enumerate().any(|(r, s)| r != me && s.is_none()) {
+            match self.receive(frame)? {
+                Some((from, Message::Scene { settings, scene, .. })) => {
+                    if settings != self.agreement.settings {
+                        return Err(Fault::Refused {
+                            rank: from,
+                            why: format!(
+                                "its glray or its settings differ from rank {me}'s: every rank must run the same \
+                                 glray with the same GLRAY_* settings (`glray run --np` forwards them)"
+                            ),
+                        });
+                    }
+                    scenes[from] = Some(scene);
+                    last_heard = Instant::now();
+                }
+                Some(early_message) => early.push(early_message),
+                None => {
+                    if last_heard.elapsed() > self.limit() {
+                        let ranks = (0..size).filter(|&r| r != me && scenes[r].is_none()).collect();
+                        return Err(Fault::Silent {
+                            ranks,
+                            waited: last_heard.elapsed(),
+                            frame,
+                            waiting_for: "its scene",
+                        });
+                    }
+                    std::thread::sleep(IDLE);
+                }
+            }
+        }
+        let waited = begun.elapsed();
+        for m in early.into_iter().rev() {
+            self.ahead.push_front(m);
+        }
+        let mut frames = Vec::with_capacity(size);
+        for (r, scene) in scenes.into_iter().enumerate() {
+            if r == me {
+                frames.push(mine.clone());
+                continue;
+            }
+            let bytes = scene.expect("every scene is in");
+            let f = decode(&bytes, &mut self.held[r])
+                .map_err(|e| Fault::Damaged { rank: r, why: format!("a scene glray cannot read: {e}") })?;
+            let (meshes, textures) = ids_of(&f);
+            self.held[r].retain(&meshes, &textures);
+            frames.push(f);
+        }
+        Ok((glray_scene::merge::merge(frames), waited))
+    }
+
+    /// Steps 2 and 3: this rank's share traced on its threads while this thread moves the
+    /// messages; rank 0's picture.
+    fn trace(
+        &mut self,
+        shared: &Shared,
+        renderer: &mut Renderer,
+        pool: Option<&rayon::ThreadPool>,
+        report: &mut FrameReport,
+    ) -> Result<Option<Rendered>, Fault> {
+        let (w, h) = shared.merged.size();
+        let grid = TileGrid::new(w, h);
+        report.tiles_total = grid.count();
+        let (ask_tx, ask_rx) = channel();
+        let (grant_tx, grant_rx) = channel();
+        let (done_tx, done_rx) = channel();
+        let abort = AtomicBool::new(false);
+        let work = ChannelWork {
+            ask: Mutex::new(ask_tx),
+            grants: Mutex::new(grant_rx),
+            done: Mutex::new(done_tx),
+            abort: &abort,
+        };
+        let traced = AtomicBool::new(false);
+        let tracing = Mutex::new((Duration::ZERO, 0u64));
+        let mut lanes = Lanes { asks: ask_rx, grants: grant_tx, tiles: done_rx, traced: &traced };
+        let owned;
+        let pool = match pool {
+            Some(p) => p,
+            None => {
+                owned = rayon::ThreadPoolBuilder::new()
+                    .build()
+                    .map_err(|e| Fault::Transport(format!("no threads: {e}")))?;
+                &owned
+            }
+        };
+        let tracer = &mut *renderer;
+        let served = pool.in_place_scope(|s| {
+            let (work, traced, tracing) = (&work, &traced, &tracing);
+            s.spawn(move |_| {
+                let start = Instant::now();
+                let stats = tracer.render_tiles(shared.merged, w, h, shared.pass, shared.linear, work);
+                *tracing.lock().unwrap_or_else(|e| e.into_inner()) = (start.elapsed(), stats.rays);
+                traced.store(true, Ordering::Release);
+            });
+            let r = self.serve(shared, grid, &mut lanes, tracing, report);
+            abort.store(r.is_err(), Ordering::Release);
+            r
+        });
+        let gathered = served?;
+        report.rays = tracing.lock().unwrap_or_else(|e| e.into_inner()).1;
+        Ok(gathered.map(|(picture, colors)| {
+            let key = renderer.accumulation_key(shared.merged, w, h);
+            renderer.add_pass(key, picture, colors)
+        }))
+    }
+
+    /// The message loop of a frame's tracing, until this rank's part is done: rank 0 hands out
+    /// tiles and gathers them (returning the picture and its linear colours), the others ask
+    /// for tiles and send them on.
+    fn serve(
+        &mut self,
+        shared: &Shared,
+        grid: TileGrid,
+        lanes: &mut Lanes,
+        tracing: &Mutex<(Duration, u64)>,
+        report: &mut FrameReport,
+    ) -> Result<Option<(Rendered, Option<Vec<glam::Vec4>>)>, Fault> {
+        let (me, size, frame) = (self.rank(), self.size(), shared.frame);
+        let tiles = grid.count();
+        // Rank 0: the picture being gathered, and who has reported.
+        let mut gather = (me == 0).then(|| Gather::new(grid, shared.linear));
+        let mut reports: Vec<Option<RankReport>> = vec![None; size];
+        let mut reserve: VecDeque<Vec<u32>> = VecDeque::new();
+        let (mut asked, mut exhausted, mut tracer_waits) = (false, false, false);
+        if me == 0 {
+            let batches = self.master.begin(tiles);
+            // (An empty grant means "no more": a rank without a first batch asks instead.)
+            for (r, batch) in batches.into_iter().enumerate().filter(|(_, b)| !b.is_empty()) {
+                if r == 0 {
+                    reserve.push_back(batch);
+                } else {
+                    self.send(r, &Message::Grant { frame, tiles: batch })?;
+                }
+            }
+        }
+        let mut last_heard = Instant::now();
+        let mut my_tiles = 0u32;
+        let mut traced_at: Option<Instant> = None;
+        loop {
+            let mut busy = false;
+            // The tracer wants tiles.
+            while lanes.asks.try_recv().is_ok() {
+                tracer_waits = true;
+            }
+            if tracer_waits {
+                let chunk = match reserve.pop_front() {
+                    Some(c) => Some(c),
+                    None if me == 0 => Some(self.master.next(0)).filter(|c| !c.is_empty()),
+                    None if exhausted => None,
+                    None => {
+                        // Wait for the master's answer.
+                        if !asked {
+                            self.send(0, &Message::Ask { frame })?;
+                            asked = true;
+                        }
+                        Some(Vec::new())
+                    }
+                };
+                match chunk {
+                    Some(c) if c.is_empty() => {}
+                    Some(c) => {
+                        my_tiles += c.len() as u32;
+                        let _ = lanes.grants.send(Some(c));
+                        tracer_waits = false;
+                        busy = true;
+                    }
+                    None => {
+                        let _ = lanes.grants.send(None);
+                        tracer_waits = false;
+                    }
+                }
+            }
+            // Keep one chunk in reserve while tracing, so that asking costs no idle time.
+            if me != 0 && !exhausted && !asked && reserve.is_empty() {
+                self.send(0, &Message::Ask { frame })?;
+                asked = true;
+            }
+            // Tiles this rank traced (all of them, once it has finished: `done` comes before
+            // `traced`).
+            let traced = lanes.traced.load(Ordering::Acquire);
+            while let Ok(t) = lanes.tiles.try_recv() {
+                busy = true;
+                match gather.as_mut() {
+                    Some(g) => {
+                        g.paste(&t);
+                    }
+                    None => {
+                        let m = tile_message(frame, &t);
+                        self.send(0, &m)?;
+                    }
+                }
+            }
+            // Messages from the other ranks.
+            while let Some((from, message)) = self.receive(frame)? {
+                busy = true;
+                last_heard = Instant::now();
+                match message {
+                    Message::Ask { .. } if me == 0 => {
+                        let chunk = self.master.next(from);
+                        self.send(from, &Message::Grant { frame, tiles: chunk })?;
+                    }
+                    Message::Grant { tiles, .. } if me != 0 => {
+                        asked = false;
+                        if tiles.is_empty() {
+                            exhausted = true;
+                        } else {
+                            reserve.push_back(tiles);
+                        }
+                    }
+                    Message::Tile { tile, rgba, depth, colors, .. } if me == 0 => {
+                        let pasted = tile_pixels(tile, rgba, &depth, &colors)
+                            .is_some_and(|t| gather.as_mut().is_some_and(|g| g.paste(&t)));
+                        if !pasted {
+                            return Err(Fault::Damaged { rank: from, why: format!("tile {tile} of another size") });
+                        }
+                    }
+                    Message::Done { report, .. } if me == 0 => reports[from] = Some(report),
+                    other => {
+                        return Err(Fault::Damaged { rank: from, why: format!("{other:?} out of turn") });
+                    }
+                }
+            }
+            if traced && traced_at.is_none() {
+                traced_at = Some(Instant::now());
+            }
+            if traced {
+                match gather.as_ref() {
+                    None => {
+                        let (seconds, rays) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
+                        let r = RankReport { tiles: my_tiles, rays, trace: seconds.as_secs_f64() };
+                        self.send(0, &Message::Done { frame, report: r })?;
+                        self.flush(frame)?;
+                        report.tiles = my_tiles;
+                        report.wait += traced_at.map_or(Duration::ZERO, |t| t.elapsed());
+                        return Ok(None);
+                    }
+                    Some(g) if g.count == tiles && (1..size).all(|r| reports[r].is_some()) => {
+                        let (seconds, _) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
+                        let mut times = vec![seconds.as_secs_f64()];
+                        times.extend(reports[1..].iter().flatten().map(|r| r.trace));
+                        report.imbalance = Some(imbalance(&times));
+                        report.tiles = my_tiles;
+                        report.wait += traced_at.map_or(Duration::ZERO, |t| t.elapsed());
+                        let known: Vec<Option<f64>> = times.iter().map(|&t| Some(t)).collect();
+                        self.master.end(&known);
+                        let g = gather.take().expect("rank 0 gathers");
+                        return Ok(Some(g.finish()));
+                    }
+                    Some(_) => {}
+                }
+            }
+            if !busy {
+                if last_heard.elapsed() > self.limit() && !(me != 0 && !traced) {
+                    // Waiting on others, not on this rank's own tracing.
+                    let ranks = if me == 0 { (1..size).filter(|&r| reports[r].is_none()).collect() } else { vec![0] };
+                    let waiting_for = if me == 0 { "tiles" } else { "the master" };
+                    return Err(Fault::Silent { ranks, waited: last_heard.elapsed(), frame, waiting_for });
+                }
+                if me != 0 && tracer_waits && last_heard.elapsed() > self.limit() {
+                    return Err(Fault::Silent {
+                        ranks: vec![0],
+                        waited: last_heard.elapsed(),
+                        frame,
+                        waiting_for: "tiles to trace",
+                    });
+                }
+                std::thread::sleep(IDLE);
+            }
+        }
+    }
+
+    /// Waits until every send has left (bounded).
+    fn flush(&mut self, frame: u64) -> Result<(), Fault> {
+        let start = Instant::now();
+        while !self.transport.flushed().map_err(Fault::Transport)? {
+            if start.elapsed() > self.limit() {
+                return Err(Fault::Silent {
+                    ranks: vec![0],
+                    waited: start.elapsed(),
+                    frame,
+                    waiting_for: "its tiles to be taken",
+                });
+            }
+            std::thread::sleep(IDLE);
+        }
+        Ok(())
+    }
+}
+
+/// What every rank traces this frame.
+struct Shared<'a> {
+    frame: u64,
+    merged: &'a Frame,
+    pass: u32,
+    linear: bool,
+}
+
+/// The message loop's ends of the channels to the tracer.
+struct Lanes<'a> {
+    asks: Receiver<()>,
+    grants: Sender<Option<Vec<u32>>>,
+    tiles: Receiver<TilePixels>,
+    traced: &'a AtomicBool,
+}
+
+/// The tracer's ends: it asks for tiles and hands them back through the message loop.
+struct ChannelWork<'a> {
+    ask: Mutex<Sender<()>>,
+    grants: Mutex<Receiver<Option<Vec<u32>>>>,
+    done: Mutex<Sender<TilePixels>>,
+    abort: &'a AtomicBool,
+}
+
+impl TileWork for ChannelWork<'_> {
+    fn next(&self) -> Option<Vec<u32>> {
+        let grants = self.grants.lock().unwrap_or_else(|e| e.into_inner());
+        self.ask.lock().unwrap_or_else(|e| e.into_inner()).send(()).ok()?;
+        loop {
+            match grants.recv_timeout(Duration::from_millis(20)) {
+                Ok(g) => return g,
+                Err(RecvTimeoutError::Timeout) if !self.abort.load(Ordering::Acquire) => {}
+                Err(_) => return None,
+            }
+        }
+    }
+
+    fn done(&self, pixels: TilePixels) {
+        let _ = self.done.lock().unwrap_or_else(|e| e.into_inner()).send(pixels);
+    }
+}
+
+/// Rank 0's picture, tile by tile.
+struct Gather {
+    grid: TileGrid,
+    rgba: Vec<u8>,
+    depth: Vec<f32>,
+    colors: Option<Vec<glam::Vec4>>,
+    have: Vec<bool>,
+    count: u32,
+}
+
+impl Gather {
+    fn new(grid: TileGrid, linear: bool) -> Gather {
+        let n = grid.width as usize * grid.height as usize;
+        Gather {
+            grid,
+            rgba: vec![0; 4 * n],
+            depth: vec![1.0; n],
+            colors: linear.then(|| vec![glam::Vec4::ZERO; n]),
+            have: vec![false; grid.count() as usize],
+            count: 0,
+        }
+    }
+
+    fn paste(&mut self, t: &TilePixels) -> bool {
+        if !self.grid.paste(t, &mut self.rgba, &mut self.depth, self.colors.as_deref_mut()) {
+            return false;
+        }
+        if !std::mem::replace(&mut self.have[t.tile as usize], true) {
+            self.count += 1;
+        }
+        true
+    }
+
+    fn finish(self) -> (Rendered, Option<Vec<glam::Vec4>>) {
+        let (width, height) = (self.grid.width, self.grid.height);
+        (Rendered { width, height, rgba: self.rgba, depth: self.depth }, self.colors)
+    }
+}
+
+/// The meshes and textures a frame draws with.
+fn ids_of(frame: &Frame) -> (std::collections::HashSet<u64>, std::collections::HashSet<u64>) {
+    let meshes = frame.instances.iter().map(|i| i.mesh.id).collect();
+    let textures = frame.surfaces.iter().filter_map(|s| s.texturing.as_ref()).map(|t| t.texture.version).collect();
+    (meshes, textures)
+}

@@ -1,0 +1,93 @@
+//! The messages ranks exchange, each carrying the frame it belongs to (a rank may be a frame
+//! ahead of another: its messages wait until that frame), encoded with postcard. Pixels travel
+//! as their bytes (little-endian floats: every rank of a job is the same kind of machine; the
+//! scene encoding checks the byte order of the first message).
+
+use serde::{Deserialize, Serialize};
+
+/// What a rank says of its frame to rank 0 when its share is traced.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct RankReport {
+    pub tiles: u32,
+    pub rays: u64,
+    /// Seconds spent tracing its tiles.
+    pub trace: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Message {
+    /// A rank's captured frame (`glray_scene::encode`), with what its settings must agree on.
+    Scene { frame: u64, settings: u64, scene: Vec<u8> },
+    /// A render rank asks the master for more tiles.
+    Ask { frame: u64 },
+    /// The master's answer: tiles to trace, or none (the frame's tiles are all handed out).
+    Grant { frame: u64, tiles: Vec<u32> },
+    /// A traced tile for the display rank: RGBA bytes, depths and linear colours as bytes.
+    Tile { frame: u64, tile: u32, rgba: Vec<u8>, depth: Vec<u8>, colors: Vec<u8> },
+    /// A rank's share is traced and every tile of it sent.
+    Done { frame: u64, report: RankReport },
+}
+
+impl Message {
+    pub fn frame(&self) -> u64 {
+        match self {
+            Message::Scene { frame, .. }
+            | Message::Ask { frame }
+            | Message::Grant { frame, .. }
+            | Message::Tile { frame, .. }
+            | Message::Done { frame, .. } => *frame,
+        }
+    }
+
+    pub fn encode(&self) -> Vec<u8> {
+        // Writing to a Vec cannot fail; every message serializes.
+        postcard::to_stdvec(self).expect("a message encodes")
+    }
+
+    pub fn decode(bytes: &[u8]) -> Result<Message, String> {
+        postcard::from_bytes(bytes).map_err(|e| format!("a damaged message ({} bytes): {e}", bytes.len()))
+    }
+}
+
+/// A tile's pixels as a message.
+pub fn tile_message(frame: u64, t: &glray_render::tiles::TilePixels) -> Message {
+    Message::Tile {
+        frame,
+        tile: t.tile,
+        rgba: t.rgba.clone(),
+        depth: bytemuck::cast_slice(&t.depth).to_vec(),
+        colors: bytemuck::cast_slice(&t.colors).to_vec(),
+    }
+}
+
+/// A tile's pixels from a message's fields (None when the byte counts are not whole floats).
+pub fn tile_pixels(tile: u32, rgba: Vec<u8>, depth: &[u8], colors: &[u8]) -> Option<glray_render::tiles::TilePixels> {
+    if depth.len() % 4 != 0 || colors.len() % 16 != 0 {
+        return None;
+    }
+    let floats =
+        |b: &[u8]| -> Vec<f32> { b.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect() };
+    let depth = floats(depth);
+    let colors = floats(colors).chunks_exact(4).map(glam::Vec4::from_slice).collect();
+    Some(glray_render::tiles::TilePixels { tile, rgba, depth, colors })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_and_tiles_cross_intact() {
+        let t = glray_render::tiles::TilePixels {
+            tile: 3,
+            rgba: vec![1, 2, 3, 4, 5, 6, 7, 8],
+            depth: vec![0.25, 1.0],
+            colors: vec![glam::Vec4::new(0.1, 0.2, 0.3, 1.0), glam::Vec4::ONE],
+        };
+        let m = Message::decode(&tile_message(9, &t).encode()).unwrap();
+        assert_eq!(m.frame(), 9);
+        let Message::Tile { tile, rgba, depth, colors, .. } = m else { panic!("{m:?}") };
+        assert_eq!(tile_pixels(tile, rgba, &depth, &colors), Some(t));
+        assert!(Message::decode(&[200, 1]).is_err());
+    }
+}

@@ -1,0 +1,181 @@
+//! The protocol between ranks run as threads (memory transport): a data-parallel scene, split
+//! over 1 to 4 ranks, traced image-parallel, is the picture one process makes of all of it,
+//! with secondary rays (AO, shadows, a reflection) crossing the ranks' pieces; a silent rank
+//! and a rank set differently end the frame with the rank named.
+
+use std::time::{Duration, Instant};
+
+use glray_capture::fixed::Context;
+use glray_core::trace::Value::{self, Int, F64};
+use glray_distribute::transport::memory::MemoryTransport;
+use glray_distribute::{Agreement, Fault, Limits, Node};
+use glray_render::{Effects, Options, Renderer};
+use glray_scene::frame::Frame;
+
+const W: u32 = 150;
+const H: u32 = 110;
+const BOXES: usize = 6;
+
+fn call(c: &mut Context, name: &str, args: &[Value<'static>]) {
+    let (op, ty) = glray_capture::ops::op_for(name).unwrap_or_else(|| panic!("{name}"));
+    c.call(op, ty, args);
+}
+
+/// The frames of `frames` frames drawn by the rank `rank` of `ranks`: a ground (rank 0's) and
+/// its block of the boxes, lit, with the same camera everywhere.
+fn frames_of(rank: usize, ranks: usize, frames: usize) -> Vec<Frame> {
+    let mut c = Context::default();
+    c.set_drawable(W, H);
+    call(&mut c, "glMatrixMode", &[Int(0x1701)]);
+    call(&mut c, "glFrustum", &[-0.6, 0.6, -0.45, 0.45, 1.0, 30.0].map(F64));
+    call(&mut c, "glMatrixMode", &[Int(0x1700)]);
+    for cap in [0x0B50, 0x4000, 0x0B57, 0x0B71] {
+        // lighting, light 0, colour material, depth test
+        call(&mut c, "glEnable", &[Int(cap)]);
+    }
+    call(&mut c, "glNewList", &[Int(1), Int(0x1300)]);
+    call(&mut c, "glBegin", &[Int(4)]);
+    let faces: [([f64; 3], [[f64; 3]; 4]); 3] = [
+        ([0.0, 0.0, 1.0], [[-1.0, -1.0, 1.0], [1.0, -1.0, 1.0], [1.0, 1.0, 1.0], [-1.0, 1.0, 1.0]]),
+        ([1.0, 0.0, 0.0], [[1.0, -1.0, 1.0], [1.0, -1.0, -1.0], [1.0, 1.0, -1.0], [1.0, 1.0, 1.0]]),
+        ([0.0, 1.0, 0.0], [[-1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, -1.0], [-1.0, 1.0, -1.0]]),
+    ];
+    for (n, corners) in faces {
+        call(&mut c, "glNormal3f", &n.map(F64));
+        for k in [0, 1, 2, 0, 2, 3] {
+            call(&mut c, "glVertex3f", &corners[k].map(F64));
+        }
+    }
+    call(&mut c, "glEnd", &[]);
+    call(&mut c, "glEndList", &[]);
+    let mine = rank * BOXES / ranks..(rank + 1) * BOXES / ranks;
+    (0..frames)
+        .map(|_| {
+            call(&mut c, "glClear", &[Int(0x4100)]);
+            call(&mut c, "glLoadIdentity", &[]);
+            call(&mut c, "glTranslatef", &[0.0, -1.0, -9.0].map(F64));
+            call(&mut c, "glRotatef", &[25.0, 1.0, 0.0, 0.0].map(F64));
+            if rank == 0 {
+                call(&mut c, "glColor3f", &[0.8, 0.8, 0.8].map(F64));
+                call(&mut c, "glBegin", &[Int(7)]);
+                call(&mut c, "glNormal3f", &[0.0, 1.0, 0.0].map(F64));
+                for (x, z) in [(-6.0, 4.0), (6.0, 4.0), (6.0, -6.0), (-6.0, -6.0)] {
+                    call(&mut c, "glVertex3f", &[x, -1.0, z].map(F64));
+                }
+                call(&mut c, "glEnd", &[]);
+            }
+            for k in mine.clone() {
+                call(&mut c, "glPushMatrix", &[]);
+                call(&mut c, "glTranslatef", &[-3.75 + 1.5 * k as f64, 0.0, -((k % 2) as f64)].map(F64));
+                call(&mut c, "glScalef", &[0.6, 0.6, 0.6].map(F64));
+                call(&mut c, "glColor3f", &[0.9, 0.2 + 0.12 * k as f64, 0.3].map(F64));
+                // The current normal is part of a draw's state (a list leaves its last one
+                // behind): set, every frame is the one before.
+                call(&mut c, "glNormal3f", &[0.0, 0.0, 1.0].map(F64));
+                call(&mut c, "glCallList", &[Int(1)]);
+                call(&mut c, "glPopMatrix", &[]);
+            }
+            c.take_frame()
+        })
+        .collect()
+}
+
+fn options(preset: &str) -> Options {
+    Options { effects: Effects::preset(preset).unwrap(), ..Options::default() }
+}
+
+/// Rank 0's pictures of `frames` frames over `ranks` ranks in threads.
+fn traced(ranks: usize, preset: &str, frames: usize) -> Vec<glray_render::Rendered> {
+    let transports = MemoryTransport::group(ranks);
+    let handles: Vec<_> = transports
+        .into_iter()
+        .enumerate()
+        .map(|(rank, t)| {
+            let preset = preset.to_string();
+            std::thread::spawn(move || {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+                let mut node = Node::new(t, Agreement { settings: 7 }, Limits { fixed: Some(Duration::from_secs(30)) });
+                let mut renderer = Renderer::new(options(&preset));
+                frames_of(rank, ranks, frames)
+                    .iter()
+                    .map(|f| node.frame(f, None, &mut renderer, Some(&pool)).unwrap())
+                    .collect::<Vec<_>>()
+            })
+        })
+        .collect();
+    let mut all: Vec<_> = handles.into_iter().map(|h| h.join().unwrap()).collect();
+    for (rank, out) in all.iter().enumerate().skip(1) {
+        assert!(out.iter().all(|(p, _)| p.is_none()), "rank {rank} returns no picture");
+    }
+    let zero = all.swap_remove(0);
+    let tiles: u32 = zero.iter().map(|(_, r)| r.tiles_total).max().unwrap();
+    assert!(tiles > 1);
+    zero.into_iter().map(|(p, _)| p.expect("rank 0's picture")).collect()
+}
+
+#[test]
+fn a_scene_split_over_ranks_is_traced_as_one_process_traces_it_all() {
+    for preset in ["gl", "full"] {
+        let whole = frames_of(0, 1, 2);
+        let mut one = Renderer::new(options(preset));
+        let expected: Vec<_> = whole.iter().map(|f| one.render(f, W, H, None)).collect();
+        // The ground is lit and shaded by the boxes of other ranks: not the picture of rank 0's
+        // pieces alone.
+        let alone = Renderer::new(options(preset)).render(&frames_of(0, 3, 1)[0], W, H, None);
+        assert_ne!(alone.rgba, expected[0].rgba);
+        for ranks in [2, 1, 3, 4] {
+            let got = traced(ranks, preset, 2);
+            for (k, (g, e)) in got.iter().zip(&expected).enumerate() {
+                assert!(g == e, "{preset}, {ranks} ranks, frame {k}: not the one-process picture");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_silent_rank_is_named_within_the_limit() {
+    let mut transports = MemoryTransport::group(3);
+    let _silent = transports.pop();
+    let limit = Duration::from_millis(400);
+    let handles: Vec<_> = transports
+        .into_iter()
+        .enumerate()
+        .map(|(rank, t)| {
+            std::thread::spawn(move || {
+                let mut node = Node::new(t, Agreement { settings: 1 }, Limits { fixed: Some(limit) });
+                let start = Instant::now();
+                let f = &frames_of(rank, 3, 1)[0];
+                let r = node.frame(f, None, &mut Renderer::new(options("gl")), None);
+                (r.map(|_| ()), start.elapsed())
+            })
+        })
+        .collect();
+    for h in handles {
+        let (r, took) = h.join().unwrap();
+        match r {
+            Err(Fault::Silent { ranks, .. }) => assert_eq!(ranks, vec![2]),
+            other => panic!("{other:?}"),
+        }
+        assert!(took < limit * 10, "{took:?}");
+        let text = Fault::Silent { ranks: vec![2], waited: limit, frame: 0, waiting_for: "its scene" }.to_string();
+        assert!(text.contains("rank 2 did not answer within 0.4 s"), "{text}");
+    }
+}
+
+#[test]
+fn a_rank_set_differently_is_refused_by_name() {
+    let handles: Vec<_> = MemoryTransport::group(2)
+        .into_iter()
+        .enumerate()
+        .map(|(rank, t)| {
+            std::thread::spawn(move || {
+                let limits = Limits { fixed: Some(Duration::from_secs(5)) };
+                let mut node = Node::new(t, Agreement { settings: rank as u64 }, limits);
+                node.frame(&frames_of(rank, 2, 1)[0], None, &mut Renderer::new(options("gl")), None).map(|_| ())
+            })
+        })
+        .collect();
+    let results: Vec<_> = handles.into_iter().map(|h| h.join().unwrap()).collect();
+    assert!(matches!(&results[0], Err(Fault::Refused { rank: 1, .. })), "{:?}", results[0]);
+    assert!(matches!(&results[1], Err(Fault::Refused { rank: 0, .. })), "{:?}", results[1]);
+}

@@ -1,0 +1,136 @@
+//! A frame traced in tiles handed out one chunk at a time (`TileWork`): how image-parallel
+//! ranks share a frame. The tiles are squares of `TILE_SIDE` pixels in a fixed grid over the
+//! window (`TileGrid`), each the same pieces (`pieces`) a whole-frame render traces, so that a
+//! pixel comes out the same whichever rank, thread or chunk traces it.
+
+use glam::Vec4;
+
+/// The side of a tile: eight bands of the pieces frames with secondary rays are traced in, and
+/// one segment of their columns (`pieces::TILE`, `pieces::SEGMENT`).
+pub const TILE_SIDE: usize = crate::pieces::SEGMENT;
+
+/// The tiles of a `width` x `height` window, numbered row by row from the bottom left (GL's
+/// first row).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TileGrid {
+    pub width: u32,
+    pub height: u32,
+}
+
+impl TileGrid {
+    pub fn new(width: u32, height: u32) -> TileGrid {
+        TileGrid { width, height }
+    }
+
+    fn columns(&self) -> usize {
+        (self.width as usize).div_ceil(TILE_SIDE)
+    }
+
+    /// How many tiles cover the window.
+    pub fn count(&self) -> u32 {
+        (self.columns() * (self.height as usize).div_ceil(TILE_SIDE)) as u32
+    }
+
+    /// Tile `tile`'s first column and row, and its width and height (smaller at the right and
+    /// top edges).
+    pub fn rect(&self, tile: u32) -> (usize, usize, usize, usize) {
+        let (tx, ty) = (tile as usize % self.columns(), tile as usize / self.columns());
+        let (x0, y0) = (tx * TILE_SIDE, ty * TILE_SIDE);
+        (x0, y0, TILE_SIDE.min(self.width as usize - x0), TILE_SIDE.min(self.height as usize - y0))
+    }
+
+    /// The tile holding pixel (x, y).
+    pub fn tile_at(&self, x: usize, y: usize) -> u32 {
+        ((y / TILE_SIDE) * self.columns() + x / TILE_SIDE) as u32
+    }
+
+    /// Tile `tile`'s pixels cut out of a whole image's (rows bottom-up, as `Rendered`).
+    pub fn cut(&self, tile: u32, rgba: &[u8], depth: &[f32], colors: Option<&[Vec4]>) -> TilePixels {
+        let (x0, y0, w, h) = self.rect(tile);
+        let width = self.width as usize;
+        let mut out = TilePixels {
+            tile,
+            rgba: Vec::with_capacity(4 * w * h),
+            depth: Vec::with_capacity(w * h),
+            colors: Vec::with_capacity(if colors.is_some() { w * h } else { 0 }),
+        };
+        for y in y0..y0 + h {
+            let row = y * width + x0;
+            out.rgba.extend_from_slice(&rgba[4 * row..4 * (row + w)]);
+            out.depth.extend_from_slice(&depth[row..row + w]);
+            if let Some(c) = colors {
+                out.colors.extend_from_slice(&c[row..row + w]);
+            }
+        }
+        out
+    }
+
+    /// Puts a tile's pixels into a whole image's. False (and nothing written) when they do not
+    /// have the tile's size: a message from another window size or a damaged one.
+    pub fn paste(&self, t: &TilePixels, rgba: &mut [u8], depth: &mut [f32], colors: Option<&mut [Vec4]>) -> bool {
+        if t.tile >= self.count() {
+            return false;
+        }
+        let (x0, y0, w, h) = self.rect(t.tile);
+        let with_colors = colors.is_some() && t.colors.len() == w * h;
+        if t.rgba.len() != 4 * w * h || t.depth.len() != w * h || (colors.is_some() && !with_colors) {
+            return false;
+        }
+        let width = self.width as usize;
+        let mut colors = colors;
+        for (k, y) in (y0..y0 + h).enumerate() {
+            let row = y * width + x0;
+            rgba[4 * row..4 * (row + w)].copy_from_slice(&t.rgba[4 * k * w..4 * (k + 1) * w]);
+            depth[row..row + w].copy_from_slice(&t.depth[k * w..(k + 1) * w]);
+            if let Some(c) = colors.as_deref_mut() {
+                c[row..row + w].copy_from_slice(&t.colors[k * w..(k + 1) * w]);
+            }
+        }
+        true
+    }
+}
+
+/// One traced tile: its pixels row by row from the bottom, and their colours before rounding
+/// when samples are added up over passes (else empty).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TilePixels {
+    pub tile: u32,
+    pub rgba: Vec<u8>,
+    pub depth: Vec<f32>,
+    pub colors: Vec<Vec4>,
+}
+
+/// Where the tiles a render traces come from and where they go: a rank's share of a frame,
+/// asked for chunk by chunk while it traces (`Renderer::render_tiles`).
+pub trait TileWork: Sync {
+    /// The next tiles to trace; None when there are no more for this rank this frame.
+    fn next(&self) -> Option<Vec<u32>>;
+    /// A tile traced.
+    fn done(&self, pixels: TilePixels);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_cover_the_window_and_cut_and_paste_back() {
+        let grid = TileGrid::new(150, 70);
+        assert_eq!(grid.count(), 3 * 2);
+        assert_eq!(grid.rect(2), (128, 0, 22, 64));
+        assert_eq!(grid.rect(5), (128, 64, 22, 6));
+        assert_eq!(grid.tile_at(149, 69), 5);
+        let n = 150 * 70;
+        let rgba: Vec<u8> = (0..4 * n).map(|i| (i % 251) as u8).collect();
+        let depth: Vec<f32> = (0..n).map(|i| i as f32).collect();
+        let colors: Vec<Vec4> = (0..n).map(|i| Vec4::splat(i as f32)).collect();
+        let (mut r2, mut d2, mut c2) = (vec![0u8; 4 * n], vec![0f32; n], vec![Vec4::ZERO; n]);
+        for t in 0..grid.count() {
+            let cut = grid.cut(t, &rgba, &depth, Some(&colors));
+            assert!(grid.paste(&cut, &mut r2, &mut d2, Some(&mut c2)));
+        }
+        assert!(r2 == rgba && d2 == depth && c2 == colors);
+        let wrong = TilePixels { tile: 0, rgba: vec![0; 4], depth: vec![0.0], colors: vec![] };
+        assert!(!grid.paste(&wrong, &mut r2, &mut d2, None), "a tile of another size is refused");
+    }
+}

@@ -1,0 +1,176 @@
+/* icet_like: a data-parallel MPI program in the style of ParaView with IceT, for glray's tests,
+ * benchmarks and demo. Each rank draws only its own objects (display lists; rank 0 also the
+ * ground), every rank reads back colour then depth with glReadPixels as IceT does, and rank 0
+ * composites by depth (sort-last; ties to the lower rank) and writes a PNG. Rendered by Mesa,
+ * the picture is the same for any number of ranks; under glray with `distribute=replicated`
+ * every rank traces tiles of the whole scene, so shadows, ambient occlusion and reflections
+ * see every rank's objects.
+ *
+ *   mpirun -np N icet_like OUT.png [FRAMES [WIDTH HEIGHT [OBJECTS]]]
+ *
+ * Built with: mpicc icet_like.c -o icet_like -lOSMesa -lz -lm (scripts/lib/build.sh). */
+#include <GL/gl.h>
+#include <GL/osmesa.h>
+#include <mpi.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <zlib.h>
+
+static void die(const char *what) {
+  fprintf(stderr, "icet_like: %s\n", what);
+  MPI_Abort(MPI_COMM_WORLD, 1);
+}
+
+/* A unit cube, as triangles with a normal per face. */
+static void cube_list(GLuint list) {
+  static const float n[6][3] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
+  static const float c[6][4][3] = {
+      {{-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}},     {{1, -1, -1}, {-1, -1, -1}, {-1, 1, -1}, {1, 1, -1}},
+      {{1, -1, 1}, {1, -1, -1}, {1, 1, -1}, {1, 1, 1}},     {{-1, -1, -1}, {-1, -1, 1}, {-1, 1, 1}, {-1, 1, -1}},
+      {{-1, 1, 1}, {1, 1, 1}, {1, 1, -1}, {-1, 1, -1}},     {{-1, -1, -1}, {1, -1, -1}, {1, -1, 1}, {-1, -1, 1}}};
+  static const int tri[6] = {0, 1, 2, 0, 2, 3};
+  glNewList(list, GL_COMPILE);
+  glBegin(GL_TRIANGLES);
+  for (int f = 0; f < 6; f++) {
+    glNormal3fv(n[f]);
+    for (int k = 0; k < 6; k++) glVertex3fv(c[f][tri[k]]);
+  }
+  glEnd();
+  glEndList();
+}
+
+static void put32(unsigned char *p, uint32_t v) {
+  p[0] = v >> 24, p[1] = v >> 16, p[2] = v >> 8, p[3] = v;
+}
+
+static void chunk(FILE *f, const char *type, const unsigned char *data, uint32_t len) {
+  unsigned char head[8];
+  put32(head, len);
+  memcpy(head + 4, type, 4);
+  fwrite(head, 1, 8, f);
+  if (len) fwrite(data, 1, len, f);
+  uLong crc = crc32(0, (const Bytef *)type, 4);
+  if (len) crc = crc32(crc, data, len);
+  unsigned char tail[4];
+  put32(tail, (uint32_t)crc);
+  fwrite(tail, 1, 4, f);
+}
+
+/* RGBA rows bottom-up (as GL reads them) to an RGB PNG, top row first. */
+static void write_png(const char *path, const unsigned char *rgba, int w, int h) {
+  size_t raw_len = (size_t)h * (1 + 3 * (size_t)w);
+  unsigned char *raw = malloc(raw_len);
+  for (int y = 0; y < h; y++) {
+    unsigned char *row = raw + (size_t)y * (1 + 3 * (size_t)w);
+    const unsigned char *src = rgba + (size_t)(h - 1 - y) * 4 * w;
+    row[0] = 0;
+    for (int x = 0; x < w; x++) memcpy(row + 1 + 3 * x, src + 4 * x, 3);
+  }
+  uLongf z_len = compressBound(raw_len);
+  unsigned char *z = malloc(z_len);
+  if (compress2(z, &z_len, raw, raw_len, 6) != Z_OK) die("zlib failed");
+  FILE *f = fopen(path, "wb");
+  if (!f) die("cannot write the PNG");
+  fwrite("\x89PNG\r\n\x1a\n", 1, 8, f);
+  unsigned char ihdr[13];
+  put32(ihdr, w), put32(ihdr + 4, h);
+  ihdr[8] = 8, ihdr[9] = 2, ihdr[10] = 0, ihdr[11] = 0, ihdr[12] = 0;
+  chunk(f, "IHDR", ihdr, 13);
+  chunk(f, "IDAT", z, (uint32_t)z_len);
+  chunk(f, "IEND", NULL, 0);
+  fclose(f);
+  free(raw), free(z);
+}
+
+int main(int argc, char **argv) {
+  MPI_Init(&argc, &argv);
+  int rank, size;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  if (argc < 2) die("usage: icet_like OUT.png [FRAMES [WIDTH HEIGHT [OBJECTS]]]");
+  int frames = argc > 2 ? atoi(argv[2]) : 2;
+  int w = argc > 4 ? atoi(argv[3]) : 256, h = argc > 4 ? atoi(argv[4]) : 192;
+  int objects = argc > 5 ? atoi(argv[5]) : 8;
+  if (frames < 1 || w < 1 || h < 1 || objects < 1) die("bad arguments");
+  /* For tests that stop a rank from outside. */
+  fprintf(stderr, "icet_like: rank %d of %d is pid %ld\n", rank, size, (long)getpid());
+
+  unsigned char *buffer = malloc((size_t)w * h * 4);
+  OSMesaContext ctx = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, NULL);
+  if (!ctx || !OSMesaMakeCurrent(ctx, buffer, GL_UNSIGNED_BYTE, w, h)) die("no OSMesa context");
+
+  glViewport(0, 0, w, h);
+  glMatrixMode(GL_PROJECTION);
+  glLoadIdentity();
+  double aspect = (double)w / h;
+  glFrustum(-0.5 * aspect, 0.5 * aspect, -0.5, 0.5, 1.0, 40.0);
+  glMatrixMode(GL_MODELVIEW);
+  glEnable(GL_DEPTH_TEST);
+  glEnable(GL_LIGHTING);
+  glEnable(GL_LIGHT0);
+  glEnable(GL_COLOR_MATERIAL);
+  glEnable(GL_NORMALIZE);
+  cube_list(1);
+
+  /* This rank's objects: a block of them in rank order, as a data-parallel reader splits. */
+  int first = rank * objects / size, last = (rank + 1) * objects / size;
+  size_t n = (size_t)w * h;
+  unsigned char *color = malloc(4 * n), *colors = rank == 0 ? malloc(4 * n * size) : NULL;
+  float *depth = malloc(sizeof(float) * n), *depths = rank == 0 ? malloc(sizeof(float) * n * size) : NULL;
+  unsigned char *image = rank == 0 ? malloc(4 * n) : NULL;
+
+  for (int frame = 0; frame < frames; frame++) {
+    glClearColor(0.25f, 0.3f, 0.38f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    glLoadIdentity();
+    glTranslatef(0.0f, -1.2f, -11.0f);
+    glRotatef(28.0f, 1.0f, 0.0f, 0.0f);
+    glRotatef(-20.0f, 0.0f, 1.0f, 0.0f);
+    const GLfloat light[4] = {-3.0f, 8.0f, 5.0f, 1.0f};
+    glLightfv(GL_LIGHT0, GL_POSITION, light);
+    if (rank == 0) {
+      glColor3f(0.85f, 0.85f, 0.8f);
+      glBegin(GL_QUADS);
+      glNormal3f(0.0f, 1.0f, 0.0f);
+      glVertex3f(-8.0f, -1.0f, 6.0f);
+      glVertex3f(8.0f, -1.0f, 6.0f);
+      glVertex3f(8.0f, -1.0f, -8.0f);
+      glVertex3f(-8.0f, -1.0f, -8.0f);
+      glEnd();
+    }
+    for (int k = first; k < last; k++) {
+      float t = objects > 1 ? (float)k / (objects - 1) : 0.5f;
+      glPushMatrix();
+      glTranslatef(-5.0f + 10.0f * t, -0.2f + 0.6f * (k % 3), -2.0f + 2.5f * (k % 2));
+      glRotatef(35.0f * k, 0.0f, 1.0f, 0.0f);
+      glScalef(0.7f, 0.8f + 0.6f * (k % 3), 0.7f);
+      glColor3f(0.9f - 0.6f * t, 0.3f + 0.5f * (k % 2), 0.2f + 0.7f * t);
+      glNormal3f(0.0f, 0.0f, 1.0f); /* the same current normal every frame */
+      glCallList(1);
+      glPopMatrix();
+    }
+    /* IceT's draw callback: colour, then depth. */
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, color);
+    glReadPixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
+    MPI_Gather(color, 4 * (int)n, MPI_UNSIGNED_CHAR, colors, 4 * (int)n, MPI_UNSIGNED_CHAR, 0, MPI_COMM_WORLD);
+    MPI_Gather(depth, (int)n, MPI_FLOAT, depths, (int)n, MPI_FLOAT, 0, MPI_COMM_WORLD);
+    if (rank == 0) {
+      for (size_t i = 0; i < n; i++) {
+        int best = 0;
+        for (int r = 1; r < size; r++)
+          if (depths[r * n + i] < depths[best * n + i]) best = r;
+        memcpy(image + 4 * i, colors + 4 * (best * n + i), 4);
+      }
+    }
+  }
+  if (rank == 0) {
+    write_png(argv[1], image, w, h);
+    printf("icet_like: %d ranks, %d frames, %dx%d, %d objects, wrote %s\n", size, frames, w, h, objects, argv[1]);
+  }
+  OSMesaDestroyContext(ctx);
+  MPI_Finalize();
+  return 0;
+}

@@ -1,0 +1,174 @@
+//! A process that is an MPI rank shares each frame with the others (docs/distributed.md):
+//! with `distribute = replicated` (the default in an MPI rank) every rank traces tiles of the
+//! whole image against every rank's scene, and rank 0's framebuffer gets the picture while the
+//! others get the background at the far depth, so that a host's sort-last compositing (IceT)
+//! keeps rank 0's picture. `data-parallel` and `local` trace each rank's own frame, as a lone
+//! process does.
+//!
+//! - `edge`: libglray_mpi.so (the only part of glray that links MPI), loaded on demand;
+//! - `mpi_entry`: MPI_Init, MPI_Init_thread, MPI_Finalize, interposed.
+//!
+//! The protocol itself is glray-distribute's; a fault (a rank silent past the time limit, set
+//! differently, gone) is said once, naming the rank, and this process traces alone from then
+//! on: the host goes on.
+
+mod edge;
+pub mod mpi_entry;
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use glray_core::config::Config;
+use glray_distribute::{Agreement, FrameReport, Limits, Node, Transport};
+use glray_render::{Rendered, Renderer};
+use glray_scene::frame::Frame;
+
+use edge::MpiTransport;
+
+/// The host's MPI_Finalize came: no more MPI.
+static ENDED: AtomicBool = AtomicBool::new(false);
+
+/// MPI's threading levels (the standard's order; OpenMPI's numbers).
+const THREAD_MULTIPLE: i32 = 3;
+
+/// This process's rank as the launcher's environment gives it (Open MPI, MPICH/PMI, PMIx).
+pub fn env_rank() -> Option<u32> {
+    ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"].iter().find_map(|v| std::env::var(v).ok()?.parse().ok())
+}
+
+/// How many ranks of the job run on this node (1 when not known).
+pub fn ranks_on_node() -> usize {
+    ["OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS"]
+        .iter()
+        .find_map(|v| std::env::var(v).ok()?.parse().ok())
+        .unwrap_or(1)
+        .max(1)
+}
+
+/// Whether this process is an MPI rank: started by a launcher, or its host called MPI_Init.
+pub fn in_mpi() -> bool {
+    env_rank().is_some() || mpi_entry::HOST_STARTED_MPI.load(Ordering::Relaxed)
+}
+
+/// Called as the library loads: objects made from here on have ids of this rank's own (ranks
+/// send their meshes to each other).
+pub fn at_load() {
+    if let Some(rank) = env_rank() {
+        glray_scene::ids::set_space(rank + 1);
+    }
+}
+
+/// The host's MPI_Finalize: glray's MPI work stops.
+fn end() {
+    ENDED.store(true, Ordering::Relaxed);
+}
+
+/// How frames are shared in this process.
+pub struct Distribution {
+    replicated: bool,
+    settings: u64,
+    limits: Limits,
+    node: Option<Node<MpiTransport>>,
+    /// Image-parallel tracing stopped (a fault, or MPI could not be joined).
+    stopped: bool,
+}
+
+/// What a shared frame gave this rank: the picture for its framebuffer, and the report.
+pub struct Shared {
+    pub picture: Rendered,
+    pub report: FrameReport,
+    pub rank: usize,
+    pub ranks: usize,
+}
+
+impl Distribution {
+    pub fn configure(config: &Config) -> Distribution {
+        Distribution {
+            replicated: config.distribute(in_mpi()) == "replicated",
+            settings: config.picture_settings(),
+            limits: Limits { fixed: config.mpi_timeout().map(Duration::from_secs_f64) },
+            node: None,
+            stopped: false,
+        }
+    }
+
+    /// Whether frames are to be shared (`frame`) rather than traced alone.
+    pub fn active(&self) -> bool {
+        self.replicated && !self.stopped && !ENDED.load(Ordering::Relaxed)
+    }
+
+    fn stop(&mut self, why: &str) {
+        self.stopped = true;
+        self.node = None;
+        glray_core::error!("image-parallel tracing stopped: {why}; this rank traces its own data from here on");
+    }
+
+    /// Shares `mine` with the other ranks (see the module); None when this rank is to trace it
+    /// alone (not shared, or just stopped).
+    pub fn frame(
+        &mut self,
+        mine: &Frame,
+        previous: Option<&Rendered>,
+        renderer: &mut Renderer,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Option<Shared> {
+        if !self.active() {
+            return None;
+        }
+        if self.node.is_none() {
+            let limit = self.limits.fixed.unwrap_or(glray_distribute::node::FIRST_FRAME_LIMIT);
+            let joined = edge::get().map_err(str::to_string).and_then(|e| e.join(limit).map(|t| (e, t)));
+            match joined {
+                Ok((edge, transport)) => {
+                    let threading = (edge.threading)();
+                    if threading < THREAD_MULTIPLE {
+                        glray_core::warn!(
+                            "MPI gives threading level {threading}, not MPI_THREAD_MULTIPLE: glray's messages move \
+                             only inside the host's GL calls, on its thread"
+                        );
+                    }
+                    glray_core::info!("rank {} of {}: image-parallel tracing", transport.rank(), transport.size());
+                    self.node = Some(Node::new(transport, Agreement { settings: self.settings }, self.limits));
+                }
+                Err(e) => {
+                    self.stop(&e);
+                    return None;
+                }
+            }
+        }
+        let node = self.node.as_mut()?;
+        let (rank, ranks) = (node.rank(), node.size());
+        match node.frame(mine, previous, renderer, pool) {
+            Ok((picture, report)) => {
+                let picture = picture.unwrap_or_else(|| background(mine, &renderer.options));
+                Some(Shared { picture, report, rank, ranks })
+            }
+            Err(fault) => {
+                self.stop(&fault.to_string());
+                None
+            }
+        }
+    }
+}
+
+/// What a rank other than 0 puts in its framebuffer: what its frame cleared to, at the depth it
+/// cleared to (far), which a sort-last compositor passes over.
+fn background(mine: &Frame, options: &glray_render::Options) -> Rendered {
+    let (w, h) = mine.size();
+    let clear = Frame {
+        clear_color: mine.clear_color,
+        cleared: true,
+        depth_cleared: mine.depth_cleared,
+        width: w,
+        height: h,
+        ..Frame::default()
+    };
+    glray_render::render(&clear, w, h, None, options)
+}
+
+/// Tracer threads for this process: the setting `threads`, else the cores shared among the
+/// ranks on this node.
+pub fn tracer_threads(config: &Config) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    config.threads().unwrap_or_else(|| if in_mpi() { (cores / ranks_on_node()).max(1) } else { cores })
+}
