@@ -3,3 +3,8 @@
 # one after the other builds nothing again.
 [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
 cargo build --release --workspace --all-targets --locked
+# The IceT-style MPI example host (examples/mpi), a C program: built with Open MPI's mpicc.
+mkdir -p target/release/examples
+if [ ! -x target/release/examples/icet_like ] || [ examples/mpi/icet_like.c -nt target/release/examples/icet_like ]; then
+  mpicc -O2 examples/mpi/icet_like.c -o target/release/examples/icet_like -lOSMesa -lz -lm
+fi

@@ -49,9 +49,10 @@ pub fn get() -> Result<&'static Edge, &'static str> {
 fn load() -> Result<Edge, String> {
     let path = path();
     let c = CString::new(path.to_string_lossy().as_bytes()).map_err(|e| e.to_string())?;
-    // SAFETY: dlopen of a library of glray's own; RTLD_GLOBAL is not needed (it binds its
-    // MPI symbols from libmpi, already loaded in a host that uses MPI).
-    let handle = unsafe { libc::dlopen(c.as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
+    // SAFETY: dlopen of a library of glray's own. RTLD_GLOBAL: Open MPI loads its components
+    // with dlopen and they bind to libmpi's symbols in the global scope (loaded locally, a
+    // program that does not use MPI itself was reported by mpirun as "exiting improperly").
+    let handle = unsafe { libc::dlopen(c.as_ptr(), libc::RTLD_NOW | libc::RTLD_GLOBAL) };
     if handle.is_null() {
         // SAFETY: dlerror's text is valid until the next dl call.
         let why = unsafe { CStr::from_ptr(libc::dlerror()) }.to_string_lossy().into_owned();

@@ -63,6 +63,17 @@ fn end() {
     ENDED.store(true, Ordering::Relaxed);
 }
 
+/// At the exit of a program that does not use MPI, where glray started it: MPI ends (mpirun
+/// counts a rank that exits without MPI_Finalize as failed).
+extern "C" fn end_at_exit() {
+    let _ = std::panic::catch_unwind(|| {
+        end();
+        if let Ok(edge) = edge::get() {
+            (edge.finalize)(0);
+        }
+    });
+}
+
 /// How frames are shared in this process.
 pub struct Distribution {
     replicated: bool,
@@ -120,6 +131,11 @@ impl Distribution {
             let joined = edge::get().map_err(str::to_string).and_then(|e| e.join(limit).map(|t| (e, t)));
             match joined {
                 Ok((edge, transport)) => {
+                    if !mpi_entry::HOST_STARTED_MPI.load(Ordering::Relaxed) {
+                        // glray started MPI (the program does not use it): glray ends it.
+                        // SAFETY: registering a plain function.
+                        unsafe { libc::atexit(end_at_exit) };
+                    }
                     let threading = (edge.threading)();
                     if threading < THREAD_MULTIPLE {
                         glray_core::warn!(

@@ -359,7 +359,7 @@ impl<T: Transport> Node<T> {
         lanes: &mut Lanes,
         tracing: &Mutex<(Duration, u64)>,
         report: &mut FrameReport,
-    ) -> Result<Option<(Rendered, Option<Vec<glam::Vec4>>)>, Fault> {
+    ) -> Result<Option<Gathered>, Fault> {
         let (me, size, frame) = (self.rank(), self.size(), shared.frame);
         let tiles = grid.count();
         // Rank 0: the picture being gathered, and who has reported.
@@ -397,6 +397,8 @@ impl<T: Transport> Node<T> {
                         if !asked {
                             self.send(0, &Message::Ask { frame })?;
                             asked = true;
+                            // The wait for the answer starts now.
+                            last_heard = Instant::now();
                         }
                         Some(Vec::new())
                     }
@@ -419,6 +421,7 @@ impl<T: Transport> Node<T> {
             if me != 0 && !exhausted && !asked && reserve.is_empty() {
                 self.send(0, &Message::Ask { frame })?;
                 asked = true;
+                last_heard = Instant::now();
             }
             // Tiles this rank traced (all of them, once it has finished: `done` comes before
             // `traced`).
@@ -495,19 +498,17 @@ impl<T: Transport> Node<T> {
                 }
             }
             if !busy {
-                if last_heard.elapsed() > self.limit() && !(me != 0 && !traced) {
-                    // Waiting on others, not on this rank's own tracing.
-                    let ranks = if me == 0 { (1..size).filter(|&r| reports[r].is_none()).collect() } else { vec![0] };
-                    let waiting_for = if me == 0 { "tiles" } else { "the master" };
-                    return Err(Fault::Silent { ranks, waited: last_heard.elapsed(), frame, waiting_for });
+                // Silent past the limit: on rank 0, ranks that have not finished; on another
+                // rank, the master, while this rank's tracer waits for tiles.
+                let silent = last_heard.elapsed() > self.limit();
+                let unfinished: Vec<usize> = (1..size).filter(|&r| reports[r].is_none()).collect();
+                if silent && me == 0 && !unfinished.is_empty() {
+                    let waited = last_heard.elapsed();
+                    return Err(Fault::Silent { ranks: unfinished, waited, frame, waiting_for: "tiles" });
                 }
-                if me != 0 && tracer_waits && last_heard.elapsed() > self.limit() {
-                    return Err(Fault::Silent {
-                        ranks: vec![0],
-                        waited: last_heard.elapsed(),
-                        frame,
-                        waiting_for: "tiles to trace",
-                    });
+                if silent && me != 0 && tracer_waits {
+                    let waited = last_heard.elapsed();
+                    return Err(Fault::Silent { ranks: vec![0], waited, frame, waiting_for: "tiles to trace" });
                 }
                 std::thread::sleep(IDLE);
             }
@@ -531,6 +532,9 @@ impl<T: Transport> Node<T> {
         Ok(())
     }
 }
+
+/// Rank 0's picture of a pass, and its colours before rounding when passes are added up.
+type Gathered = (Rendered, Option<Vec<glam::Vec4>>);
 
 /// What every rank traces this frame.
 struct Shared<'a> {

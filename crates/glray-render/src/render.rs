@@ -181,7 +181,8 @@ impl Renderer {
         };
         let (_, _, stats) = job.run(&mut self.meshes, linear);
         self.meshes.forget_gone();
-        self.stats = Stats { kept_bytes: glray_core::reuse::kept_bytes() as u64, ..stats };
+        let samples = self.options.effects.samples.max(1);
+        self.stats = Stats { kept_bytes: glray_core::reuse::kept_bytes() as u64, samples, ..stats };
         self.stats
     }
 

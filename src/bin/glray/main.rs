@@ -18,6 +18,7 @@ mod bench;
 #[path = "../../abi/commands.rs"]
 mod commands;
 mod meshgen;
+mod mpi_launch;
 mod progress;
 mod raytrace;
 mod replay;
@@ -58,6 +59,17 @@ enum Command {
         /// libglray.so to use (default: the one installed beside this command).
         #[arg(long, value_name = "PATH")]
         library: Option<PathBuf>,
+        /// Run N ranks of PROGRAM under Open MPI's mpirun, each with glray and every GLRAY_*
+        /// setting (image-parallel: docs/distributed.md).
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+        np: Option<u32>,
+        /// With --np: the hosts to run on (mpirun --host), e.g. node1,node2 or node1:4,node2:4.
+        #[arg(long, value_name = "H1,H2", requires = "np")]
+        hosts: Option<String>,
+        /// With --np: one more argument for mpirun (repeat for several), e.g.
+        /// --mpirun-arg=--mca --mpirun-arg=btl --mpirun-arg=self,tcp.
+        #[arg(long = "mpirun-arg", value_name = "ARG", requires = "np", allow_hyphen_values = true)]
+        mpirun_args: Vec<String>,
         /// The program and its arguments (`--` before them is optional: every word from the
         /// program's name on is the program's).
         #[arg(required = true, trailing_var_arg = true, allow_hyphen_values = true, value_name = "PROGRAM ARGS")]
@@ -170,13 +182,14 @@ fn main() -> ExitCode {
         Command::Compare { a, b, fuzz, max_differing, min_psnr, diff, json } => {
             return compare(&a, &b, fuzz, max_differing, min_psnr, diff.as_deref(), json);
         }
-        Command::Run { dropin, mut set, record, library, program } => {
+        Command::Run { dropin, mut set, record, library, np, hosts, mpirun_args, program } => {
             if let Some(r) = record {
                 // Absolute, so that a program that changes directory records where it was asked.
                 let r = std::path::absolute(&r).unwrap_or(r);
                 set.push(format!("record={}", r.display()));
             }
-            run(dropin, &set, library, &program)
+            let ranks = np.map(|np| mpi_launch::Ranks { np, hosts, extra: mpirun_args });
+            run(dropin, &set, library, ranks.as_ref(), &program)
         }
         Command::Info { set, library } => info(&set, library),
         Command::Replay { trace, renderer, out, frames, readpixels } => {
@@ -599,24 +612,39 @@ fn append(var: &str, value: &Path, sep: char) -> OsString {
     }
 }
 
-fn run(dropin: bool, set: &[String], library: Option<PathBuf>, program: &[OsString]) -> Result<(), String> {
+fn run(
+    dropin: bool,
+    set: &[String],
+    library: Option<PathBuf>,
+    ranks: Option<&mpi_launch::Ranks>,
+    program: &[OsString],
+) -> Result<(), String> {
     let flags = parse_flags(set)?;
     // Refuse to start with a bad setting: the library would only fall back to pass-through.
     Config::resolve(&process_env(), &flags)?;
     let lib = find_library(library)?;
-    let mut cmd = std::process::Command::new(&program[0]);
-    cmd.args(&program[1..]);
-    for (k, v) in &flags {
-        cmd.env(env_name(k), v);
-    }
+    let mut env: Vec<(String, OsString)> = flags.iter().map(|(k, v)| (env_name(k), OsString::from(v))).collect();
     if dropin {
         let dir = dropin_dir(&lib)?;
-        cmd.env("LD_LIBRARY_PATH", prepend("LD_LIBRARY_PATH", &dir, ':'));
+        env.push(("LD_LIBRARY_PATH".into(), prepend("LD_LIBRARY_PATH", &dir, ':')));
     } else {
-        cmd.env("LD_PRELOAD", append("LD_PRELOAD", &lib, ':'));
+        env.push(("LD_PRELOAD".into(), append("LD_PRELOAD", &lib, ':')));
     }
+    let mut cmd = match ranks {
+        Some(ranks) => mpi_launch::command(ranks, &env, program)?,
+        None => {
+            let mut cmd = std::process::Command::new(&program[0]);
+            cmd.args(&program[1..]);
+            cmd
+        }
+    };
+    for (k, v) in &env {
+        cmd.env(k, v);
+    }
+    // exec: the program's (or mpirun's) exit status is the command's.
     let err = cmd.exec();
-    Err(format!("cannot run {}: {err}", Path::new(&program[0]).display()))
+    let name = if ranks.is_some() { OsString::from("mpirun") } else { program[0].clone() };
+    Err(format!("cannot run {}: {err}", Path::new(&name).display()))
 }
 
 /// "RENDERER, GL VERSION" of Mesa, from a 1x1 OSMesa context (no display needed).

@@ -1,0 +1,221 @@
+//! glray under MPI (Debian's Open MPI), with the IceT-style example host (examples/mpi): the
+//! image-parallel picture is the same for 1 to 4 ranks over TCP and equal to one process's
+//! picture of all the data, with AO, shadows and a reflection crossing the ranks' pieces;
+//! data-parallel mode composites as before; a rank that stops answering is named within the
+//! time limit; programs that do not use MPI never load it.
+
+mod common;
+
+use common::*;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The example host, compiled with mpicc (scripts/lib/build.sh does too; a test run alone
+/// compiles it here).
+fn icet_like() -> PathBuf {
+    static BUILT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    BUILT.get_or_init(build_icet_like).clone()
+}
+
+fn build_icet_like() -> PathBuf {
+    let out = build_dir().join("examples").join("icet_like");
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/mpi/icet_like.c");
+    let fresh = |p: &Path| p.metadata().and_then(|m| m.modified()).ok();
+    if fresh(&out).is_none() || fresh(&out) < fresh(&source) {
+        let tmp = out.with_extension(format!("{}.tmp", std::process::id()));
+        let status = Command::new("mpicc")
+            .arg(&source)
+            .arg("-o")
+            .arg(&tmp)
+            .args(["-O2", "-lOSMesa", "-lz", "-lm"])
+            .status()
+            .expect("mpicc is not installed: scripts/test installs libopenmpi-dev");
+        assert!(status.success(), "mpicc {}", source.display());
+        std::fs::rename(&tmp, &out).unwrap();
+    }
+    out
+}
+
+/// mpirun for `np` ranks: as root, with more ranks than cores, over TCP (the network path).
+fn mpirun(np: u32) -> Command {
+    let mut cmd = Command::new("timeout");
+    cmd.args(["-k", "5", "120", "mpirun", "--allow-run-as-root", "--oversubscribe", "--mca", "btl", "self,tcp"]);
+    cmd.arg("-np").arg(np.to_string());
+    clean(&mut cmd);
+    cmd
+}
+
+/// No GLRAY_* of the test's own environment.
+fn clean(cmd: &mut Command) {
+    for (k, _) in std::env::vars() {
+        if k.starts_with("GLRAY_") {
+            cmd.env_remove(k);
+        }
+    }
+    cmd.env_remove("LD_PRELOAD");
+}
+
+/// Runs the example under mpirun with glray and `settings`, writing `png`; returns stderr.
+fn ranks(np: u32, settings: &[(&str, &str)], png: &Path, frames: &str) -> String {
+    let mut cmd = mpirun(np);
+    cmd.arg("-x").arg(format!("LD_PRELOAD={}", libglray().display()));
+    for (k, v) in settings {
+        cmd.arg("-x").arg(format!("{k}={v}"));
+    }
+    cmd.arg(icet_like()).arg(png).arg(frames);
+    stderr(&run_ok(&mut cmd, &format!("icet_like, {np} ranks, {settings:?}")))
+}
+
+fn pixels(png: &Path) -> Vec<u8> {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    buf
+}
+
+fn compare(a: &Path, b: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(glray_bin()).arg("compare").arg(a).arg(b).args(args).output().unwrap()
+}
+
+#[test]
+fn image_parallel_pictures_are_one_process_picture_for_any_rank_count() {
+    let dir = scratch("mpi-ranks");
+    let full = [("GLRAY_PRESET", "full")];
+    // One process drawing all the data, glray without MPI: the picture to match.
+    let alone = dir.join("alone.png");
+    let mut cmd = command(Way::Preload, &[], &icet_like(), 120);
+    cmd.arg(&alone).arg("2").env("GLRAY_PRESET", "full").env("GLRAY_DISTRIBUTE", "local");
+    run_ok(&mut cmd, "icet_like alone");
+    for np in 1..=4 {
+        let png = dir.join(format!("replicated-{np}.png"));
+        let said = ranks(np, &[full[0], ("GLRAY_STATS", "stderr")], &png, "2");
+        assert!(pixels(&png) == pixels(&alone), "{np} ranks: not the one-process picture\n{said}");
+        if np > 1 {
+            // Every rank traced a share, and rank 0 says how even the shares were.
+            for r in 0..np {
+                assert!(said.contains(&format!("rank {r} of {np}: ")), "{said}");
+            }
+            assert!(said.contains("imbalance"), "{said}");
+            assert!(!said.contains("glray: error"), "{said}");
+        }
+    }
+    // The launcher: the same picture.
+    let launched = dir.join("launched.png");
+    let mut cmd = Command::new("timeout");
+    cmd.args(["-k", "5", "120"]).arg(glray_bin()).args(["run", "--np", "2", "--set", "preset=full"]);
+    cmd.args(["--mpirun-arg=--mca", "--mpirun-arg=btl", "--mpirun-arg=self,tcp", "--"]);
+    cmd.arg(icet_like()).arg(&launched).arg("2");
+    clean(&mut cmd);
+    run_ok(&mut cmd, "glray run --np 2");
+    assert!(pixels(&launched) == pixels(&alone), "glray run --np 2");
+
+    // Data-parallel (each rank traces its own pieces, the host composites): the boxes of rank 1
+    // cast no shadow on rank 0's ground, so with effects the picture is not the whole scene's...
+    let data = dir.join("data-parallel.png");
+    ranks(2, &[full[0], ("GLRAY_DISTRIBUTE", "data-parallel")], &data, "2");
+    let differing = compare(&data, &alone, &["--max-differing", "0.5%"]);
+    assert_eq!(differing.status.code(), Some(1), "secondary rays cross ranks only image-parallel");
+    // ... while camera rays alone (the GL look) composite to the image-parallel picture.
+    let (gl_data, gl_image) = (dir.join("gl-data-parallel.png"), dir.join("gl-replicated.png"));
+    ranks(2, &[("GLRAY_PRESET", "gl"), ("GLRAY_DISTRIBUTE", "data-parallel")], &gl_data, "1");
+    ranks(3, &[("GLRAY_PRESET", "gl")], &gl_image, "1");
+    let same = compare(&gl_data, &gl_image, &["--max-differing", "0.1%"]);
+    assert!(same.status.success(), "{}", String::from_utf8_lossy(&same.stdout));
+
+    // And glray's picture is not Mesa's (the test would pass on pass-through otherwise).
+    let mesa = dir.join("mesa.png");
+    let mut cmd = mpirun(2);
+    cmd.arg(icet_like()).arg(&mesa).arg("1");
+    run_ok(&mut cmd, "icet_like under Mesa");
+    assert!(pixels(&mesa) != pixels(&alone));
+}
+
+#[test]
+fn a_rank_that_stops_answering_is_named_within_the_timeout() {
+    let dir = scratch("mpi-stopped");
+    let log = dir.join("stderr.txt");
+    let mut cmd = Command::new("timeout");
+    cmd.args(["-k", "5", "90"]).arg(glray_bin()).args(["run", "--np", "2", "--set", "preset=gl", "--set"]);
+    cmd.arg("mpi_timeout=2").arg("--").arg(icet_like()).arg(dir.join("out.png")).arg("100000");
+    clean(&mut cmd);
+    let mut child =
+        cmd.stdout(Stdio::null()).stderr(std::fs::File::create(&log).unwrap()).spawn().expect("glray run --np 2");
+    let read = || std::fs::read_to_string(&log).unwrap_or_default();
+    let until = |what: &dyn Fn(&str) -> bool, limit: Duration| {
+        let start = Instant::now();
+        while start.elapsed() < limit {
+            if what(&read()) {
+                return true;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        false
+    };
+    // Rank 1 says its pid; once frames are being traced across both ranks, it is stopped.
+    let pid_line =
+        |s: &str| s.lines().find_map(|l| l.strip_prefix("icet_like: rank 1 of 2 is pid ")?.trim().parse().ok());
+    assert!(until(&|s| pid_line(s).is_some(), Duration::from_secs(30)), "{}", read());
+    let pid: i32 = pid_line(&read()).unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let stopped = Instant::now();
+    // SAFETY: signals to a process this test started.
+    unsafe { libc::kill(pid, libc::SIGSTOP) };
+    let named = until(&|s| s.contains("rank 1 did not answer within 2.0 s"), Duration::from_secs(20));
+    let took = stopped.elapsed();
+    // Killed: mpirun ends the whole job.
+    unsafe { libc::kill(pid, libc::SIGKILL) };
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break Some(s);
+        }
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let mut said = String::new();
+    let _ = std::fs::File::open(&log).and_then(|mut f| f.read_to_string(&mut said));
+    assert!(named, "rank 0 names the stopped rank: {said}");
+    assert!(took < Duration::from_secs(2 + 8), "named after {took:?}");
+    assert!(said.contains("this rank traces its own data from here on"), "{said}");
+    let status = status.unwrap_or_else(|| panic!("the job did not end after a rank was killed: {said}"));
+    assert!(!status.success(), "a killed rank fails the job");
+}
+
+/// The shared libraries a run loaded, as the dynamic loader tells (LD_DEBUG=files).
+fn loaded(cmd: &mut Command) -> String {
+    cmd.env("LD_DEBUG", "files");
+    let out = cmd.output().unwrap();
+    let said = stderr(&out);
+    said.lines().filter(|l| l.contains("file=")).collect::<Vec<_>>().join("\n")
+}
+
+#[test]
+fn programs_without_mpi_never_load_it() {
+    let dir = scratch("mpi-not-loaded");
+    let mut cmd = command(Way::Preload, &[], &example("osmesa_scene"), 60);
+    cmd.arg(dir.join("osmesa.png")).arg("2").env("GLRAY_PRESET", "ao");
+    let files = loaded(&mut cmd);
+    assert!(files.contains("libOSMesa") && files.contains("libglray.so"), "LD_DEBUG told: {files}");
+    assert!(!files.contains("libmpi") && !files.contains("libglray_mpi"), "{files}");
+
+    let x = Xvfb::start();
+    let mut cmd = command(Way::Preload, &[], &which("glxgears"), 3);
+    cmd.env("DISPLAY", &x.display).env("GLRAY_PRESET", "gl");
+    let files = loaded(&mut cmd);
+    assert!(files.contains("libGLX_mesa") || files.contains("libglray.so"), "LD_DEBUG told: {files}");
+    assert!(!files.contains("libmpi") && !files.contains("libglray_mpi"), "{files}");
+
+    // An MPI program does load glray's MPI edge (the check above can see it).
+    let mut cmd = mpirun(1);
+    cmd.arg("-x").arg(format!("LD_PRELOAD={}", libglray().display())).arg("-x").arg("LD_DEBUG=files");
+    cmd.arg(icet_like()).arg(dir.join("mpi.png")).arg("1");
+    let out = cmd.output().unwrap();
+    assert!(stderr(&out).contains("libglray_mpi.so"), "{}", stderr(&out));
+}
