@@ -6,7 +6,11 @@
  * every rank traces tiles of the whole scene, so shadows, ambient occlusion and reflections
  * see every rank's objects.
  *
- *   mpirun -np N icet_like OUT.png [FRAMES [WIDTH HEIGHT [OBJECTS]]]
+ *   mpirun -np N icet_like OUT.png [FRAMES [WIDTH HEIGHT [OBJECTS [MESH]]]]
+ *
+ * With MESH (the anchors' ISOMESH1 file, `glray bench --save-mesh`), the ranks split the mesh's
+ * triangles instead of boxes, seen by the anchors' camera and light (scripts/bench-mpi); rank 0
+ * prints each frame's time.
  *
  * Built with: mpicc icet_like.c -o icet_like -lOSMesa -lz -lm (scripts/lib/build.sh). */
 #include <GL/gl.h>
@@ -17,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <math.h>
 #include <zlib.h>
 
 static void die(const char *what) {
@@ -85,6 +90,54 @@ static void write_png(const char *path, const unsigned char *rgba, int w, int h)
   free(raw), free(z);
 }
 
+/* The anchors' isosurface (common.h's format and camera). */
+typedef struct {
+  uint32_t nv, nt;
+  float *pos, *nrm;
+  uint32_t *idx;
+} Mesh;
+
+static Mesh read_mesh(const char *path) {
+  Mesh m = {0};
+  FILE *f = fopen(path, "rb");
+  char magic[8];
+  if (!f || fread(magic, 1, 8, f) != 8 || memcmp(magic, "ISOMESH1", 8) || fread(&m.nv, 4, 1, f) != 1 ||
+      fread(&m.nt, 4, 1, f) != 1)
+    die("cannot read the mesh (ISOMESH1)");
+  m.pos = malloc(12 * (size_t)m.nv), m.nrm = malloc(12 * (size_t)m.nv), m.idx = malloc(12 * (size_t)m.nt);
+  if (fread(m.pos, 12, m.nv, f) != m.nv || fread(m.nrm, 12, m.nv, f) != m.nv || fread(m.idx, 12, m.nt, f) != m.nt)
+    die("the mesh is cut short");
+  fclose(f);
+  return m;
+}
+
+/* Triangles [first, last) of the mesh in display list `list`. */
+static void mesh_list(GLuint list, const Mesh *m, size_t first, size_t last) {
+  glNewList(list, GL_COMPILE);
+  glBegin(GL_TRIANGLES);
+  for (size_t t = first; t < last; t++)
+    for (int k = 0; k < 3; k++) {
+      uint32_t v = m->idx[3 * t + k];
+      glNormal3fv(m->nrm + 3 * v);
+      glVertex3fv(m->pos + 3 * v);
+    }
+  glEnd();
+  glEndList();
+}
+
+/* gluLookAt from the anchors' eye to the origin, y up. */
+static void look_at(const float eye[3]) {
+  float f[3] = {-eye[0], -eye[1], -eye[2]}, l = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+  for (int i = 0; i < 3; i++) f[i] /= l;
+  float s[3] = {-f[2], 0.0f, f[0]}; /* f x (0,1,0) */
+  l = sqrtf(s[0] * s[0] + s[2] * s[2]);
+  s[0] /= l, s[2] /= l;
+  float u[3] = {s[1] * f[2] - s[2] * f[1], s[2] * f[0] - s[0] * f[2], s[0] * f[1] - s[1] * f[0]};
+  float m[16] = {s[0], u[0], -f[0], 0, s[1], u[1], -f[1], 0, s[2], u[2], -f[2], 0, 0, 0, 0, 1};
+  glMultMatrixf(m);
+  glTranslatef(-eye[0], -eye[1], -eye[2]);
+}
+
 int main(int argc, char **argv) {
   MPI_Init(&argc, &argv);
   int rank, size;
@@ -94,6 +147,7 @@ int main(int argc, char **argv) {
   int frames = argc > 2 ? atoi(argv[2]) : 2;
   int w = argc > 4 ? atoi(argv[3]) : 256, h = argc > 4 ? atoi(argv[4]) : 192;
   int objects = argc > 5 ? atoi(argv[5]) : 8;
+  const char *mesh_path = argc > 6 ? argv[6] : NULL;
   if (frames < 1 || w < 1 || h < 1 || objects < 1) die("bad arguments");
   /* For tests that stop a rank from outside. */
   fprintf(stderr, "icet_like: rank %d of %d is pid %ld\n", rank, size, (long)getpid());
@@ -106,7 +160,12 @@ int main(int argc, char **argv) {
   glMatrixMode(GL_PROJECTION);
   glLoadIdentity();
   double aspect = (double)w / h;
-  glFrustum(-0.5 * aspect, 0.5 * aspect, -0.5, 0.5, 1.0, 40.0);
+  if (mesh_path) {
+    double top = 0.5 * tan(40.0 * M_PI / 360.0); /* the anchors' gluPerspective(40, aspect, 0.5, 10) */
+    glFrustum(-top * aspect, top * aspect, -top, top, 0.5, 10.0);
+  } else {
+    glFrustum(-0.5 * aspect, 0.5 * aspect, -0.5, 0.5, 1.0, 40.0);
+  }
   glMatrixMode(GL_MODELVIEW);
   glEnable(GL_DEPTH_TEST);
   glEnable(GL_LIGHTING);
@@ -114,6 +173,11 @@ int main(int argc, char **argv) {
   glEnable(GL_COLOR_MATERIAL);
   glEnable(GL_NORMALIZE);
   cube_list(1);
+  if (mesh_path) {
+    Mesh m = read_mesh(mesh_path);
+    mesh_list(2, &m, (size_t)rank * m.nt / size, (size_t)(rank + 1) * m.nt / size);
+    free(m.pos), free(m.nrm), free(m.idx);
+  }
 
   /* This rank's objects: a block of them in rank order, as a data-parallel reader splits. */
   int first = rank * objects / size, last = (rank + 1) * objects / size;
@@ -123,38 +187,51 @@ int main(int argc, char **argv) {
   unsigned char *image = rank == 0 ? malloc(4 * n) : NULL;
 
   for (int frame = 0; frame < frames; frame++) {
+    MPI_Barrier(MPI_COMM_WORLD);
+    double start = MPI_Wtime();
     glClearColor(0.25f, 0.3f, 0.38f, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     glLoadIdentity();
-    glTranslatef(0.0f, -1.2f, -11.0f);
-    glRotatef(28.0f, 1.0f, 0.0f, 0.0f);
-    glRotatef(-20.0f, 0.0f, 1.0f, 0.0f);
-    const GLfloat light[4] = {-3.0f, 8.0f, 5.0f, 1.0f};
-    glLightfv(GL_LIGHT0, GL_POSITION, light);
-    if (rank == 0) {
-      glColor3f(0.85f, 0.85f, 0.8f);
-      glBegin(GL_QUADS);
-      glNormal3f(0.0f, 1.0f, 0.0f);
-      glVertex3f(-8.0f, -1.0f, 6.0f);
-      glVertex3f(8.0f, -1.0f, 6.0f);
-      glVertex3f(8.0f, -1.0f, -8.0f);
-      glVertex3f(-8.0f, -1.0f, -8.0f);
-      glEnd();
-    }
-    for (int k = first; k < last; k++) {
-      float t = objects > 1 ? (float)k / (objects - 1) : 0.5f;
-      glPushMatrix();
-      glTranslatef(-5.0f + 10.0f * t, -0.2f + 0.6f * (k % 3), -2.0f + 2.5f * (k % 2));
-      glRotatef(35.0f * k, 0.0f, 1.0f, 0.0f);
-      glScalef(0.7f, 0.8f + 0.6f * (k % 3), 0.7f);
-      glColor3f(0.9f - 0.6f * t, 0.3f + 0.5f * (k % 2), 0.2f + 0.7f * t);
-      glNormal3f(0.0f, 0.0f, 1.0f); /* the same current normal every frame */
-      glCallList(1);
-      glPopMatrix();
+    if (mesh_path) {
+      static const float eye[3] = {1.45f, 1.05f, 1.95f};
+      const GLfloat dir[4] = {-0.5f, 0.8f, 0.35f, 0.0f};
+      look_at(eye);
+      glLightfv(GL_LIGHT0, GL_POSITION, dir);
+      glColor3f(0.8f, 0.7f, 0.5f);
+      glNormal3f(0.0f, 0.0f, 1.0f);
+      glCallList(2);
+    } else {
+      glTranslatef(0.0f, -1.2f, -11.0f);
+      glRotatef(28.0f, 1.0f, 0.0f, 0.0f);
+      glRotatef(-20.0f, 0.0f, 1.0f, 0.0f);
+      const GLfloat light[4] = {-3.0f, 8.0f, 5.0f, 1.0f};
+      glLightfv(GL_LIGHT0, GL_POSITION, light);
+      if (rank == 0) {
+        glColor3f(0.85f, 0.85f, 0.8f);
+        glBegin(GL_QUADS);
+        glNormal3f(0.0f, 1.0f, 0.0f);
+        glVertex3f(-8.0f, -1.0f, 6.0f);
+        glVertex3f(8.0f, -1.0f, 6.0f);
+        glVertex3f(8.0f, -1.0f, -8.0f);
+        glVertex3f(-8.0f, -1.0f, -8.0f);
+        glEnd();
+      }
+      for (int k = first; k < last; k++) {
+        float t = objects > 1 ? (float)k / (objects - 1) : 0.5f;
+        glPushMatrix();
+        glTranslatef(-5.0f + 10.0f * t, -0.2f + 0.6f * (k % 3), -2.0f + 2.5f * (k % 2));
+        glRotatef(35.0f * k, 0.0f, 1.0f, 0.0f);
+        glScalef(0.7f, 0.8f + 0.6f * (k % 3), 0.7f);
+        glColor3f(0.9f - 0.6f * t, 0.3f + 0.5f * (k % 2), 0.2f + 0.7f * t);
+        glNormal3f(0.0f, 0.0f, 1.0f); /* the same current normal every frame */
+        glCallList(1);
+        glPopMatrix();
+      }
     }
     /* IceT's draw callback: colour, then depth. */
     glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, color);
     glReadPixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
+    if (rank == 0 && mesh_path) printf("icet_like: frame %d: %.4f s\n", frame, MPI_Wtime() - start);
     MPI_Gather(color, 4 * (int)n, MPI_UNSIGNED_CHAR, colors, 4 * (int)n, MPI_UNSIGNED_CHAR, 0, MPI_COMM_WORLD);
     MPI_Gather(depth, (int)n, MPI_FLOAT, depths, (int)n, MPI_FLOAT, 0, MPI_COMM_WORLD);
     if (rank == 0) {

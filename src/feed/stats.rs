@@ -51,7 +51,7 @@ impl RankStats {
     fn json(&self) -> String {
         let r = &self.report;
         format!(
-            ",\"rank\":{},\"ranks\":{},\"tiles\":{},\"tiles_total\":{},\"bytes_sent\":{},\"bytes_received\":{},\"wait_ms\":{:.3},\"imbalance\":{}",
+            ",\"rank\":{},\"ranks\":{},\"tiles\":{},\"tiles_total\":{},\"bytes_sent\":{},\"bytes_received\":{},\"wait_ms\":{:.3},\"exchange_ms\":{:.3},\"rank_trace_ms\":{:.3},\"imbalance\":{}",
             self.rank,
             self.ranks,
             r.tiles,
@@ -59,6 +59,8 @@ impl RankStats {
             r.bytes_sent,
             r.bytes_received,
             ms(r.wait),
+            ms(r.exchange),
+            ms(r.trace),
             r.imbalance.map_or("null".to_string(), |i| format!("{i:.3}"))
         )
     }
@@ -90,9 +92,13 @@ impl StatsSink {
         let r = &s.render;
         let trace = r.trace.as_secs_f64();
         let mrays = if trace > 0.0 { r.rays as f64 / trace / 1e6 } else { 0.0 };
-        let result = match self {
+        // Each line is formatted first and written in one piece: the ranks of an MPI job write
+        // their lines to the same stream or file at once.
+        use std::fmt::Write as _;
+        let mut line = String::new();
+        let made = match self {
             StatsSink::Stderr => writeln!(
-                std::io::stderr(),
+                line,
                 "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms{}{}, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
                  present {:.2} ms; {}, {} per pixel{}{}{}",
                 s.frame,
@@ -121,8 +127,8 @@ impl StatsSink {
                 },
                 s.ranks.as_ref().map_or(String::new(), RankStats::text)
             ),
-            StatsSink::File(f) => writeln!(
-                f,
+            StatsSink::File(_) => writeln!(
+                line,
                 "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
                  \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1}{}}}",
                 s.frame,
@@ -143,6 +149,11 @@ impl StatsSink {
                 mb(r.kept_bytes),
                 s.ranks.as_ref().map_or(String::new(), RankStats::json)
             ),
+        };
+        let result = match self {
+            _ if made.is_err() => return,
+            StatsSink::Stderr => std::io::stderr().write_all(line.as_bytes()),
+            StatsSink::File(f) => f.write_all(line.as_bytes()),
         };
         if let Err(e) = result {
             glray_core::warn!("stats: {e}");

@@ -80,6 +80,11 @@ pub struct FrameReport {
     pub bytes_received: u64,
     /// Time spent waiting for other ranks: for their scenes, for tiles, at the end.
     pub wait: Duration,
+    /// Step 1: this rank's scene sent, every other rank's received, decoded and merged (on the
+    /// first frame, the replication of every mesh).
+    pub exchange: Duration,
+    /// This rank's tracing of its tiles.
+    pub trace: Duration,
     /// Slowest rank's tracing time over the mean (rank 0 only).
     pub imbalance: Option<f64>,
     /// The picture was the last one's again (converged), or traced by rank 0 alone.
@@ -122,6 +127,11 @@ pub struct Node<T: Transport> {
 
 /// How long the message loop sleeps when there is nothing to do.
 const IDLE: Duration = Duration::from_micros(50);
+/// How long the tracing's message loop waits for the tracer before it looks at MPI again. Other
+/// ranks' asks wait at most this long, hidden by the chunk each keeps in reserve; polled every
+/// 200 us, Open MPI's progress over TCP slowed a one-rank frame's tracing by ~14% (on the
+/// other core), every 1 ms by ~3% (docs/distributed.md).
+const POLL: Duration = Duration::from_millis(1);
 
 impl<T: Transport> Node<T> {
     pub fn new(transport: T, agreement: Agreement, limits: Limits) -> Node<T> {
@@ -195,6 +205,7 @@ impl<T: Transport> Node<T> {
         let mut report = FrameReport { frame, ..FrameReport::default() };
         let (merged, waited) = self.exchange(frame, mine)?;
         report.wait += waited;
+        report.exchange = started.elapsed();
         let (w, h) = merged.size();
         let key = renderer.accumulation_key(&merged, w, h);
         let pass = match (key, self.run) {
@@ -305,19 +316,13 @@ impl<T: Transport> Node<T> {
         let (w, h) = shared.merged.size();
         let grid = TileGrid::new(w, h);
         report.tiles_total = grid.count();
-        let (ask_tx, ask_rx) = channel();
+        let (event_tx, event_rx) = channel();
         let (grant_tx, grant_rx) = channel();
-        let (done_tx, done_rx) = channel();
         let abort = AtomicBool::new(false);
-        let work = ChannelWork {
-            ask: Mutex::new(ask_tx),
-            grants: Mutex::new(grant_rx),
-            done: Mutex::new(done_tx),
-            abort: &abort,
-        };
+        let work = ChannelWork { events: Mutex::new(event_tx), grants: Mutex::new(grant_rx), abort: &abort };
         let traced = AtomicBool::new(false);
         let tracing = Mutex::new((Duration::ZERO, 0u64));
-        let mut lanes = Lanes { asks: ask_rx, grants: grant_tx, tiles: done_rx, traced: &traced };
+        let mut lanes = Lanes { events: event_rx, grants: grant_tx, traced: &traced };
         let owned;
         let pool = match pool {
             Some(p) => p,
@@ -342,7 +347,7 @@ impl<T: Transport> Node<T> {
             r
         });
         let gathered = served?;
-        report.rays = tracing.lock().unwrap_or_else(|e| e.into_inner()).1;
+        (report.trace, report.rays) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
         Ok(gathered.map(|(picture, colors)| {
             let key = renderer.accumulation_key(shared.merged, w, h);
             renderer.add_pass(key, picture, colors)
@@ -381,11 +386,22 @@ impl<T: Transport> Node<T> {
         let mut last_heard = Instant::now();
         let mut my_tiles = 0u32;
         let mut traced_at: Option<Instant> = None;
+        let mut busy = true;
         loop {
-            let mut busy = false;
-            // The tracer wants tiles.
-            while lanes.asks.try_recv().is_ok() {
-                tracer_waits = true;
+            // What the tracer said: it wants tiles, or has traced some (all of them, once it
+            // has finished: `done` comes before `traced`). The wait for it is the loop's idle
+            // time, so that a tile or an ask is taken at once.
+            let traced = lanes.traced.load(Ordering::Acquire);
+            let mut traced_tiles = Vec::new();
+            // Waited for only when the last round found nothing to do.
+            let wait = if busy { Duration::ZERO } else { POLL };
+            busy = false;
+            let mut first = lanes.events.recv_timeout(wait).ok();
+            while let Some(event) = first.take().or_else(|| lanes.events.try_recv().ok()) {
+                match event {
+                    TracerEvent::Ask => tracer_waits = true,
+                    TracerEvent::Tile(t) => traced_tiles.push(t),
+                }
             }
             if tracer_waits {
                 let chunk = match reserve.pop_front() {
@@ -417,16 +433,11 @@ impl<T: Transport> Node<T> {
                     }
                 }
             }
-            // Keep one chunk in reserve while tracing, so that asking costs no idle time.
-            if me != 0 && !exhausted && !asked && reserve.is_empty() {
-                self.send(0, &Message::Ask { frame })?;
-                asked = true;
-                last_heard = Instant::now();
-            }
-            // Tiles this rank traced (all of them, once it has finished: `done` comes before
-            // `traced`).
-            let traced = lanes.traced.load(Ordering::Acquire);
-            while let Ok(t) = lanes.tiles.try_recv() {
+            // No chunk is asked for ahead of need: one held in reserve at the end of a frame is
+            // work another rank could have taken (2 ranks: 1.54x over one with it, see
+            // docs/distributed.md); an ask costs a round trip of at most `POLL`.
+            // Tiles this rank traced.
+            for t in traced_tiles {
                 busy = true;
                 match gather.as_mut() {
                     Some(g) => {
@@ -510,7 +521,6 @@ impl<T: Transport> Node<T> {
                     let waited = last_heard.elapsed();
                     return Err(Fault::Silent { ranks: vec![0], waited, frame, waiting_for: "tiles to trace" });
                 }
-                std::thread::sleep(IDLE);
             }
         }
     }
@@ -546,24 +556,28 @@ struct Shared<'a> {
 
 /// The message loop's ends of the channels to the tracer.
 struct Lanes<'a> {
-    asks: Receiver<()>,
+    events: Receiver<TracerEvent>,
     grants: Sender<Option<Vec<u32>>>,
-    tiles: Receiver<TilePixels>,
     traced: &'a AtomicBool,
+}
+
+/// What the tracer tells the message loop.
+enum TracerEvent {
+    Ask,
+    Tile(TilePixels),
 }
 
 /// The tracer's ends: it asks for tiles and hands them back through the message loop.
 struct ChannelWork<'a> {
-    ask: Mutex<Sender<()>>,
+    events: Mutex<Sender<TracerEvent>>,
     grants: Mutex<Receiver<Option<Vec<u32>>>>,
-    done: Mutex<Sender<TilePixels>>,
     abort: &'a AtomicBool,
 }
 
 impl TileWork for ChannelWork<'_> {
     fn next(&self) -> Option<Vec<u32>> {
         let grants = self.grants.lock().unwrap_or_else(|e| e.into_inner());
-        self.ask.lock().unwrap_or_else(|e| e.into_inner()).send(()).ok()?;
+        self.events.lock().unwrap_or_else(|e| e.into_inner()).send(TracerEvent::Ask).ok()?;
         loop {
             match grants.recv_timeout(Duration::from_millis(20)) {
                 Ok(g) => return g,
@@ -574,7 +588,7 @@ impl TileWork for ChannelWork<'_> {
     }
 
     fn done(&self, pixels: TilePixels) {
-        let _ = self.done.lock().unwrap_or_else(|e| e.into_inner()).send(pixels);
+        let _ = self.events.lock().unwrap_or_else(|e| e.into_inner()).send(TracerEvent::Tile(pixels));
     }
 }
 

@@ -76,6 +76,25 @@ pub fn load(path: &Path) -> Result<Mesh, String> {
     Mesh::indexed(positions, normals, triangles).ok_or_else(|| bad("an index past the last vertex"))
 }
 
+/// Writes the anchors' isosurface of about `triangles` triangles to `path` in their ISOMESH1
+/// format ("ISOMESH1", u32 vertices, u32 triangles, positions, normals, indices).
+pub fn save_mesh(path: &Path, triangles: u64) -> Result<(), String> {
+    let n = meshgen::cells_for(triangles);
+    let iso = meshgen::generate(n);
+    let mut d = b"ISOMESH1".to_vec();
+    d.extend((iso.positions.len() as u32).to_le_bytes());
+    d.extend((iso.triangles.len() as u32).to_le_bytes());
+    for v in iso.positions.iter().chain(&iso.normals) {
+        d.extend(v.iter().flat_map(|x| x.to_le_bytes()));
+    }
+    for t in &iso.triangles {
+        d.extend(t.iter().flat_map(|x| x.to_le_bytes()));
+    }
+    std::fs::write(path, &d).map_err(|e| format!("--save-mesh {}: {e}", path.display()))?;
+    println!("isosurface N={n}: {} triangles written to {}", iso.triangles.len(), path.display());
+    Ok(())
+}
+
 /// The bench's mesh and its name: generated, or read from an anchors file or an OBJ file.
 fn mesh_for(a: &Args) -> Result<(Mesh, String), String> {
     let Some(path) = a.mesh else {

@@ -161,6 +161,11 @@ enum Command {
         /// Write the last AO frame here (PNG).
         #[arg(long, value_name = "PNG")]
         out: Option<PathBuf>,
+        /// Only write the generated isosurface to FILE (the anchors' ISOMESH1 format, as
+        /// meshgen.c writes it) and stop: for benchmarks of other programs on the same mesh
+        /// (scripts/bench-mpi).
+        #[arg(long, value_name = "FILE", conflicts_with = "mesh")]
+        save_mesh: Option<PathBuf>,
     },
     /// Print a trace's events, one per line.
     Dump {
@@ -196,21 +201,33 @@ fn main() -> ExitCode {
             replay(&trace, renderer, &out, frames, readpixels)
         }
         Command::Dump { trace, calls } => dump(&trace, calls),
-        Command::Bench { mesh, triangles, width, height, ao, threads, frames, builds, bvh, json, out } => {
-            bench::run(&bench::Args {
-                mesh: mesh.as_deref(),
-                triangles,
-                bvh: glray_render::options::BvhBuild::from_setting(&bvh).unwrap_or_default(),
-                width,
-                height,
-                ao,
-                threads,
-                frames,
-                builds,
-                json,
-                out: out.as_deref(),
-            })
-        }
+        Command::Bench { save_mesh: Some(path), triangles, .. } => bench::save_mesh(&path, triangles),
+        Command::Bench {
+            mesh,
+            triangles,
+            width,
+            height,
+            ao,
+            threads,
+            frames,
+            builds,
+            bvh,
+            json,
+            out,
+            save_mesh: None,
+        } => bench::run(&bench::Args {
+            mesh: mesh.as_deref(),
+            triangles,
+            bvh: glray_render::options::BvhBuild::from_setting(&bvh).unwrap_or_default(),
+            width,
+            height,
+            ao,
+            threads,
+            frames,
+            builds,
+            json,
+            out: out.as_deref(),
+        }),
         Command::DropinDir { library } => {
             find_library(library).and_then(|lib| dropin_dir(&lib)).map(|d| println!("{}", d.display()))
         }
