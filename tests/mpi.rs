@@ -103,6 +103,11 @@ fn image_parallel_pictures_are_one_process_picture_for_any_rank_count() {
             assert!(!said.contains("glray: error"), "{said}");
         }
     }
+    // Rank 0 as a dedicated master and display (it traces nothing): the same picture.
+    let dedicated = dir.join("dedicated.png");
+    let said = ranks(3, &[full[0], ("GLRAY_MPI_ROLES", "dedicated"), ("GLRAY_STATS", "stderr")], &dedicated, "2");
+    assert!(pixels(&dedicated) == pixels(&alone), "a dedicated master\n{said}");
+    assert!(said.contains("rank 0 of 3: 0 of "), "rank 0 traces no tile: {said}");
     // The launcher: the same picture.
     let launched = dir.join("launched.png");
     let mut cmd = Command::new("timeout");

@@ -19,6 +19,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use glray_core::config::Config;
+use glray_distribute::node::Roles;
 use glray_distribute::{Agreement, FrameReport, Limits, Node, Transport};
 use glray_render::{Rendered, Renderer};
 use glray_scene::frame::Frame;
@@ -79,6 +80,7 @@ pub struct Distribution {
     replicated: bool,
     settings: u64,
     limits: Limits,
+    roles: Roles,
     node: Option<Node<MpiTransport>>,
     /// Image-parallel tracing stopped (a fault, or MPI could not be joined).
     stopped: bool,
@@ -98,6 +100,7 @@ impl Distribution {
             replicated: config.distribute(in_mpi()) == "replicated",
             settings: config.picture_settings(),
             limits: Limits { fixed: config.mpi_timeout().map(Duration::from_secs_f64) },
+            roles: if config.dedicated_master() { Roles::Dedicated } else { Roles::Shared },
             node: None,
             stopped: false,
         }
@@ -144,7 +147,8 @@ impl Distribution {
                         );
                     }
                     glray_core::info!("rank {} of {}: image-parallel tracing", transport.rank(), transport.size());
-                    self.node = Some(Node::new(transport, Agreement { settings: self.settings }, self.limits));
+                    let agreement = Agreement { settings: self.settings };
+                    self.node = Some(Node::with_roles(transport, agreement, self.limits, self.roles));
                 }
                 Err(e) => {
                     self.stop(&e);

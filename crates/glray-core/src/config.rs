@@ -41,6 +41,7 @@ pub const TRIGGERS: &[&str] = &["auto", "swap", "finish", "flush", "readpixels"]
 pub const LIGHTING: &[&str] = &["vertex", "pixel"];
 pub const PRESENTS: &[&str] = &["auto", "pixels", "shader"];
 pub const DISTRIBUTIONS: &[&str] = &["auto", "local", "replicated", "data-parallel"];
+pub const MPI_ROLES: &[&str] = &["shared", "dedicated"];
 /// The values of `bvh` (glray-render's `bvh_choice::BvhBuild`).
 pub const BVH_BUILDS: &[&str] = &["auto", "sah", "fast"];
 
@@ -201,6 +202,14 @@ pub const SETTINGS: &[Setting] = &[
               tiles of the whole image against every rank's scene (image-parallel: shadows, AO and reflections \
               see all the data); `data-parallel`, each rank traces only what it drew, for the host's \
               compositor; `local`, no MPI at all. `auto`: `replicated` in an MPI rank, `local` otherwise.",
+    },
+    Setting {
+        key: "mpi_roles",
+        kind: Kind::Choice(MPI_ROLES),
+        default: "shared",
+        doc: "With `distribute = replicated`: `shared`, rank 0 hands out tiles and gathers them beside tracing \
+              its share; `dedicated`, rank 0 only hands out and gathers (the paper's master and display on a \
+              rank of their own), the other ranks trace.",
     },
     Setting {
         key: "threads",
@@ -544,6 +553,11 @@ impl Config {
             "auto" => "local",
             other => other,
         }
+    }
+
+    /// Whether rank 0 is a dedicated master and display (`mpi_roles`).
+    pub fn dedicated_master(&self) -> bool {
+        self.get("mpi_roles") == "dedicated"
     }
 
     /// Tracer threads asked for (None: decide from the cores and ranks).

@@ -19,6 +19,8 @@ pub struct Master {
     queue: VecDeque<u32>,
     /// Tiles handed out this frame, per rank.
     given: Vec<Vec<u32>>,
+    /// Ranks that trace nothing (a dedicated master).
+    idle: Vec<bool>,
 }
 
 impl Master {
@@ -29,12 +31,31 @@ impl Master {
             speed: vec![None; ranks],
             queue: VecDeque::new(),
             given: vec![Vec::new(); ranks],
+            idle: vec![false; ranks],
         }
+    }
+
+    /// Rank `rank` traces nothing: it only hands out and gathers (a dedicated master and
+    /// display). Not when it is the only rank.
+    pub fn leave_out(&mut self, rank: usize) {
+        if self.ranks > 1 && rank < self.ranks {
+            self.idle[rank] = true;
+        }
+    }
+
+    /// Whether `rank` traces tiles.
+    pub fn traces(&self, rank: usize) -> bool {
+        self.idle.get(rank) != Some(&true)
     }
 
     /// Each rank's share of the work by last frame's speeds (equal before any).
     fn shares(&self) -> Vec<f64> {
-        let speeds: Vec<f64> = self.speed.iter().map(|s| s.unwrap_or(1.0).max(1e-9)).collect();
+        let speeds: Vec<f64> = self
+            .speed
+            .iter()
+            .zip(&self.idle)
+            .map(|(s, &idle)| if idle { 0.0 } else { s.unwrap_or(1.0).max(1e-9) })
+            .collect();
         let total: f64 = speeds.iter().sum();
         speeds.iter().map(|s| s / total).collect()
     }
@@ -46,8 +67,9 @@ impl Master {
             self.owner = vec![None; tiles as usize];
         }
         let shares = self.shares();
+        let working = (0..self.ranks).filter(|&r| !self.idle[r]);
         let slowest = (self.speed.iter().all(Option::is_some) && self.ranks > 1)
-            .then(|| (0..self.ranks).min_by(|&a, &b| shares[a].total_cmp(&shares[b])))
+            .then(|| working.min_by(|&a, &b| shares[a].total_cmp(&shares[b])))
             .flatten();
         let quota: Vec<usize> = shares.iter().map(|s| (s * FIRST_SHARE * f64::from(tiles)).floor() as usize).collect();
         let mut batches: Vec<Vec<u32>> = vec![Vec::new(); self.ranks];
@@ -82,6 +104,9 @@ impl Master {
     /// The next chunk for `rank`: a share of what is left by its speed, halved (so that the
     /// last chunks are small and every rank ends near the same time); empty when all is out.
     pub fn next(&mut self, rank: usize) -> Vec<u32> {
+        if self.idle.get(rank) == Some(&true) {
+            return Vec::new();
+        }
         let left = self.queue.len();
         let share = self.shares()[rank.min(self.ranks - 1)];
         let n = ((left as f64 * share / 2.0).ceil() as usize).clamp(1.min(left), left);
@@ -131,6 +156,10 @@ mod tests {
         let mut seen: Vec<u32> = batches.into_iter().flatten().collect();
         let mut r = 0;
         loop {
+            if !m.traces(r % m.ranks) {
+                r += 1;
+                continue;
+            }
             let chunk = m.next(r % m.ranks);
             if chunk.is_empty() {
                 break;
@@ -171,6 +200,15 @@ mod tests {
         // The fast rank's first batch is made of tiles it traced last frame.
         assert!(batches[1].iter().all(|t| last[1].contains(t)), "affinity: {:?}", batches[1]);
         all_given(&mut m, batches, 100);
+        // A dedicated master traces nothing; the others share all.
+        let mut m = Master::new(3);
+        m.leave_out(0);
+        let batches = m.begin(60);
+        assert!(batches[0].is_empty() && m.next(0).is_empty());
+        all_given(&mut m, batches, 60);
+        let mut alone = Master::new(1);
+        alone.leave_out(0);
+        assert_eq!(alone.begin(4)[0].len(), 2, "the only rank traces");
         assert!((imbalance(&[1.0, 1.0]) - 1.0).abs() < 1e-9 && (imbalance(&[1.0, 3.0]) - 1.5).abs() < 1e-9);
     }
 }

@@ -98,6 +98,15 @@ pub struct Agreement {
     pub settings: u64,
 }
 
+/// Whether rank 0 traces too (`Shared`, the default) or only hands out tiles and gathers them
+/// (`Dedicated`: the master and display on a rank of their own, as the paper's roles).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Roles {
+    #[default]
+    Shared,
+    Dedicated,
+}
+
 /// How long a rank waits for another: `fixed` (the setting `mpi_timeout`) or, when not set,
 /// `FIRST_FRAME_LIMIT`, then the last frame's time plus `SLACK`.
 #[derive(Debug, Clone, Copy, Default)]
@@ -135,7 +144,15 @@ const POLL: Duration = Duration::from_millis(1);
 
 impl<T: Transport> Node<T> {
     pub fn new(transport: T, agreement: Agreement, limits: Limits) -> Node<T> {
+        Node::with_roles(transport, agreement, limits, Roles::Shared)
+    }
+
+    pub fn with_roles(transport: T, agreement: Agreement, limits: Limits, roles: Roles) -> Node<T> {
         let size = transport.size();
+        let mut master = Master::new(size);
+        if roles == Roles::Dedicated {
+            master.leave_out(0);
+        }
         Node {
             transport,
             frame: 0,
@@ -144,7 +161,7 @@ impl<T: Transport> Node<T> {
             sent: ObjectStore::default(),
             held: (0..size).map(|_| ObjectStore::default()).collect(),
             ahead: VecDeque::new(),
-            master: Master::new(size),
+            master,
             run: None,
             last_frame: None,
             bytes_sent: 0,
@@ -334,9 +351,17 @@ impl<T: Transport> Node<T> {
             }
         };
         let tracer = &mut *renderer;
+        let traces = self.master.traces(self.rank());
+        if !traces {
+            // A dedicated master: nothing to trace here.
+            traced.store(true, Ordering::Release);
+        }
         let served = pool.in_place_scope(|s| {
             let (work, traced, tracing) = (&work, &traced, &tracing);
             s.spawn(move |_| {
+                if !traces {
+                    return;
+                }
                 let start = Instant::now();
                 let stats = tracer.render_tiles(shared.merged, w, h, shared.pass, shared.linear, work);
                 *tracing.lock().unwrap_or_else(|e| e.into_inner()) = (start.elapsed(), stats.rays);
@@ -497,10 +522,13 @@ impl<T: Transport> Node<T> {
                         let (seconds, _) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
                         let mut times = vec![seconds.as_secs_f64()];
                         times.extend(reports[1..].iter().flatten().map(|r| r.trace));
+                        let known: Vec<Option<f64>> = times.iter().map(|&t| Some(t)).collect();
+                        if !self.master.traces(0) {
+                            times.remove(0);
+                        }
                         report.imbalance = Some(imbalance(&times));
                         report.tiles = my_tiles;
                         report.wait += traced_at.map_or(Duration::ZERO, |t| t.elapsed());
-                        let known: Vec<Option<f64>> = times.iter().map(|&t| Some(t)).collect();
                         self.master.end(&known);
                         let g = gather.take().expect("rank 0 gathers");
                         return Ok(Some(g.finish()));

@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 
 use glray_capture::fixed::Context;
 use glray_core::trace::Value::{self, Int, F64};
+use glray_distribute::node::Roles;
 use glray_distribute::transport::memory::MemoryTransport;
 use glray_distribute::{Agreement, Fault, Limits, Node};
 use glray_render::{Effects, Options, Renderer};
@@ -86,6 +87,10 @@ fn options(preset: &str) -> Options {
 
 /// Rank 0's pictures of `frames` frames over `ranks` ranks in threads.
 fn traced(ranks: usize, preset: &str, frames: usize) -> Vec<glray_render::Rendered> {
+    traced_with(ranks, preset, frames, Roles::Shared)
+}
+
+fn traced_with(ranks: usize, preset: &str, frames: usize, roles: Roles) -> Vec<glray_render::Rendered> {
     let transports = MemoryTransport::group(ranks);
     let handles: Vec<_> = transports
         .into_iter()
@@ -94,7 +99,8 @@ fn traced(ranks: usize, preset: &str, frames: usize) -> Vec<glray_render::Render
             let preset = preset.to_string();
             std::thread::spawn(move || {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-                let mut node = Node::new(t, Agreement { settings: 7 }, Limits { fixed: Some(Duration::from_secs(30)) });
+                let limits = Limits { fixed: Some(Duration::from_secs(30)) };
+                let mut node = Node::with_roles(t, Agreement { settings: 7 }, limits, roles);
                 let mut renderer = Renderer::new(options(&preset));
                 frames_of(rank, ranks, frames)
                     .iter()
@@ -110,6 +116,9 @@ fn traced(ranks: usize, preset: &str, frames: usize) -> Vec<glray_render::Render
     let zero = all.swap_remove(0);
     let tiles: u32 = zero.iter().map(|(_, r)| r.tiles_total).max().unwrap();
     assert!(tiles > 1);
+    if roles == Roles::Dedicated && ranks > 1 {
+        assert!(zero.iter().all(|(_, r)| r.tiles == 0), "a dedicated master traces nothing");
+    }
     zero.into_iter().map(|(p, _)| p.expect("rank 0's picture")).collect()
 }
 
@@ -129,6 +138,9 @@ fn a_scene_split_over_ranks_is_traced_as_one_process_traces_it_all() {
                 assert!(g == e, "{preset}, {ranks} ranks, frame {k}: not the one-process picture");
             }
         }
+        // Rank 0 as a dedicated master and display: the same picture.
+        let got = traced_with(3, preset, 2, Roles::Dedicated);
+        assert!(got == expected, "{preset}, a dedicated master");
     }
 }
 
