@@ -145,7 +145,11 @@ fn a_rank_that_stops_answering_is_named_within_the_timeout() {
     let log = dir.join("stderr.txt");
     let mut cmd = Command::new("timeout");
     cmd.args(["-k", "5", "90"]).arg(glray_bin()).args(["run", "--np", "2", "--set", "preset=gl", "--set"]);
-    cmd.arg("mpi_timeout=2").arg("--").arg(icet_like()).arg(dir.join("out.png")).arg("100000");
+    // Rank 1 stops itself as frame 3 begins, past the host's own barrier: rank 0 then waits
+    // for its scene inside glray (stopped at a random moment, rank 1 could leave rank 0 waiting
+    // in the host's own MPI_Gather instead, where glray has no say).
+    cmd.arg("mpi_timeout=2").args(["--mpirun-arg=-x", "--mpirun-arg=ICET_LIKE_STALL=1:3", "--"]);
+    cmd.arg(icet_like()).arg(dir.join("out.png")).arg("100000");
     clean(&mut cmd);
     let mut child =
         cmd.stdout(Stdio::null()).stderr(std::fs::File::create(&log).unwrap()).spawn().expect("glray run --np 2");
@@ -160,18 +164,24 @@ fn a_rank_that_stops_answering_is_named_within_the_timeout() {
         }
         false
     };
-    // Rank 1 says its pid; once frames are being traced across both ranks, it is stopped.
+    // Rank 1 says its pid.
     let pid_line =
         |s: &str| s.lines().find_map(|l| l.strip_prefix("icet_like: rank 1 of 2 is pid ")?.trim().parse().ok());
     assert!(until(&|s| pid_line(s).is_some(), Duration::from_secs(30)), "{}", read());
     let pid: i32 = pid_line(&read()).unwrap();
-    std::thread::sleep(Duration::from_millis(1500));
+    // Stopped: the process's state in /proc is T.
+    let state = || std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    let is_stopped = || state().rsplit(')').next().is_some_and(|rest| rest.trim_start().starts_with('T'));
+    let start = Instant::now();
+    while !is_stopped() && start.elapsed() < Duration::from_secs(30) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(is_stopped(), "rank 1 did not stop itself: {}", read());
     let stopped = Instant::now();
-    // SAFETY: signals to a process this test started.
-    unsafe { libc::kill(pid, libc::SIGSTOP) };
     let named = until(&|s| s.contains("rank 1 did not answer within 2.0 s"), Duration::from_secs(20));
     let took = stopped.elapsed();
     // Killed: mpirun ends the whole job.
+    // SAFETY: a signal to a process this test started.
     unsafe { libc::kill(pid, libc::SIGKILL) };
     let start = Instant::now();
     let status = loop {

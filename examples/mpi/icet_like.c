@@ -12,10 +12,14 @@
  * triangles instead of boxes, seen by the anchors' camera and light (scripts/bench-mpi); rank 0
  * prints each frame's time.
  *
+ * ICET_LIKE_STALL=RANK:FRAME makes that rank stop itself (SIGSTOP) as that frame begins: a rank
+ * that stops answering, for glray's tests of its time limits.
+ *
  * Built with: mpicc icet_like.c -o icet_like -lOSMesa -lz -lm (scripts/lib/build.sh). */
 #include <GL/gl.h>
 #include <GL/osmesa.h>
 #include <mpi.h>
+#include <signal.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -149,7 +153,9 @@ int main(int argc, char **argv) {
   int objects = argc > 5 ? atoi(argv[5]) : 8;
   const char *mesh_path = argc > 6 ? argv[6] : NULL;
   if (frames < 1 || w < 1 || h < 1 || objects < 1) die("bad arguments");
-  /* For tests that stop a rank from outside. */
+  int stall_rank = -1, stall_frame = -1;
+  if (getenv("ICET_LIKE_STALL")) sscanf(getenv("ICET_LIKE_STALL"), "%d:%d", &stall_rank, &stall_frame);
+  /* For tests that signal a rank from outside. */
   fprintf(stderr, "icet_like: rank %d of %d is pid %ld\n", rank, size, (long)getpid());
 
   unsigned char *buffer = malloc((size_t)w * h * 4);
@@ -188,6 +194,7 @@ int main(int argc, char **argv) {
 
   for (int frame = 0; frame < frames; frame++) {
     MPI_Barrier(MPI_COMM_WORLD);
+    if (rank == stall_rank && frame == stall_frame) raise(SIGSTOP);
     double start = MPI_Wtime();
     glClearColor(0.25f, 0.3f, 0.38f, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);

@@ -737,8 +737,8 @@ fn info(set: &[String], library: Option<PathBuf>) -> Result<(), String> {
 
 /// Every setting's value in force and where it came from: the default, a file, the
 /// environment or a flag; for an effect setting left empty, the preset's value ("preset ao");
-/// for an empty path, what that means ("(none)", or "(auto)" for the real libraries, which
-/// glray finds itself).
+/// for an empty path, what that means ("(none)", or "(auto)" for the real libraries and the
+/// MPI edge, which glray finds itself); "(auto)" for an MPI time limit decided per frame.
 fn effective_settings(config: &Config) -> Vec<(&'static str, String, String)> {
     let effects = glray_render::Options::from_config(config).map(|o| o.effects);
     let preset = config.preset();
@@ -749,6 +749,8 @@ fn effective_settings(config: &Config) -> Vec<(&'static str, String, String)> {
         .map(|(s, value, source)| {
             let from_preset = |v: String| (v, format!("preset {preset}"));
             let (value, source) = match (value, &effects) {
+                // Decided when it applies (docs/settings.md says how).
+                ("", _) if s.key == "mpi_timeout" || s.key == "mpi_library" => ("(auto)".into(), source.to_string()),
                 ("", Some(e)) if s.kind != Kind::Path => match s.key {
                     "ao_samples" => from_preset(e.ao_samples.to_string()),
                     "ao_distance" => from_preset(e.ao_distance.to_string()),
