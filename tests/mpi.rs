@@ -234,3 +234,22 @@ fn programs_without_mpi_never_load_it() {
     let out = cmd.output().unwrap();
     assert!(stderr(&out).contains("libglray_mpi.so"), "{}", stderr(&out));
 }
+
+#[test]
+fn without_its_mpi_part_glray_lets_the_program_run_and_says_why() {
+    let dir = scratch("mpi-no-edge");
+    // The MPI edge cannot be loaded: MPI starts without glray's part, each rank traces alone,
+    // the host composites as it would, and the job ends well.
+    let png = dir.join("out.png");
+    let said = ranks(2, &[("GLRAY_PRESET", "gl"), ("GLRAY_MPI_LIBRARY", "/nonexistent/libglray_mpi.so")], &png, "1");
+    assert!(said.contains("cannot load glray's MPI edge /nonexistent/libglray_mpi.so"), "{said}");
+    let data = dir.join("data-parallel.png");
+    ranks(2, &[("GLRAY_PRESET", "gl"), ("GLRAY_DISTRIBUTE", "data-parallel")], &data, "1");
+    assert!(pixels(&png) == pixels(&data), "ranks tracing alone: the data-parallel picture");
+    // `glray run --np` passes the program's failure through.
+    let mut cmd = Command::new("timeout");
+    cmd.args(["-k", "5", "60"]).arg(glray_bin()).args(["run", "--np", "1", "--", "false"]);
+    clean(&mut cmd);
+    let out = cmd.output().unwrap();
+    assert!(!out.status.success(), "glray run --np 1 -- false");
+}
