@@ -246,6 +246,16 @@ fn without_its_mpi_part_glray_lets_the_program_run_and_says_why() {
     let data = dir.join("data-parallel.png");
     ranks(2, &[("GLRAY_PRESET", "gl"), ("GLRAY_DISTRIBUTE", "data-parallel")], &data, "1");
     assert!(pixels(&png) == pixels(&data), "ranks tracing alone: the data-parallel picture");
+    // A rank without glray (rank 1 runs with no preload): the others say so within the limit,
+    // trace alone, and the job ends well.
+    let script = dir.join("rank1-without-glray.sh");
+    std::fs::write(&script, "#!/bin/sh\n[ \"$OMPI_COMM_WORLD_RANK\" = 1 ] && unset LD_PRELOAD\nexec \"$@\"\n").unwrap();
+    let mut cmd = mpirun(2);
+    cmd.arg("-x").arg(format!("LD_PRELOAD={}", libglray().display()));
+    cmd.args(["-x", "GLRAY_PRESET=gl", "-x", "GLRAY_MPI_TIMEOUT=2", "sh"]).arg(&script).arg(icet_like());
+    cmd.arg(dir.join("mixed.png")).arg("2");
+    let said = stderr(&run_ok(&mut cmd, "a rank without glray"));
+    assert!(said.contains("not every rank joined glray's communicator within 2 s"), "{said}");
     // `glray run --np` passes the program's failure through.
     let mut cmd = Command::new("timeout");
     cmd.args(["-k", "5", "60"]).arg(glray_bin()).args(["run", "--np", "1", "--", "false"]);
