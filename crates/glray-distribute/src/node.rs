@@ -182,8 +182,11 @@ impl<T: Transport> Node<T> {
         self.limits.fixed.unwrap_or_else(|| self.last_frame.map_or(FIRST_FRAME_LIMIT, |t| t + SLACK))
     }
 
-    fn send(&mut self, to: usize, message: &Message) -> Result<(), Fault> {
-        let bytes = message.encode();
+    fn send(&mut self, to: usize, message: Message) -> Result<(), Fault> {
+        self.send_bytes(to, message.encode())
+    }
+
+    fn send_bytes(&mut self, to: usize, bytes: Vec<u8>) -> Result<(), Fault> {
         self.bytes_sent += bytes.len() as u64;
         self.transport.send(to, bytes).map_err(Fault::Transport)
     }
@@ -196,7 +199,7 @@ impl<T: Transport> Node<T> {
         }
         while let Some((from, bytes)) = self.transport.poll().map_err(Fault::Transport)? {
             self.bytes_received += bytes.len() as u64;
-            let message = Message::decode(&bytes).map_err(|why| Fault::Damaged { rank: from, why })?;
+            let message = Message::decode(bytes).map_err(|why| Fault::Damaged { rank: from, why })?;
             match message.frame() {
                 f if f == frame => return Ok(Some((from, message))),
                 f if f > frame => self.ahead.push_back((from, message)),
@@ -258,9 +261,15 @@ impl<T: Transport> Node<T> {
         let (me, size) = (self.rank(), self.size());
         if size > 1 {
             let scene = encode(mine, &mut self.sent);
-            let message = Message::Scene { frame, settings: self.agreement.settings, scene };
-            for r in (0..size).filter(|&r| r != me) {
-                self.send(r, &message)?;
+            // Encoded once for every rank (the first frame's may be hundreds of megabytes).
+            // Encoded once for every rank (the first frame's may be hundreds of megabytes),
+            // moved to the last one.
+            let bytes = Message::Scene { frame, settings: self.agreement.settings, scene }.encode();
+            let others: Vec<usize> = (0..size).filter(|&r| r != me).collect();
+            let mut bytes = Some(bytes);
+            for (k, &r) in others.iter().enumerate() {
+                let b = if k + 1 == others.len() { bytes.take() } else { bytes.clone() };
+                self.send_bytes(r, b.expect("bytes for every rank"))?;
             }
         }
         // What the others hold of ours is what this frame draws (the rest they forget, below).
@@ -404,7 +413,7 @@ impl<T: Transport> Node<T> {
                 if r == 0 {
                     reserve.push_back(batch);
                 } else {
-                    self.send(r, &Message::Grant { frame, tiles: batch })?;
+                    self.send(r, Message::Grant { frame, tiles: batch })?;
                 }
             }
         }
@@ -436,7 +445,7 @@ impl<T: Transport> Node<T> {
                     None => {
                         // Wait for the master's answer.
                         if !asked {
-                            self.send(0, &Message::Ask { frame })?;
+                            self.send(0, Message::Ask { frame })?;
                             asked = true;
                             // The wait for the answer starts now.
                             last_heard = Instant::now();
@@ -470,7 +479,7 @@ impl<T: Transport> Node<T> {
                     }
                     None => {
                         let m = tile_message(frame, &t);
-                        self.send(0, &m)?;
+                        self.send(0, m)?;
                     }
                 }
             }
@@ -481,7 +490,7 @@ impl<T: Transport> Node<T> {
                 match message {
                     Message::Ask { .. } if me == 0 => {
                         let chunk = self.master.next(from);
-                        self.send(from, &Message::Grant { frame, tiles: chunk })?;
+                        self.send(from, Message::Grant { frame, tiles: chunk })?;
                     }
                     Message::Grant { tiles, .. } if me != 0 => {
                         asked = false;
@@ -512,7 +521,7 @@ impl<T: Transport> Node<T> {
                     None => {
                         let (seconds, rays) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
                         let r = RankReport { tiles: my_tiles, rays, trace: seconds.as_secs_f64() };
-                        self.send(0, &Message::Done { frame, report: r })?;
+                        self.send(0, Message::Done { frame, report: r })?;
                         self.flush(frame)?;
                         report.tiles = my_tiles;
                         report.wait += traced_at.map_or(Duration::ZERO, |t| t.elapsed());

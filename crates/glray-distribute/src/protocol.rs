@@ -1,6 +1,6 @@
 //! The messages ranks exchange, each carrying the frame it belongs to (a rank may be a frame
-//! ahead of another: its messages wait until that frame), encoded with postcard. Pixels travel
-//! as their bytes (little-endian floats: every rank of a job is the same kind of machine; the
+//! ahead of another: its messages wait until that frame), encoded with postcard; byte fields as
+//! one run of bytes (serde_bytes), not as a sequence of numbers. Pixels travel as their bytes (little-endian floats: every rank of a job is the same kind of machine; the
 //! scene encoding checks the byte order of the first message).
 
 use serde::{Deserialize, Serialize};
@@ -17,13 +17,27 @@ pub struct RankReport {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum Message {
     /// A rank's captured frame (`glray_scene::encode`), with what its settings must agree on.
-    Scene { frame: u64, settings: u64, scene: Vec<u8> },
+    Scene {
+        frame: u64,
+        settings: u64,
+        #[serde(with = "serde_bytes")]
+        scene: Vec<u8>,
+    },
     /// A render rank asks the master for more tiles.
     Ask { frame: u64 },
     /// The master's answer: tiles to trace, or none (the frame's tiles are all handed out).
     Grant { frame: u64, tiles: Vec<u32> },
     /// A traced tile for the display rank: RGBA bytes, depths and linear colours as bytes.
-    Tile { frame: u64, tile: u32, rgba: Vec<u8>, depth: Vec<u8>, colors: Vec<u8> },
+    Tile {
+        frame: u64,
+        tile: u32,
+        #[serde(with = "serde_bytes")]
+        rgba: Vec<u8>,
+        #[serde(with = "serde_bytes")]
+        depth: Vec<u8>,
+        #[serde(with = "serde_bytes")]
+        colors: Vec<u8>,
+    },
     /// A rank's share is traced and every tile of it sent.
     Done { frame: u64, report: RankReport },
 }
@@ -39,15 +53,45 @@ impl Message {
         }
     }
 
-    pub fn encode(&self) -> Vec<u8> {
+    /// The message's bytes. A scene goes as its own bytes after a short header (`RAW_SCENE`,
+    /// frame, settings): at 10M triangles it is 400 MB, and every copy of it costs.
+    pub fn encode(self) -> Vec<u8> {
+        if let Message::Scene { frame, settings, mut scene } = self {
+            let mut header = Vec::with_capacity(RAW_HEADER);
+            header.push(RAW_SCENE);
+            header.extend_from_slice(&frame.to_le_bytes());
+            header.extend_from_slice(&settings.to_le_bytes());
+            scene.splice(0..0, header);
+            return scene;
+        }
+        let room = 64
+            + match &self {
+                Message::Tile { rgba, depth, colors, .. } => rgba.len() + depth.len() + colors.len(),
+                Message::Grant { tiles, .. } => 5 * tiles.len(),
+                _ => 0,
+            };
         // Writing to a Vec cannot fail; every message serializes.
-        postcard::to_stdvec(self).expect("a message encodes")
+        postcard::to_extend(&self, Vec::with_capacity(room)).expect("a message encodes")
     }
 
-    pub fn decode(bytes: &[u8]) -> Result<Message, String> {
-        postcard::from_bytes(bytes).map_err(|e| format!("a damaged message ({} bytes): {e}", bytes.len()))
+    pub fn decode(mut bytes: Vec<u8>) -> Result<Message, String> {
+        if bytes.first() == Some(&RAW_SCENE) {
+            if bytes.len() < RAW_HEADER {
+                return Err(format!("a scene message cut short ({} bytes)", bytes.len()));
+            }
+            let word = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
+            let (frame, settings) = (word(1), word(9));
+            bytes.drain(..RAW_HEADER);
+            return Ok(Message::Scene { frame, settings, scene: bytes });
+        }
+        postcard::from_bytes(&bytes).map_err(|e| format!("a damaged message ({} bytes): {e}", bytes.len()))
     }
 }
+
+/// The first byte of a scene message: never the first byte of a postcard-encoded `Message`
+/// (its variant's number, a varint below 128).
+const RAW_SCENE: u8 = 0xFF;
+const RAW_HEADER: usize = 1 + 8 + 8;
 
 /// A tile's pixels as a message.
 pub fn tile_message(frame: u64, t: &glray_render::tiles::TilePixels) -> Message {
@@ -84,10 +128,13 @@ mod tests {
             depth: vec![0.25, 1.0],
             colors: vec![glam::Vec4::new(0.1, 0.2, 0.3, 1.0), glam::Vec4::ONE],
         };
-        let m = Message::decode(&tile_message(9, &t).encode()).unwrap();
+        let m = Message::decode(tile_message(9, &t).encode()).unwrap();
         assert_eq!(m.frame(), 9);
         let Message::Tile { tile, rgba, depth, colors, .. } = m else { panic!("{m:?}") };
         assert_eq!(tile_pixels(tile, rgba, &depth, &colors), Some(t));
-        assert!(Message::decode(&[200, 1]).is_err());
+        assert!(Message::decode(vec![200, 1]).is_err());
+        let scene = Message::Scene { frame: 3, settings: 99, scene: vec![1, 2, 3] };
+        assert_eq!(Message::decode(scene.clone().encode()), Ok(scene));
+        assert!(Message::decode(vec![0xFF, 1, 2]).is_err(), "a scene cut short");
     }
 }
