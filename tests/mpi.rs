@@ -43,18 +43,8 @@ fn mpirun(np: u32) -> Command {
     let mut cmd = Command::new("timeout");
     cmd.args(["-k", "5", "120", "mpirun", "--allow-run-as-root", "--oversubscribe", "--mca", "btl", "self,tcp"]);
     cmd.arg("-np").arg(np.to_string());
-    clean(&mut cmd);
+    without_glray(&mut cmd);
     cmd
-}
-
-/// No GLRAY_* of the test's own environment.
-fn clean(cmd: &mut Command) {
-    for (k, _) in std::env::vars() {
-        if k.starts_with("GLRAY_") {
-            cmd.env_remove(k);
-        }
-    }
-    cmd.env_remove("LD_PRELOAD");
 }
 
 /// Runs the example under mpirun with glray and `settings`, writing `png`; returns stderr.
@@ -114,7 +104,7 @@ fn image_parallel_pictures_are_one_process_picture_for_any_rank_count() {
     cmd.args(["-k", "5", "120"]).arg(glray_bin()).args(["run", "--np", "2", "--set", "preset=full"]);
     cmd.args(["--mpirun-arg=--mca", "--mpirun-arg=btl", "--mpirun-arg=self,tcp", "--"]);
     cmd.arg(icet_like()).arg(&launched).arg("2");
-    clean(&mut cmd);
+    without_glray(&mut cmd);
     run_ok(&mut cmd, "glray run --np 2");
     assert!(pixels(&launched) == pixels(&alone), "glray run --np 2");
 
@@ -158,7 +148,7 @@ fn a_rank_that_stops_answering_is_named_within_the_timeout() {
     // in the host's own MPI_Gather instead, where glray has no say).
     cmd.arg("mpi_timeout=2").args(["--mpirun-arg=-x", "--mpirun-arg=ICET_LIKE_STALL=1:3", "--"]);
     cmd.arg(icet_like()).arg(dir.join("out.png")).arg("100000");
-    clean(&mut cmd);
+    without_glray(&mut cmd);
     let mut child =
         cmd.stdout(Stdio::null()).stderr(std::fs::File::create(&log).unwrap()).spawn().expect("glray run --np 2");
     let read = || std::fs::read_to_string(&log).unwrap_or_default();
@@ -267,7 +257,7 @@ fn without_its_mpi_part_glray_lets_the_program_run_and_says_why() {
     // `glray run --np` passes the program's failure through.
     let mut cmd = Command::new("timeout");
     cmd.args(["-k", "5", "60"]).arg(glray_bin()).args(["run", "--np", "1", "--", "false"]);
-    clean(&mut cmd);
+    without_glray(&mut cmd);
     let out = cmd.output().unwrap();
     assert!(!out.status.success(), "glray run --np 1 -- false");
 }

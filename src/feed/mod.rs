@@ -94,6 +94,7 @@ pub fn configure(config: &Config) -> Live {
         "readpixels" => Trigger::ReadPixels,
         _ => Trigger::Auto,
     };
+    let threads = crate::distribute::tracer_threads(config);
     let live = Live {
         capture: Capture::default(),
         names: Vec::new(),
@@ -109,8 +110,8 @@ pub fn configure(config: &Config) -> Live {
         frames: 0,
         stats: config.stats().and_then(|spec| stats::StatsSink::open(spec).map_err(|e| glray_core::warn!("{e}")).ok()),
         capture_time: std::time::Duration::ZERO,
-        pool: tracer_pool(crate::distribute::tracer_threads(config)),
-        threads: crate::distribute::tracer_threads(config),
+        pool: tracer_pool(threads),
+        threads,
         distribution: crate::distribute::Distribution::configure(config),
     };
     ON.store(true, Ordering::Relaxed);

@@ -83,12 +83,8 @@ pub fn command(way: Way, preload: &[&Path], program: &Path, seconds: u32) -> Com
     let mut cmd = Command::new("timeout");
     cmd.arg("-k").arg("5").arg(seconds.to_string()).arg(program);
     let mut preloads: Vec<String> = preload.iter().map(|p| p.display().to_string()).collect();
-    for (k, _) in std::env::vars() {
-        if k.starts_with("GLRAY_") {
-            cmd.env_remove(k);
-        }
-    }
-    cmd.env_remove("LD_PRELOAD").env_remove("LD_LIBRARY_PATH").env("GLRAY_PRESET", "off");
+    without_glray(&mut cmd);
+    cmd.env_remove("LD_LIBRARY_PATH").env("GLRAY_PRESET", "off");
     match way {
         Way::Plain => {}
         Way::Preload => preloads.push(libglray().display().to_string()),
@@ -100,6 +96,16 @@ pub fn command(way: Way, preload: &[&Path], program: &Path, seconds: u32) -> Com
         cmd.env("LD_PRELOAD", preloads.join(":"));
     }
     cmd
+}
+
+/// No GLRAY_* setting and no LD_PRELOAD of the test's own environment reach `cmd`.
+pub fn without_glray(cmd: &mut Command) {
+    for (k, _) in std::env::vars() {
+        if k.starts_with("GLRAY_") {
+            cmd.env_remove(k);
+        }
+    }
+    cmd.env_remove("LD_PRELOAD");
 }
 
 /// Runs and returns the output; panics with stderr if it did not exit 0.

@@ -233,19 +233,17 @@ impl<T: Transport> Node<T> {
             _ => 0,
         };
         let me = self.rank();
-        let picture = if w == 0 || h == 0 || merged.is_empty() {
-            // Nothing to trace anywhere; rank 0 shows what the frame cleared to.
-            report.untraced = true;
-            (me == 0).then(|| renderer.render(&merged, w, h, previous))
-        } else if pass >= renderer.converged_passes() || !Renderer::shares(&merged) {
-            // Converged (the last picture again), or a frame drawn over the last or in several
-            // viewports: rank 0 renders it alone, as one process would.
+        let alone = w == 0 || h == 0 || merged.is_empty() || pass >= renderer.converged_passes();
+        let picture = if alone || !Renderer::shares(&merged) {
+            // Nothing to trace (rank 0 shows what the frame cleared to), converged (the last
+            // picture again), or a frame drawn over the last or in several viewports: rank 0
+            // renders it alone, as one process would.
             report.untraced = true;
             (me == 0).then(|| renderer.render(&merged, w, h, previous))
         } else {
             self.run = key.map(|k| (k, pass + 1));
             let linear = key.is_some() && renderer.options.effects.beyond_gl();
-            let shared = Shared { frame, merged: &merged, pass, linear };
+            let shared = Shared { frame, merged: &merged, key, pass, linear };
             self.trace(&shared, renderer, pool, &mut report)?
         };
         if !report.untraced {
@@ -382,10 +380,7 @@ impl<T: Transport> Node<T> {
         });
         let gathered = served?;
         (report.trace, report.rays) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
-        Ok(gathered.map(|(picture, colors)| {
-            let key = renderer.accumulation_key(shared.merged, w, h);
-            renderer.add_pass(key, picture, colors)
-        }))
+        Ok(gathered.map(|(picture, colors)| renderer.add_pass(shared.key, picture, colors)))
     }
 
     /// The message loop of a frame's tracing, until this rank's part is done: rank 0 hands out
@@ -587,6 +582,8 @@ type Gathered = (Rendered, Option<Vec<glam::Vec4>>);
 struct Shared<'a> {
     frame: u64,
     merged: &'a Frame,
+    /// Its accumulation key (`Renderer::accumulation_key`), and which pass this is under it.
+    key: Option<u64>,
     pass: u32,
     linear: bool,
 }

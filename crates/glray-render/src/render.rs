@@ -239,11 +239,6 @@ impl Renderer {
         rendered
     }
 
-    /// The picture added up under `key`, when it has all its passes (shown again untraced).
-    pub fn converged(&self, key: u64) -> Option<&Rendered> {
-        self.accumulation.as_ref().filter(|a| a.key == key && a.passes >= self.converged_passes()).map(|a| &a.last)
-    }
-
     /// The key under which progressive refinement adds up the passes of `frame` rendered at
     /// `width` x `height`, the same for every frame that shows the same scene; None when each
     /// render of it is a picture of its own (progressive is off, or the frame draws over the
