@@ -7,7 +7,8 @@
 //!    threads, asking for more while it traces, and sends each finished tile straight to rank
 //!    0, the display;
 //! 3. rank 0 puts the tiles together, adds the pass to the ones before (progressive
-//!    refinement) and returns the picture; every other rank returns none.
+//!    refinement) and sends the picture to every other rank: each returns it (a sort-last
+//!    compositor such as IceT takes a rank's pixels only where its own data projects).
 //!
 //! The thread that calls `frame` is the one that moves messages (the tracing runs on the
 //! tracer's threads), and every wait on another rank has a time limit: a rank that stops
@@ -25,7 +26,7 @@ use glray_scene::encode::{decode, encode, ObjectStore};
 use glray_scene::frame::Frame;
 
 use crate::master::{imbalance, Master};
-use crate::protocol::{tile_message, tile_pixels, Message, RankReport};
+use crate::protocol::{picture, picture_message, tile_message, tile_pixels, Message, RankReport};
 use crate::transport::Transport;
 
 /// How long a rank waits for another on the first frame (each rank loads its data and builds
@@ -245,6 +246,20 @@ impl<T: Transport> Node<T> {
             let linear = key.is_some() && renderer.options.effects.beyond_gl();
             let shared = Shared { frame, merged: &merged, key, pass, linear };
             self.trace(&shared, renderer, pool, &mut report)?
+        };
+        // Every rank's framebuffer gets the picture (see `Message::Picture`).
+        let picture = if me == 0 {
+            if let Some(p) = &picture {
+                let bytes = picture_message(frame, p).encode();
+                for r in 1..self.size() {
+                    self.send_bytes(r, bytes.clone())?;
+                }
+            }
+            picture
+        } else {
+            let (p, waited) = self.await_picture(frame)?;
+            report.wait += waited;
+            Some(p)
         };
         if !report.untraced {
             self.last_frame = Some(started.elapsed());
@@ -553,6 +568,29 @@ impl<T: Transport> Node<T> {
                     let waited = last_heard.elapsed();
                     return Err(Fault::Silent { ranks: vec![0], waited, frame, waiting_for: "tiles to trace" });
                 }
+            }
+        }
+    }
+
+    /// A rank other than 0: the display rank's picture of `frame`, and the time waited for it
+    /// (bounded).
+    fn await_picture(&mut self, frame: u64) -> Result<(Rendered, Duration), Fault> {
+        let start = Instant::now();
+        loop {
+            match self.receive(frame)? {
+                Some((from, Message::Picture { width, height, rgba, depth, .. })) => {
+                    let p = picture(width, height, rgba, &depth)
+                        .ok_or_else(|| Fault::Damaged { rank: from, why: "a picture of another size".into() })?;
+                    return Ok((p, start.elapsed()));
+                }
+                Some((from, other)) => {
+                    return Err(Fault::Damaged { rank: from, why: format!("{other:?} out of turn") });
+                }
+                None if start.elapsed() > self.limit() => {
+                    let waited = start.elapsed();
+                    return Err(Fault::Silent { ranks: vec![0], waited, frame, waiting_for: "the picture" });
+                }
+                None => std::thread::sleep(IDLE),
             }
         }
     }

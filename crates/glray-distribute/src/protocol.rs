@@ -40,6 +40,18 @@ pub enum Message {
     },
     /// A rank's share is traced and every tile of it sent.
     Done { frame: u64, report: RankReport },
+    /// The display rank's finished picture, for every other rank's framebuffer: a sort-last
+    /// compositor (IceT) takes each rank's pixels only where that rank's own data projects, so
+    /// every rank must hold the whole picture for the composite to be whole.
+    Picture {
+        frame: u64,
+        width: u32,
+        height: u32,
+        #[serde(with = "serde_bytes")]
+        rgba: Vec<u8>,
+        #[serde(with = "serde_bytes")]
+        depth: Vec<u8>,
+    },
 }
 
 impl Message {
@@ -49,7 +61,8 @@ impl Message {
             | Message::Ask { frame }
             | Message::Grant { frame, .. }
             | Message::Tile { frame, .. }
-            | Message::Done { frame, .. } => *frame,
+            | Message::Done { frame, .. }
+            | Message::Picture { frame, .. } => *frame,
         }
     }
 
@@ -67,6 +80,7 @@ impl Message {
         let room = 64
             + match &self {
                 Message::Tile { rgba, depth, colors, .. } => rgba.len() + depth.len() + colors.len(),
+                Message::Picture { rgba, depth, .. } => rgba.len() + depth.len(),
                 Message::Grant { tiles, .. } => 5 * tiles.len(),
                 _ => 0,
             };
@@ -104,6 +118,27 @@ pub fn tile_message(frame: u64, t: &glray_render::tiles::TilePixels) -> Message 
     }
 }
 
+/// A picture as a message.
+pub fn picture_message(frame: u64, r: &glray_render::Rendered) -> Message {
+    Message::Picture {
+        frame,
+        width: r.width,
+        height: r.height,
+        rgba: r.rgba.clone(),
+        depth: r.depth.iter().flat_map(|d| d.to_le_bytes()).collect(),
+    }
+}
+
+/// A picture from a message's fields (None when the sizes do not agree).
+pub fn picture(width: u32, height: u32, rgba: Vec<u8>, depth: &[u8]) -> Option<glray_render::Rendered> {
+    let n = width as usize * height as usize;
+    if rgba.len() != 4 * n || depth.len() != 4 * n {
+        return None;
+    }
+    let depth = depth.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+    Some(glray_render::Rendered { width, height, rgba, depth })
+}
+
 /// A tile's pixels from a message's fields (None when the byte counts are not whole floats).
 pub fn tile_pixels(tile: u32, rgba: Vec<u8>, depth: &[u8], colors: &[u8]) -> Option<glray_render::tiles::TilePixels> {
     if depth.len() % 4 != 0 || colors.len() % 16 != 0 {
@@ -136,5 +171,13 @@ mod tests {
         let scene = Message::Scene { frame: 3, settings: 99, scene: vec![1, 2, 3] };
         assert_eq!(Message::decode(scene.clone().encode()), Ok(scene));
         assert!(Message::decode(vec![0xFF, 1, 2]).is_err(), "a scene cut short");
+        let r = glray_render::Rendered { width: 2, height: 1, rgba: vec![9; 8], depth: vec![0.5, 1.0] };
+        let Message::Picture { width, height, rgba, depth, .. } =
+            Message::decode(picture_message(4, &r).encode()).unwrap()
+        else {
+            panic!("not a picture")
+        };
+        assert_eq!(picture(width, height, rgba, &depth), Some(r));
+        assert_eq!(picture(3, 1, vec![0; 8], &[0; 8]), None, "sizes that do not agree");
     }
 }

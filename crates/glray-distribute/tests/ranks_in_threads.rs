@@ -111,7 +111,9 @@ fn traced_with(ranks: usize, preset: &str, frames: usize, roles: Roles) -> Vec<g
         .collect();
     let mut all: Vec<_> = handles.into_iter().map(|h| h.join().unwrap()).collect();
     for (rank, out) in all.iter().enumerate().skip(1) {
-        assert!(out.iter().all(|(p, _)| p.is_none()), "rank {rank} returns no picture");
+        for (k, (p, _)) in out.iter().enumerate() {
+            assert_eq!(p, &all[0][k].0, "rank {rank} returns rank 0's picture of frame {k}");
+        }
     }
     let zero = all.swap_remove(0);
     let tiles: u32 = zero.iter().map(|(_, r)| r.tiles_total).max().unwrap();
