@@ -230,14 +230,6 @@ fn follow_live(capture: &mut Capture, cmd: usize, thread: u32, args: &[Value], r
     copied::follow(capture, cmd, thread, args);
 }
 
-/// Called after this thread made a context current: capture follows only compatibility
-/// contexts (a core profile has no fixed-function GL; its frames stay the real GL's).
-pub fn made_current() {
-    if ON.load(Ordering::Relaxed) && crate::abi::profile::core() {
-        tell_left_alone("it made a core-profile context current");
-    }
-}
-
 /// Says once per process, at the default log level, that this program's frames are not ray
 /// traced and why: a user who runs a program under glray and gets the real GL's pictures back
 /// must not have to guess (ParaView's shaders, a core profile). Whichever reason comes first
@@ -246,8 +238,8 @@ fn tell_left_alone(why: &str) {
     static TOLD: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
     if !TOLD.swap(true, Ordering::Relaxed) {
         glray_core::warn!(
-            "frames are left to the real GL, not ray traced: {why}, and glray ray traces fixed-function \
-             GL only (see docs/compatibility.md)"
+            "frames are left to the real GL, not ray traced: {why}; glray ray traces fixed-function GL \
+             and the shader programs of VTK 9 (ParaView 5.11), see docs/compatibility.md"
         );
     }
 }
@@ -345,6 +337,11 @@ pub fn fire(live: &mut Live, c: usize, thread: u32, firing: Firing) -> bool {
 
 fn fire_in(live: &mut Live, c: usize, thread: u32, Firing { geometry, raster, at }: Firing) -> bool {
     if geometry {
+        // A draw through a program no profile recognises, after the frame's 3D scene (VTK's
+        // orientation axes, scalar bar, FXAA): the scene goes in first, the draw lands on it.
+        if live.capture.context(thread).draw_passes_over() {
+            live.present(thread);
+        }
         // Only where this thread's frames are known to reach a trigger, so that what is not
         // rasterized will be shown: once one of its frames has been presented, or from the
         // first frame on where every way of seeing the pixels is a trigger (`triggers_all`).
@@ -413,6 +410,9 @@ impl Live {
             return;
         }
         if frame.is_empty() {
+            if frame.passed_draws > 0 && frame.cleared && self.shown.is_empty() {
+                tell_left_alone("it draws with shader programs no profile recognises");
+            }
             return;
         }
         let (w, h) = frame.size();

@@ -125,6 +125,7 @@ impl Capture {
             if let Some(l) = live {
                 l.give(ctx);
             }
+            ctx.returned = ret.map(Value::as_int);
             return ctx.call(op, ty, args);
         }
         if let Some(l) = live {

@@ -8,7 +8,9 @@
 //! - `fixed`: the fixed-function machine: one context's state, by concern (matrices, lighting
 //!   and materials, rasterization and fragment state, texturing, display lists, arrays and
 //!   buffer objects, immediate mode), each with the commands it follows, and a frame of what
-//!   the context draws; a shader-program layer (VTK's) will stand beside it;
+//!   the context draws;
+//! - `programs`: the shader-program layer beside it: programs by their inputs' names, uniforms,
+//!   vertex arrays, and the profiles (VTK 9's) that say what a program's draw is;
 //! - `texture`: client pixels decoded into texels, glTexParameter's sampling state;
 //! - `error`: GL error codes and the error flag glGetError reads;
 //! - `primitive`: assembling vertex streams into points, lines and triangles, with the provoking
@@ -23,4 +25,5 @@ pub mod events;
 pub mod fixed;
 pub mod ops;
 pub mod primitive;
+pub mod programs;
 pub mod texture;

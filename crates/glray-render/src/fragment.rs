@@ -128,7 +128,8 @@ pub fn shade(frame: &Frame, camera: &Camera, t: &Triangle, p: DVec3, per_pixel: 
     let mix3 = |v: [Vec3; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     let mix2 = |v: [Vec2; 3]| v[0] * b.x + v[1] * b.y + v[2] * b.z;
     // Triangles carried in from another camera have no lighting left (Frame::unified).
-    let lit_here = (per_pixel || visible.is_some()) && t.lighting != NO_LIGHTING;
+    let lit_here = t.lighting != NO_LIGHTING
+        && (per_pixel || visible.is_some() || frame.lightings[t.lighting as usize].model().per_fragment);
     let (mut c, sec) = if lit_here {
         let l = &frame.lightings[t.lighting as usize];
         let mats = l.materials(mix4(t.base_colors).as_dvec4());

@@ -46,7 +46,8 @@ impl Gouraud {
             .map(|i| {
                 let untextured = frame.surfaces.get(i.surface as usize).is_some_and(|s| s.texturing.is_none());
                 // Weights found in object space hold in eye space only through an affine map.
-                untextured && i.is_affine() && own_camera(frame, i.camera, camera)
+                let per_fragment = frame.lightings.get(i.lighting as usize).is_some_and(|l| l.model().per_fragment);
+                untextured && !per_fragment && i.is_affine() && own_camera(frame, i.camera, camera)
             })
             .collect();
         let positions = frame

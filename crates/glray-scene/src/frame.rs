@@ -104,6 +104,9 @@ pub struct Frame {
     /// Draws capture cannot follow (shaders, generic vertex attributes): a frame with any
     /// is not ray traced, the real GL's picture stands.
     pub unsupported_draws: u32,
+    /// Draws through shader programs no profile recognised (or outside the 3D viewport): left
+    /// to the real GL, drawn over the ray-traced picture; the frame is still ray traced.
+    pub passed_draws: u32,
     /// Drawable size, when known.
     pub width: u32,
     pub height: u32,
@@ -275,6 +278,7 @@ impl Frame {
             lightings,
             cameras,
             unsupported_draws,
+            passed_draws,
             width,
             height,
         } = self;
@@ -294,6 +298,7 @@ impl Frame {
             lightings: lightings.clone(),
             cameras: cameras.clone(),
             unsupported_draws: *unsupported_draws,
+            passed_draws: *passed_draws,
             width: *width,
             height: *height,
         }

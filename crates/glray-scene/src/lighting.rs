@@ -80,6 +80,9 @@ pub struct LightModel {
     pub two_side: bool,
     /// GL_SEPARATE_SPECULAR_COLOR: specular goes to the secondary colour (added after texturing).
     pub separate_specular: bool,
+    /// Lit per pixel, not per vertex: what a shader program computes per fragment (VTK's),
+    /// drawn by glray as a fixed-function draw (`programs` in glray-capture). Not GL state.
+    pub per_fragment: bool,
 }
 
 impl Default for LightModel {
@@ -89,6 +92,7 @@ impl Default for LightModel {
             local_viewer: false,
             two_side: false,
             separate_specular: false,
+            per_fragment: false,
         }
     }
 }

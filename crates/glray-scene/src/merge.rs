@@ -99,6 +99,7 @@ fn append(out: &mut Frame, frame: Frame) {
         d
     }));
     out.unsupported_draws += frame.unsupported_draws;
+    out.passed_draws += frame.passed_draws;
 }
 
 /// The sequence number after the last draw of `frame`.

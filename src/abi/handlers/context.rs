@@ -16,7 +16,6 @@ fn bind<T: PartialEq + Default>(bind: impl FnOnce() -> T, backend: Backend) -> T
     if ok != T::default() {
         set_backend(backend);
         crate::abi::profile::made_current();
-        crate::feed::made_current();
     }
     ok
 }

@@ -660,6 +660,9 @@ impl Context {
                 self.client.vertex.buffer = 0;
             }
             Op::DrawArrays | Op::DrawElements | Op::DrawRangeElements | Op::MultiDrawArrays | Op::MultiDrawElements => {
+                if self.programmable {
+                    return self.program_draw(op, a);
+                }
                 if let Some(key) = self.buffer_draw_key(op, a) {
                     // Buffer objects only: the mesh (and its BVH) lives as long as the buffers
                     // stay as they are.
@@ -736,7 +739,6 @@ impl Context {
                     _ => {}
                 }
             }
-            Op::VertexAttribPointer => {}
             _ => unreachable!("{op:?} is not an array command"),
         }
         Ok(())

@@ -145,6 +145,12 @@ impl Context {
             self.frame.projection = Some(projection);
             self.frame.viewport = Some(viewport);
             self.frame.depth_range = self.raster.depth_range;
+            if self.framebuffer != 0 {
+                // Drawn into a framebuffer object, not the drawable: traced at the size its
+                // first draw's viewport reaches (VTK's render target; not the window's).
+                self.frame.width = (viewport.x + viewport.width).max(0) as u32;
+                self.frame.height = (viewport.y + viewport.height).max(0) as u32;
+            }
         }
         let view = View { projection, viewport };
         let camera = match self.frame.cameras.iter().rposition(|c| *c == view) {

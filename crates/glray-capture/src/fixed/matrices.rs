@@ -36,7 +36,7 @@ impl Stack {
         self.entries.last().expect("a matrix stack is never empty")
     }
 
-    fn top_mut(&mut self) -> &mut DMat4 {
+    pub(crate) fn top_mut(&mut self) -> &mut DMat4 {
         self.entries.last_mut().expect("a matrix stack is never empty")
     }
 

@@ -17,6 +17,7 @@
 //! | arrays | `arrays` | client arrays, buffer objects, array draws (`client_draws`: big client draws kept) |
 //! | immediate | `immediate` | glBegin/glEnd and the current attributes (`immediate_meshes`: long glBegins kept) |
 //! | context | here | enables, clears, the attribute stack, programs, framebuffers |
+//! | programs | `crate::programs` (`program_draws` here) | GLSL programs, uniforms, vertex arrays: draws a profile recognises |
 //!
 //! Beside them: `vertex` (the vertex stage: transform, lighting, texture coordinates),
 //! `draw` (a draw's vertices into the frame's triangles), `mesh_builder` (meshes made from
@@ -32,6 +33,7 @@ pub mod list_effects;
 pub mod lists;
 pub mod matrices;
 pub mod mesh_builder;
+mod program_draws;
 mod raster;
 mod texturing;
 mod vertex;
@@ -143,11 +145,18 @@ pub struct Context {
     pub(crate) frame: Frame,
     pub(crate) sequence: u32,
     pub(crate) normal_matrix: Option<(DMat4, DMat3)>,
-    /// A shader program is in use: draws go through shaders capture cannot follow.
+    /// A shader program is in use: draws go to the program layer (`program_draws`).
     pub(crate) programmable: bool,
+    /// Programs, vertex arrays and texture units (the program layer's state).
+    pub programs: crate::programs::Programs,
+    /// The return value of the call being followed (a program's name, a location).
+    pub returned: Option<i64>,
+    /// The viewport of the last glClear of the colour buffer: where program draws make the
+    /// frame's 3D scene (`program_draws`).
+    pub(crate) cleared_viewport: Option<Viewport>,
     /// The context is a core profile: it has no fixed-function commands (GL raises
     /// INVALID_OPERATION for glBegin, glCallList... and draws nothing) and every draw goes through
-    /// shaders, so capture follows none of its calls and its frames stay the real GL's.
+    /// shaders: capture follows only what core GL has (`follows_in_core`).
     pub core_profile: bool,
     /// Counts changes to the frame (draws, clears), so that a frame is presented once.
     pub(crate) revision: u64,
@@ -184,6 +193,9 @@ impl Default for Context {
             sequence: 0,
             normal_matrix: None,
             programmable: false,
+            programs: Default::default(),
+            returned: None,
+            cleared_viewport: None,
             core_profile: false,
             revision: 0,
             framebuffer: 0,
@@ -195,6 +207,30 @@ impl Default for Context {
 
 pub(crate) fn vec4(v: DVec4) -> Vec4 {
     v.as_vec4()
+}
+
+/// Whether capture follows `op` in a core-profile context: what core GL has (programs, buffers,
+/// textures, rasterization and per-fragment state, clears, framebuffers, draws); not the
+/// fixed-function commands, which core GL refuses.
+fn follows_in_core(op: Op) -> bool {
+    match op.concern() {
+        Concern::Programs | Concern::Raster | Concern::Context => true,
+        Concern::Immediate | Concern::Lighting | Concern::Lists => false,
+        Concern::Matrices => op == Op::ActiveTexture,
+        Concern::Texturing => !matches!(op, Op::TexEnv | Op::TexGen),
+        Concern::Arrays => !matches!(
+            op,
+            Op::ClientActiveTexture
+                | Op::EnableClientState
+                | Op::DisableClientState
+                | Op::VertexPointer
+                | Op::NormalPointer
+                | Op::ColorPointer
+                | Op::TexCoordPointer
+                | Op::InterleavedArrays
+                | Op::ArrayElement
+        ),
+    }
 }
 
 impl Context {
@@ -314,7 +350,7 @@ impl Context {
 
     /// Follows one call. Errors go to the context's error flag, as GL would raise them.
     pub fn call(&mut self, op: Op, ty: u32, a: &[Value]) {
-        if self.core_profile {
+        if self.core_profile && !follows_in_core(op) {
             return;
         }
         if let Some((_, execute)) = self.shared.lists.compiling() {
@@ -345,6 +381,7 @@ impl Context {
             self.stop_recording();
         }
         let modelview = *self.matrices.modelview.top();
+        self.programs.observe(op, a);
         match op.concern() {
             Concern::Immediate => self.immediate_command(op, ty, a),
             Concern::Matrices => self.matrices.command(op, ty, a),
@@ -356,6 +393,10 @@ impl Context {
             Concern::Lists => self.list_command(op, a),
             Concern::Arrays => self.array_command(op, a),
             Concern::Context => self.context_command(op, a),
+            Concern::Programs => {
+                let returned = self.returned.take();
+                self.programs.command(op, ty, a, returned)
+            }
         }
     }
 
@@ -365,11 +406,16 @@ impl Context {
         match op {
             Op::Enable | Op::Disable => self.set_cap(args::uint(a, 0), op == Op::Enable),
             Op::Clear => {
-                self.revision += 1;
                 let (color, depth) =
                     (args::uint(a, 0) & GL_COLOR_BUFFER_BIT != 0, args::uint(a, 0) & GL_DEPTH_BUFFER_BIT != 0);
                 // With every colour channel masked, glClear leaves the colour buffer alone.
                 let color = color && self.raster.color_mask.contains(&true);
+                // A clear of the depth buffer alone changes the picture only through the draws
+                // after it (which count themselves): the frame put in before it (VTK's scene,
+                // before its orientation axes) is not traced again for it.
+                if color || self.frame.is_empty() {
+                    self.revision += 1;
+                }
                 if let Some(rect) = self.raster.scissor.filter(|_| self.scissored()) {
                     // One view of several clearing its own part of the window: what was drawn
                     // elsewhere stays, and the box is filled before the frame is traced.
@@ -397,6 +443,7 @@ impl Context {
                 if color {
                     // What was drawn before is covered: the frame starts again.
                     self.frame.unsupported_draws = 0;
+                    self.frame.passed_draws = 0;
                     self.frame.triangles.clear();
                     self.frame.instances.clear();
                     self.frame.solids.clear();
@@ -409,6 +456,7 @@ impl Context {
                     self.frame.depth_clears.clear();
                     self.frame.clear_color = self.raster.clear_color;
                     self.frame.cleared = true;
+                    self.cleared_viewport = Some(self.raster.viewport);
                 }
             }
             Op::PushAttrib => {
