@@ -366,7 +366,8 @@ fn core_profile_frames_stay_the_real_gls() {
     let said = stderr(&traced);
     let told = left_alone_lines(&said);
     assert_eq!(told.len(), 1, "{}", stderr(&traced));
-    assert!(told[0].contains("core-profile") && told[0].contains("docs/compatibility.md"), "{}", told[0]);
+    // Its shader is no program family glray knows (tests/paraview.rs has VTK's, which is).
+    assert!(told[0].contains("no profile recognises") && told[0].contains("docs/compatibility.md"), "{}", told[0]);
     assert!(!scenes.exists(), "nothing captured or ray traced in a core profile");
     let mut recorded = command(Way::Preload, &[], &program, 60);
     recorded.env("GLRAY_RECORD", &trace);
@@ -399,23 +400,17 @@ fn an_osmesa_programs_first_frame_is_not_rasterized_as_well() {
     cmd.env("GLRAY_PRESET", "gl").env("GLRAY_TRIGGER", "swap");
     let unshown = stdout(&run_ok(&mut cmd, "first_frame under glray, trigger=swap"));
     assert_eq!(unshown, plain, "a frame never presented is the real GL's");
-    // A triangle and a shader draw in every frame: frames left to the real GL. The first one's
-    // triangle was not rasterized (lost); every frame after it is the real GL's in full.
+    // A triangle and, after it, a shader draw in every frame: the triangle is ray traced and
+    // put in before the shader draw, which the real GL draws over it, depth tested against the
+    // ray-traced depth: every frame as the real GL draws it, and nothing to tell.
     let mut cmd = command(Way::Plain, &[], &program, 60);
     let plain = stdout(&run_ok(cmd.arg("mixed"), "first_frame mixed plain"));
     assert!(plain.contains("frame 2 middle 255 0 0 square 0 255 0"), "{plain}");
     let mut cmd = command(Way::Preload, &[], &program, 60);
-    cmd.arg("mixed").env("GLRAY_PRESET", "gl");
-    let traced = stdout(&run_ok(&mut cmd, "first_frame mixed under glray"));
-    let after_first = |out: &str| out.lines().skip(1).map(String::from).collect::<Vec<_>>();
-    assert_eq!(after_first(&traced), after_first(&plain), "frames after the first, mixed");
-    assert!(traced.contains("frame 0 middle 0 0 255 square 0 255 0"), "{traced}");
-    let mut cmd = command(Way::Preload, &[], &program, 60);
     let out = run_ok(cmd.arg("mixed").env("GLRAY_PRESET", "gl"), "first_frame mixed under glray");
+    assert_eq!(stdout(&out), plain, "mixed frames");
     let said = stderr(&out);
-    let told = left_alone_lines(&said);
-    assert_eq!(told.len(), 1, "once per process, not once per frame: {}", stderr(&out));
-    assert!(told[0].contains("shaders"), "{}", told[0]);
+    assert!(left_alone_lines(&said).is_empty(), "{said}");
 }
 
 /// The lines in which glray says a program's frames are left to the real GL.

@@ -401,7 +401,8 @@ impl Live {
         if frame.unsupported_draws > 0 {
             if self.fell_back.insert(thread) {
                 tell_left_alone(&format!(
-                    "it draws with shaders ({} draws in its first such frame)",
+                    "it draws with shaders, or instanced draws, that glray does not follow ({} draws in its first such \
+                     frame)",
                     frame.unsupported_draws
                 ));
             }

@@ -393,6 +393,13 @@ impl Context {
             Concern::Lists => self.list_command(op, a),
             Concern::Arrays => self.array_command(op, a),
             Concern::Context => self.context_command(op, a),
+            Concern::Programs if op == Op::UnfollowedDraw => {
+                // The real GL draws it amid the scene, where the ray-traced picture would cover
+                // it: the frame is left to the real GL (and the program told why, once).
+                self.revision += 1;
+                self.frame.unsupported_draws += 1;
+                Ok(())
+            }
             Concern::Programs => {
                 let returned = self.returned.take();
                 self.programs.command(op, ty, a, returned)

@@ -56,8 +56,16 @@ impl Context {
     /// A draw (glDrawArrays, glDrawElements, glDrawRangeElements) while a program is in use.
     pub(crate) fn program_draw(&mut self, op: Op, a: &[Value]) -> GlResult {
         let Some(draw) = self.recognised_draw() else {
-            // The real GL draws it; the frame is unchanged (its picture, once put in, stays).
-            self.frame.passed_draws += 1;
+            if self.core_profile || self.frame.passed_draws > 0 || !self.frame.is_empty() {
+                // The real GL draws it; the frame is unchanged (its picture, once put in, stays):
+                // the overlays a program draws over its 3D scene.
+                self.frame.passed_draws += 1;
+            } else {
+                // A compatibility context mixing shader draws with fixed-function ones before
+                // any is captured: where it lands among them is unknown, so the frame stays the
+                // real GL's (said once).
+                self.frame.unsupported_draws += 1;
+            }
             return Ok(());
         };
         let saved = (
@@ -67,6 +75,7 @@ impl Context {
             *self.matrices.projection.top(),
             *self.matrices.modelview.top(),
             self.imm.current,
+            self.normal_matrix,
         );
         self.client.vertex = pointer(Some(draw.inputs.position));
         self.client.normal = pointer(draw.inputs.normal);
@@ -105,11 +114,16 @@ impl Context {
         *self.matrices.projection.top_mut() = draw.projection;
         *self.matrices.modelview.top_mut() = draw.modelview;
         self.imm.current.color = DVec4::ONE;
+        if let Some(n) = draw.normal_matrix {
+            // The cache the vertex stage and instances read the normal matrix from.
+            self.normal_matrix = Some((draw.modelview, n));
+        }
         self.programmable = false;
         let result = self.array_command(op, a);
         self.programmable = true;
-        let (client, lighting, texturing, projection, modelview, current) = saved;
+        let (client, lighting, texturing, projection, modelview, current, normal_matrix) = saved;
         (self.client, self.lighting, self.texturing, self.imm.current) = (client, lighting, texturing, current);
+        self.normal_matrix = normal_matrix;
         *self.matrices.projection.top_mut() = projection;
         *self.matrices.modelview.top_mut() = modelview;
         result
@@ -243,5 +257,35 @@ mod tests {
         call(&mut c, "glDrawArrays", &[i(GL_TRIANGLES as i64), i(0), i(3)]);
         assert_eq!(c.frame().passed_draws, 2);
         assert_eq!(c.frame().unsupported_draws, 0, "the frame is still ray traced");
+        // In a compatibility context, the same draw before anything is captured: where it lands
+        // among the fixed-function draws to come is unknown, so the frame is the real GL's.
+        let mut c = Context::default();
+        c.set_drawable(64, 64);
+        returning(&mut c, 4, "glCreateProgram", &[]);
+        returning(&mut c, 0, "glGetAttribLocation", &[i(4), Value::Str(b"ndCoordIn")]);
+        call(&mut c, "glUseProgram", &[i(4)]);
+        call(&mut c, "glClear", &[i(GL_COLOR_BUFFER_BIT as i64)]);
+        call(&mut c, "glDrawArrays", &[i(GL_TRIANGLES as i64), i(0), i(3)]);
+        assert_eq!((c.frame().passed_draws, c.frame().unsupported_draws), (0, 1));
+    }
+
+    #[test]
+    fn the_programs_own_normal_matrix_is_used() {
+        // VTK scales positions per axis into its buffers, not normals: its normal matrix is
+        // the rotation alone, where the modelview's inverse transpose would skew the normals.
+        let (mut c, _) = vtk_context();
+        returning(&mut c, 0, "glGetUniformLocation", &[i(3), Value::Str(b"normalMatrix")]);
+        let mv = DMat4::from_translation(glam::DVec3::new(0.0, 0.0, -5.0))
+            * DMat4::from_scale(glam::DVec3::new(1.0, 4.0, 1.0));
+        matrix(&mut c, 2, mv);
+        let rotation = f32s(&glam::Mat3::IDENTITY.to_cols_array());
+        call(&mut c, "glUniformMatrix3fv", &[i(0), i(1), i(0), Value::Blob(&rotation)]);
+        let normals = f32s(&[0.0, 0.6, 0.8].repeat(3));
+        call(&mut c, "glBindBuffer", &[i(GL_ARRAY_BUFFER as i64), i(2)]);
+        call(&mut c, "glBufferData", &[i(GL_ARRAY_BUFFER as i64), i(36), Value::Blob(&normals), i(0x88E4)]);
+        call(&mut c, "glDrawArrays", &[i(GL_TRIANGLES as i64), i(0), i(3)]);
+        let n = c.frame().all_triangles()[0].normals[0];
+        assert!((n - glam::Vec3::new(0.0, 0.6, 0.8)).length() < 1e-5, "{n:?}");
+        assert!(c.normal_matrix.is_none_or(|(m, _)| m != mv), "the fixed path's cache is its own again");
     }
 }

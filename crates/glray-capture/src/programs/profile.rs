@@ -5,7 +5,7 @@
 //! the colour map. The fixed machine then draws it as it would a glDrawElements of its own
 //! (`fixed::program_draws`), so both kinds of draw make the same scene.
 
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DMat3, DMat4, DVec3, DVec4};
 use glray_scene::lighting::{Light, Material};
 
 use super::program::Program;
@@ -24,9 +24,12 @@ pub struct Profile {
     pub texcoord: &'static str,
     pub color: &'static str,
     /// Uniforms: object to eye (view) coordinates and object to clip coordinates (both
-    /// required; normals go through the first's inverse transpose, as GL's normal matrix).
+    /// required), and the normal matrix (when absent, the first's inverse transpose, as GL's).
+    /// VTK's is not that: its positions are shifted and scaled per axis into the buffer, its
+    /// normals are not, so its normal matrix leaves the scale out.
     pub object_to_eye: &'static str,
     pub object_to_clip: &'static str,
+    pub normal_matrix: &'static str,
     /// Light `k`'s colour and direction of travel in eye coordinates: the name with `k` after it.
     pub light_color: &'static str,
     pub light_direction: &'static str,
@@ -63,6 +66,8 @@ pub struct ProgramDraw {
     pub inputs: Inputs,
     pub modelview: DMat4,
     pub projection: DMat4,
+    /// Object-space normals to eye space, when the program is given its own.
+    pub normal_matrix: Option<DMat3>,
     /// Lights in eye coordinates (w = 0: at infinity).
     pub lights: Vec<Light>,
     pub material: Material,
@@ -113,6 +118,7 @@ impl Profile {
             return None;
         }
         let projection = object_to_clip * modelview.inverse();
+        let normal_matrix = program.uniform(self.normal_matrix).filter(|v| v.len() == 9).map(DMat3::from_cols_slice);
         let u = |name: &str| program.uniform(name);
         let lights: Vec<Light> = (0..self.lights)
             .filter_map(|k| {
@@ -174,6 +180,15 @@ impl Profile {
             shininess: scalar(u(self.specular_power)).unwrap_or(1.0).clamp(0.0, 128.0),
         };
         let inputs = Inputs { color: if overridden { None } else { inputs.color }, ..inputs };
-        Some(ProgramDraw { inputs, modelview, projection, lights, material, per_fragment: true, color_map })
+        Some(ProgramDraw {
+            inputs,
+            modelview,
+            projection,
+            normal_matrix,
+            lights,
+            material,
+            per_fragment: true,
+            color_map,
+        })
     }
 }

@@ -19,6 +19,7 @@ pub const VTK9: Profile = Profile {
     color: "scalarColor",
     object_to_eye: "MCVCMatrix",
     object_to_clip: "MCDCMatrix",
+    normal_matrix: "normalMatrix",
     light_color: "lightColor",
     light_direction: "lightDirectionVC",
     lights: 6,
