@@ -89,8 +89,13 @@ fn paraview_contour_is_ray_traced_with_its_overlays_on_top() {
     compare_ok(&mesa, &gl, "GL look");
 
     // Ambient occlusion: the surface changes, the overlays drawn after it do not.
+    // A batch program's screenshot: its frame traced with `batch_passes` (16) passes at once.
     let ao = dir.join("ao.png");
-    pvbatch(&x.display, &ao, Some(&[("GLRAY_PRESET", "ao")]), false);
+    let stats = dir.join("ao.jsonl");
+    let s = stats.display().to_string();
+    pvbatch(&x.display, &ao, Some(&[("GLRAY_PRESET", "ao"), ("GLRAY_STATS", &s)]), false);
+    let lines = std::fs::read_to_string(&stats).unwrap();
+    assert!(lines.lines().next().is_some_and(|l| l.contains("\"samples\":16")), "{lines}");
     let (m, a) = (rgb(&mesa), rgb(&ao));
     let surface = differing(&m, &a, (200, 60, 440, 300));
     assert!(surface > 0.2, "AO darkens the contour's folds: {:.1}% of its box changed", 100.0 * surface);

@@ -70,6 +70,10 @@ pub struct Live {
     threads: usize,
     /// In an MPI rank: frames shared with the other ranks.
     distribution: crate::distribute::Distribution,
+    /// Passes traced at once for an offscreen program's frame (setting `batch_passes`), and the
+    /// swaps seen so far (an offscreen program swaps a window at most once).
+    batch_passes: u32,
+    swaps: u64,
 }
 
 /// The tracer's threads (None, logged, if the system gives none: frames are then traced on
@@ -113,6 +117,8 @@ pub fn configure(config: &Config) -> Live {
         pool: tracer_pool(threads),
         threads,
         distribution: crate::distribute::Distribution::configure(config),
+        batch_passes: config.batch_passes(),
+        swaps: 0,
     };
     ON.store(true, Ordering::Relaxed);
     live
@@ -367,6 +373,9 @@ fn fire_in(live: &mut Live, c: usize, thread: u32, Firing { geometry, raster, at
         (t, Some(a)) => t == a,
         _ => false,
     };
+    if at == Some(Trigger::Swap) {
+        live.swaps += 1;
+    }
     if fires {
         live.present(thread);
     }
@@ -420,7 +429,19 @@ impl Live {
         if w == 0 || h == 0 {
             return;
         }
+        // An offscreen program reads one frame back as its picture: traced with several passes
+        // at once (the first ones here, the last below), as a still view converges over frames.
+        let offscreen = ctx.draws_offscreen() && self.swaps <= 1;
+        let extra = if offscreen && !self.distribution.active() { self.batch_passes - 1 } else { 0 };
         let (renderer, last) = (&mut self.renderer, self.last.get(&thread));
+        if extra > 0 && renderer.options.effects.beyond_gl() && renderer.accumulation_key(frame, w, h).is_some() {
+            for _ in 0..extra {
+                match &self.pool {
+                    Some(pool) => pool.install(|| renderer.render(frame, w, h, last)),
+                    None => renderer.render(frame, w, h, last),
+                };
+            }
+        }
         // In an MPI rank, shared with the other ranks (None: traced here alone).
         let shared = self.distribution.frame(frame, last, renderer, self.pool);
         let (rendered, ranks) = match shared {

@@ -138,6 +138,17 @@ pub const SETTINGS: &[Setting] = &[
               traced anew.",
     },
     Setting {
+        key: "batch_passes",
+        kind: Kind::Int(0, 64),
+        default: "16",
+        doc: "An offscreen program's frames (drawn into a framebuffer object by a process that has \
+              swapped a window at most once: pvbatch, `openscad -o`), whose one read-back \
+              frame is the picture, are traced with this many passes at once with effects on, so that \
+              its ambient occlusion and antialiasing have converged in that frame (as `progressive` \
+              converges a still interactive view over frames). 0 or 1: one pass per frame. Not under \
+              MPI yet.",
+    },
+    Setting {
         key: "stats",
         kind: Kind::Path,
         default: "",
@@ -542,6 +553,11 @@ impl Config {
     }
 
     /// How many frames `dump_scene` writes (None: every one).
+    /// Passes traced at once for an offscreen program's frame (at least 1).
+    pub fn batch_passes(&self) -> u32 {
+        self.get("batch_passes").parse().unwrap_or(16).max(1)
+    }
+
     pub fn dump_frames(&self) -> Option<u64> {
         self.get("dump_frames").parse().ok().filter(|n| *n > 0)
     }

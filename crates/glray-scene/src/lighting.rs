@@ -245,14 +245,19 @@ pub fn light_vertex_prepared(
         let mut term = m.ambient.truncate() * l.ambient.truncate();
         if n_dot_l > 0.0 {
             term += n_dot_l * m.diffuse.truncate() * l.diffuse.truncate();
-            let half = match ready {
-                Some(r) if r.fixed_half => r.half,
-                _ => (to_light + eye).normalize_or_zero(),
-            };
-            let n_dot_h = normal.dot(half).max(0.0);
-            // 0^0 is 1 in GL's equation: a shininess of 0 gives the full specular colour.
-            let power = if m.shininess == 0.0 { 1.0 } else { n_dot_h.powf(m.shininess) };
-            specular += factor * power * m.specular.truncate() * l.specular.truncate();
+            let colour = m.specular.truncate() * l.specular.truncate();
+            // No specular colour (VTK's default material): no power to raise (a pow was an
+            // eighth of a ParaView frame's ambient occlusion, its result multiplied by zero).
+            if colour != DVec3::ZERO {
+                let half = match ready {
+                    Some(r) if r.fixed_half => r.half,
+                    _ => (to_light + eye).normalize_or_zero(),
+                };
+                let n_dot_h = normal.dot(half).max(0.0);
+                // 0^0 is 1 in GL's equation: a shininess of 0 gives the full specular colour.
+                let power = if m.shininess == 0.0 { 1.0 } else { n_dot_h.powf(m.shininess) };
+                specular += factor * power * colour;
+            }
         }
         primary += factor * term;
     }

@@ -338,6 +338,11 @@ impl Context {
         !self.programmable && !self.core_profile && self.shared.lists.compiling().is_none() && self.framebuffer == 0
     }
 
+    /// Whether draws go to a framebuffer object (not the window's or OSMesa's buffer).
+    pub fn draws_offscreen(&self) -> bool {
+        self.framebuffer != 0
+    }
+
     /// Whether a display list is being compiled.
     pub fn compiling(&self) -> bool {
         self.shared.lists.compiling().is_some()
@@ -463,6 +468,10 @@ impl Context {
                     self.frame.depth_clears.clear();
                     self.frame.clear_color = self.raster.clear_color;
                     self.frame.cleared = true;
+                    // Draws are numbered from the frame's start: a program that never swaps
+                    // (pvbatch) draws the same frame with the same numbers again, which
+                    // progressive refinement must see as the same frame.
+                    self.sequence = 0;
                     self.cleared_viewport = Some(self.raster.viewport);
                 }
             }

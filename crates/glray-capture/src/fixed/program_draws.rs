@@ -114,6 +114,10 @@ impl Context {
         *self.matrices.projection.top_mut() = draw.projection;
         *self.matrices.modelview.top_mut() = draw.modelview;
         self.imm.current.color = DVec4::ONE;
+        // VTK blends every draw; an opaque one blends to itself. Drawn without blending, its
+        // hits block secondary rays at once instead of each being shaded for its alpha.
+        let blend = self.raster.blend;
+        self.raster.blend = blend && !self.opaque(&draw);
         if let Some(n) = draw.normal_matrix {
             // The cache the vertex stage and instances read the normal matrix from.
             self.normal_matrix = Some((draw.modelview, n));
@@ -126,7 +130,25 @@ impl Context {
         self.normal_matrix = normal_matrix;
         *self.matrices.projection.top_mut() = projection;
         *self.matrices.modelview.top_mut() = modelview;
+        self.raster.blend = blend;
         result
+    }
+
+    /// Whether a recognised draw is opaque: its material's opacity is 1, and so is every
+    /// colour it maps to (per-vertex colours may carry alpha: not looked at, taken as blended).
+    fn opaque(&self, draw: &ProgramDraw) -> bool {
+        if draw.material.diffuse.w < 1.0 || draw.inputs.color.is_some() {
+            return false;
+        }
+        match draw.color_map {
+            Some(t) => self
+                .shared
+                .textures
+                .get(&t)
+                .and_then(|t| t.levels.first())
+                .is_some_and(|l| l.texels.iter().all(|c| c.w >= 1.0)),
+            None => true,
+        }
     }
 }
 
