@@ -7,7 +7,7 @@ from paraview.simple import *
 out = sys.argv[1]
 cells = int(sys.argv[2]) if len(sys.argv) > 2 else 200
 start = time.time()
-source = RandomAttributeGenerator(Input=Wavelet(WholeExtent=[0, cells, 0, cells, 0, cells]))
+source = RandomAttributes(Input=Wavelet(WholeExtent=[0, cells, 0, cells, 0, cells]))
 source.DataType = "Float"
 source.ComponentRange = [0.0, 1.0]
 source.GeneratePointScalars = 1

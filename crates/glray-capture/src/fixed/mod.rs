@@ -333,9 +333,14 @@ impl Context {
     /// Whether a draw now would be taken by capture alone, so that the real GL need not
     /// rasterize it: fixed-function, not being compiled into a list (the real list must keep
     /// its geometry), and into the default framebuffer (a framebuffer object may be a texture
-    /// the program draws with later, which capture does not follow).
+    /// the program draws with later, which capture does not follow); or a draw a profile
+    /// recognises as the frame's 3D scene (VTK's, into its render target, which the picture is
+    /// put into whole: colour and depth).
     pub fn takes_draws(&self) -> bool {
-        !self.programmable && !self.core_profile && self.shared.lists.compiling().is_none() && self.framebuffer == 0
+        if self.programmable {
+            return self.shared.lists.compiling().is_none() && self.recognised_draw().is_some();
+        }
+        !self.core_profile && self.shared.lists.compiling().is_none() && self.framebuffer == 0
     }
 
     /// Whether draws go to a framebuffer object (not the window's or OSMesa's buffer).

@@ -36,7 +36,7 @@ fn pointer(a: Option<AttribArray>) -> ArrayPointer {
 impl Context {
     /// What a draw now would be, if a profile recognises the program in use and the draw is in
     /// the frame's 3D viewport.
-    fn recognised_draw(&self) -> Option<ProgramDraw> {
+    pub(crate) fn recognised_draw(&self) -> Option<ProgramDraw> {
         // The frame's 3D scene is drawn in the viewport its colour clear was made in (VTK's
         // renderer clears its viewport, then draws). Draws elsewhere (the orientation axes'
         // corner, drawn after a clear of the depth alone) stay the real GL's: so does rank 0's
