@@ -410,8 +410,9 @@ impl Live {
         if frame.unsupported_draws > 0 {
             if self.fell_back.insert(thread) {
                 tell_left_alone(&format!(
-                    "it draws with shaders, or instanced draws, that glray does not follow ({} draws in its first such \
-                     frame)",
+                    "it draws with shaders or draws glray does not follow yet: shader programs in a fixed-function \
+                     frame, instanced draws, VTK's translucent surfaces and surfaces without normals (glyphs) ({} \
+                     draws in its first such frame)",
                     frame.unsupported_draws
                 ));
             }

@@ -338,7 +338,8 @@ impl Context {
     /// put into whole: colour and depth).
     pub fn takes_draws(&self) -> bool {
         if self.programmable {
-            return self.shared.lists.compiling().is_none() && self.recognised_draw().is_some();
+            return self.shared.lists.compiling().is_none()
+                && self.recognised_draw().is_some_and(|d| !Self::declined(&d));
         }
         !self.core_profile && self.shared.lists.compiling().is_none() && self.framebuffer == 0
     }

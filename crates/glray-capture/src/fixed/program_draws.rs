@@ -53,8 +53,22 @@ impl Context {
         self.programmable && !self.frame.is_empty() && self.recognised_draw().is_none()
     }
 
+    /// Why a recognised draw cannot be made yet (its frame is then left to the real GL whole):
+    /// translucent (VTK peels depth over several passes into its own framebuffers, which would
+    /// put the geometry in the frame several times), or without normals (VTK lights such a
+    /// draw, the Glyph filter's arrows, with each facet's normal from screen-space
+    /// derivatives).
+    pub(crate) fn declined(draw: &ProgramDraw) -> bool {
+        draw.material.diffuse.w < 1.0 || draw.inputs.normal.is_none() || draw.peeling
+    }
+
     /// A draw (glDrawArrays, glDrawElements, glDrawRangeElements) while a program is in use.
     pub(crate) fn program_draw(&mut self, op: Op, a: &[Value]) -> GlResult {
+        if self.recognised_draw().is_some_and(|d| Self::declined(&d)) {
+            self.revision += 1;
+            self.frame.unsupported_draws += 1;
+            return Ok(());
+        }
         let Some(draw) = self.recognised_draw() else {
             if self.core_profile || self.frame.passed_draws > 0 || !self.frame.is_empty() {
                 // The real GL draws it; the frame is unchanged (its picture, once put in, stays):

@@ -49,6 +49,8 @@ pub struct Profile {
     /// A uniform that, when set to non-zero, makes the solid diffuse colour win over mapped
     /// colours (VTK's OverridesColor).
     pub overrides_color: &'static str,
+    /// Uniforms only the passes of a translucent draw have (VTK's depth peeling).
+    pub peeling: &'static [&'static str],
 }
 
 /// Where a draw's per-vertex inputs are.
@@ -75,6 +77,8 @@ pub struct ProgramDraw {
     pub per_fragment: bool,
     /// The colour map's texture, when the draw's colours are looked up in it.
     pub color_map: Option<u32>,
+    /// A pass of a translucent draw (`Profile::peeling`).
+    pub peeling: bool,
 }
 
 fn matrix4(v: Option<&[f64]>) -> Option<DMat4> {
@@ -180,6 +184,7 @@ impl Profile {
             shininess: scalar(u(self.specular_power)).unwrap_or(1.0).clamp(0.0, 128.0),
         };
         let inputs = Inputs { color: if overridden { None } else { inputs.color }, ..inputs };
+        let peeling = self.peeling.iter().any(|u| program.has_uniform(u));
         Some(ProgramDraw {
             inputs,
             modelview,
@@ -189,6 +194,7 @@ impl Profile {
             material,
             per_fragment: true,
             color_map,
+            peeling,
         })
     }
 }

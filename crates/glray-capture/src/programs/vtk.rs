@@ -31,4 +31,5 @@ pub const VTK9: Profile = Profile {
     intensities: ["ambientIntensity", "diffuseIntensity", "specularIntensity"],
     color_map: "colortexture",
     overrides_color: "OverridesColor",
+    peeling: &["opaqueDepth", "lastDepthPeel", "translucentRGBATexture"],
 };
