@@ -101,6 +101,13 @@ fn paraview_contour_is_ray_traced_with_its_overlays_on_top() {
         "frames traced at the render target's size with the whole contour:\n{lines}"
     );
     compare_ok(&mesa, &gl, "GL look");
+    // The overlays drawn over the last frame's picture are counted (FXAA, axes, scalar bar).
+    assert!(
+        lines.lines().skip(1).all(|l| {
+            l.contains("\"passed_draws\":") && !l.contains("\"passed_draws\":0,") && !l.contains("\"passed_draws\":0}")
+        }),
+        "draws left to the real GL counted:\n{lines}"
+    );
 
     // Ambient occlusion: the surface changes, the overlays drawn after it do not.
     // A batch program's screenshot: its frame traced with `batch_passes` (16) passes at once.

@@ -74,6 +74,8 @@ pub struct Live {
     /// swaps seen so far (an offscreen program swaps a window at most once).
     batch_passes: u32,
     swaps: u64,
+    /// Each thread's context's `passed_total` at its last statistics line.
+    passed_seen: HashMap<u32, u64>,
 }
 
 /// The tracer's threads (None, logged, if the system gives none: frames are then traced on
@@ -119,6 +121,7 @@ pub fn configure(config: &Config) -> Live {
         distribution: crate::distribute::Distribution::configure(config),
         batch_passes: config.batch_passes(),
         swaps: 0,
+        passed_seen: HashMap::new(),
     };
     ON.store(true, Ordering::Relaxed);
     live
@@ -430,6 +433,7 @@ impl Live {
         if w == 0 || h == 0 {
             return;
         }
+        let passed_total = ctx.passed_total;
         // An offscreen program reads one frame back as its picture: traced with several passes
         // at once (the first ones here, the last below), as a still view converges over frames.
         let offscreen = ctx.draws_offscreen() && self.swaps <= 1;
@@ -493,6 +497,7 @@ impl Live {
                 capture: std::mem::take(&mut self.capture_time),
                 render: self.renderer.stats(),
                 present: start.elapsed(),
+                passed_draws: passed_total - self.passed_seen.insert(thread, passed_total).unwrap_or(0),
                 ranks,
             });
         }

@@ -21,6 +21,9 @@ pub struct FrameStats {
     pub capture: Duration,
     pub render: glray_render::Stats,
     pub present: Duration,
+    /// Draws through shader programs left to the real GL since the last line (the overlays
+    /// drawn over the last picture, and any before this one).
+    pub passed_draws: u64,
     /// In an MPI rank sharing frames: its part.
     pub ranks: Option<RankStats>,
 }
@@ -100,7 +103,7 @@ impl StatsSink {
             StatsSink::Stderr => writeln!(
                 line,
                 "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms{}{}, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
-                 present {:.2} ms; {}, {} per pixel{}{}{}",
+                 present {:.2} ms; {}, {} per pixel{}{}{}{}",
                 s.frame,
                 s.width,
                 s.height,
@@ -125,12 +128,16 @@ impl StatsSink {
                     0 => String::new(),
                     b => format!("; {:.1} MB kept for the next frame", mb(b)),
                 },
+                match s.passed_draws {
+                    0 => String::new(),
+                    n => format!("; {} left to the real GL", glray_core::log::plural(n, "shader draw")),
+                },
                 s.ranks.as_ref().map_or(String::new(), RankStats::text)
             ),
             StatsSink::File(_) => writeln!(
                 line,
                 "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
-                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1}{}}}",
+                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1},\"passed_draws\":{}{}}}",
                 s.frame,
                 s.thread,
                 s.width,
@@ -147,6 +154,7 @@ impl StatsSink {
                 r.fast_builds,
                 r.refits,
                 mb(r.kept_bytes),
+                s.passed_draws,
                 s.ranks.as_ref().map_or(String::new(), RankStats::json)
             ),
         };

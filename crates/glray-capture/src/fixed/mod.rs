@@ -151,6 +151,9 @@ pub struct Context {
     pub programs: crate::programs::Programs,
     /// The return value of the call being followed (a program's name, a location).
     pub returned: Option<i64>,
+    /// Draws left to the real GL since the context was made (`Frame::passed_draws` counts a
+    /// frame's, up to its clear): the statistics report them.
+    pub passed_total: u64,
     /// The viewport of the last glClear of the colour buffer: where program draws make the
     /// frame's 3D scene (`program_draws`).
     pub(crate) cleared_viewport: Option<Viewport>,
@@ -195,6 +198,7 @@ impl Default for Context {
             programmable: false,
             programs: Default::default(),
             returned: None,
+            passed_total: 0,
             cleared_viewport: None,
             core_profile: false,
             revision: 0,

@@ -74,6 +74,7 @@ impl Context {
                 // The real GL draws it; the frame is unchanged (its picture, once put in, stays):
                 // the overlays a program draws over its 3D scene.
                 self.frame.passed_draws += 1;
+                self.passed_total += 1;
             } else {
                 // A compatibility context mixing shader draws with fixed-function ones before
                 // any is captured: where it lands among them is unknown, so the frame stays the
