@@ -151,6 +151,14 @@ fn paraview_under_two_ranks_composites_the_ray_traced_picture_whole() {
             assert_eq!(shared.count(), 0, "each rank traces its own half:\n{lines}");
         }
     }
+    // With ambient occlusion, the screenshot's frame is traced with 16 passes there too, each a
+    // frame both ranks share.
+    let ao = dir.join("ao.png");
+    let stats = dir.join("ao.jsonl");
+    let s = stats.display().to_string();
+    pvbatch(&x.display, &ao, Some(&[("GLRAY_PRESET", "ao"), ("GLRAY_STATS", &s)]), true);
+    let lines = std::fs::read_to_string(&stats).unwrap();
+    assert!(lines.lines().any(|l| l.contains("\"samples\":16") && l.contains("\"rank\":0")), "{lines}");
 }
 
 #[test]

@@ -437,14 +437,25 @@ impl Live {
         // An offscreen program reads one frame back as its picture: traced with several passes
         // at once (the first ones here, the last below), as a still view converges over frames.
         let offscreen = ctx.draws_offscreen() && self.swaps <= 1;
-        let extra = if offscreen && !self.distribution.active() { self.batch_passes - 1 } else { 0 };
         let (renderer, last) = (&mut self.renderer, self.last.get(&thread));
-        if extra > 0 && renderer.options.effects.beyond_gl() && renderer.accumulation_key(frame, w, h).is_some() {
+        // Decided from what every rank of an MPI job has alike (settings, an offscreen frame
+        // that clears), so that all of them share the same number of frames.
+        let batch =
+            offscreen && renderer.options.effects.beyond_gl() && renderer.options.effects.progressive && frame.cleared;
+        let extra = if batch { self.batch_passes - 1 } else { 0 };
+        if extra > 0 && !self.distribution.active() {
             for _ in 0..extra {
                 match &self.pool {
                     Some(pool) => pool.install(|| renderer.render(frame, w, h, last)),
                     None => renderer.render(frame, w, h, last),
                 };
+            }
+        } else if extra > 0 {
+            // In an MPI rank: each pass a frame shared with the others (a fault ends them).
+            for _ in 0..extra {
+                if self.distribution.frame(frame, last, renderer, self.pool).is_none() {
+                    break;
+                }
             }
         }
         // In an MPI rank, shared with the other ranks (None: traced here alone).

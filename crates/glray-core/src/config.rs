@@ -145,8 +145,8 @@ pub const SETTINGS: &[Setting] = &[
               swapped a window at most once: pvbatch, `openscad -o`), whose one read-back \
               frame is the picture, are traced with this many passes at once with effects on, so that \
               its ambient occlusion and antialiasing have converged in that frame (as `progressive` \
-              converges a still interactive view over frames). 0 or 1: one pass per frame. Not under \
-              MPI yet.",
+              converges a still interactive view over frames). 0 or 1: one pass per frame. Under MPI \
+              each pass is a frame shared by every rank.",
     },
     Setting {
         key: "stats",
