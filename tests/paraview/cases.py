@@ -2,17 +2,16 @@
 #   pvbatch cases.py OUT.png clip|glyphs|translucent [WIDTH HEIGHT]
 # clip: the Wavelet's contour clipped by a plane (a surface with a cut); glyphs: arrows on the
 # contour's points (instanced draws); translucent: the contour at opacity 0.5 (depth peeling).
+import os
 import sys
-from paraview.simple import *
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from paraview.simple import Clip, ColorBy, Glyph, Render, SaveScreenshot, Show
+from scene import contour_and_view, look
 
 out, case = sys.argv[1], sys.argv[2]
 width, height = (int(sys.argv[3]), int(sys.argv[4])) if len(sys.argv) > 4 else (640, 360)
-wavelet = Wavelet()
-contour = Contour(Input=wavelet, ContourBy=["POINTS", "RTData"], Isosurfaces=[100.0, 157.0, 214.0])
-contour.ComputeScalars = 1
-view = GetActiveViewOrCreate("RenderView")
-view.ViewSize = [width, height]
-view.OrientationAxesVisibility = 1
+contour, view = contour_and_view(width, height)
 if case == "clip":
     shown = Clip(Input=contour, ClipType="Plane")
     shown.ClipType.Normal = [1.0, 0.3, 0.0]
@@ -32,9 +31,6 @@ elif case == "translucent":
     display.Opacity = 0.5
 else:
     raise SystemExit("case: clip, glyphs or translucent")
-view.CameraPosition = [60.0, -45.0, 50.0]
-view.CameraFocalPoint = [0.0, 0.0, 0.0]
-view.CameraViewUp = [0.0, 0.0, 1.0]
-view.ResetCamera()
+look(view)
 Render(view)
 SaveScreenshot(out, view, ImageResolution=[width, height])
