@@ -205,6 +205,40 @@ fn openscad_render_is_ray_traced_like_mesa() {
 }
 
 #[test]
+fn openscad_replayed_by_glretrace_is_traced_at_its_framebuffers_size() {
+    // OpenSCAD's --render frame, recorded by apitrace and replayed by glretrace: drawn into a
+    // 512x512 framebuffer object, then a swap of a small window, then read back. The frame is
+    // traced at the framebuffer's size and put back into it, so ambient occlusion changes
+    // the snapshot (it once changed nothing: traced at the window's 32x32).
+    let x = Xvfb::start();
+    let dir = scratch("rt-openscad-glretrace");
+    let model = dir.join("model.scad");
+    std::fs::write(&model, "difference(){cube(12,center=true); sphere(7.8,$fn=64);}").unwrap();
+    let trace = dir.join("openscad.trace");
+    let mut cmd = command(Way::Plain, &[], &which("apitrace"), 120);
+    cmd.arg("trace").arg("-o").arg(&trace).arg(which("openscad"));
+    cmd.arg("--render").arg("-o").arg(dir.join("recorded.png")).arg(&model).env("DISPLAY", &x.display);
+    run_ok(&mut cmd, "apitrace trace openscad");
+    let snapshot = |way: Way, preset: &str, prefix: &str| -> PathBuf {
+        let stats = dir.join(format!("{prefix}.jsonl"));
+        let mut cmd = command(way, &[], &which("glretrace"), 120);
+        cmd.arg("-s").arg(dir.join(format!("{prefix}-"))).arg(&trace).env("DISPLAY", &x.display);
+        cmd.env("GLRAY_PRESET", preset).env("GLRAY_STATS", &stats).env("GLRAY_BATCH_PASSES", "1");
+        run_ok(&mut cmd, &format!("glretrace {prefix}"));
+        let pngs = files_ending(&dir, "png");
+        pngs.into_iter()
+            .find(|p| p.file_name().unwrap().to_string_lossy().starts_with(&format!("{prefix}-")))
+            .unwrap_or_else(|| panic!("no snapshot {prefix}"))
+    };
+    let plain = snapshot(Way::Plain, "off", "plain");
+    let ao = snapshot(Way::Dropin, "ao", "ao");
+    let stats = std::fs::read_to_string(dir.join("ao.jsonl")).unwrap();
+    assert!(stats.contains("\"width\":512,\"height\":512"), "traced at the framebuffer's size: {stats}");
+    let share = differing(&plain, &ao);
+    assert!(share > 0.005, "ambient occlusion reaches the snapshot: {:.3}% differ", share * 100.0);
+}
+
+#[test]
 fn effect_presets_change_the_picture_and_report_their_statistics() {
     let dir = scratch("rt-effects");
     let program = example("osmesa_scene");
