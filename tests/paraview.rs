@@ -162,10 +162,10 @@ fn paraview_under_two_ranks_composites_the_ray_traced_picture_whole() {
 }
 
 #[test]
-fn paraview_clips_are_ray_traced_and_glyphs_and_translucency_left_to_paraview() {
+fn paraview_clips_lines_and_points_are_ray_traced_and_glyphs_and_translucency_left_to_paraview() {
     let dir: PathBuf = scratch("paraview-cases");
     let x = Xvfb::start();
-    for case in ["clip", "glyphs", "translucent"] {
+    for case in ["clip", "wireframe", "points", "glyphs", "translucent"] {
         let mesa = dir.join(format!("{case}-mesa.png"));
         pvbatch_script(&x.display, "cases.py", &[case], &mesa, None, false);
         let gl = dir.join(format!("{case}-gl.png"));
@@ -181,9 +181,9 @@ fn paraview_clips_are_ray_traced_and_glyphs_and_translucency_left_to_paraview() 
         );
         let traced = std::fs::read_to_string(&stats).unwrap_or_default();
         let told: Vec<&str> = said.lines().filter(|l| l.contains("left to the real GL")).collect();
-        if case == "clip" {
-            // A surface with a cut: ray traced, as the contour is.
-            compare_ok(&mesa, &gl, "a clip in the GL look");
+        if matches!(case, "clip" | "wireframe" | "points") {
+            // A surface with a cut, lines, points: ray traced, as the contour is.
+            compare_ok(&mesa, &gl, &format!("{case} in the GL look"));
             assert!(!traced.is_empty() && told.is_empty(), "{traced}\n{said}");
         } else {
             // Not followed yet: ParaView's own picture, and glray says so once.

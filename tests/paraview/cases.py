@@ -1,7 +1,8 @@
 # The other things ParaView draws, one per run, for tests/paraview.rs and docs/compatibility.md:
-#   pvbatch cases.py OUT.png clip|glyphs|translucent [WIDTH HEIGHT]
-# clip: the Wavelet's contour clipped by a plane (a surface with a cut); glyphs: arrows on the
-# contour's points (instanced draws); translucent: the contour at opacity 0.5 (depth peeling).
+#   pvbatch cases.py OUT.png clip|wireframe|points|glyphs|translucent [WIDTH HEIGHT]
+# clip: the Wavelet's contour clipped by a plane (a surface with a cut); wireframe, points: the
+# contour drawn as lines and as points; glyphs: the Glyph filter's arrows on the contour's
+# points (no normals); translucent: the contour at opacity 0.5 (depth peeling).
 import os
 import sys
 
@@ -17,6 +18,10 @@ if case == "clip":
     shown.ClipType.Normal = [1.0, 0.3, 0.0]
     display = Show(shown, view)
     ColorBy(display, ("POINTS", "RTData"))
+elif case in ("wireframe", "points"):
+    display = Show(contour, view)
+    ColorBy(display, ("POINTS", "RTData"))
+    display.SetRepresentationType("Wireframe" if case == "wireframe" else "Points")
 elif case == "glyphs":
     display = Show(contour, view)
     ColorBy(display, ("POINTS", "RTData"))
@@ -30,7 +35,7 @@ elif case == "translucent":
     ColorBy(display, ("POINTS", "RTData"))
     display.Opacity = 0.5
 else:
-    raise SystemExit("case: clip, glyphs or translucent")
+    raise SystemExit("case: clip, wireframe, points, glyphs or translucent")
 look(view)
 Render(view)
 SaveScreenshot(out, view, ImageResolution=[width, height])
