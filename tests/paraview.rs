@@ -165,7 +165,7 @@ fn paraview_under_two_ranks_composites_the_ray_traced_picture_whole() {
 fn paraview_clips_lines_and_points_are_ray_traced_and_glyphs_and_translucency_left_to_paraview() {
     let dir: PathBuf = scratch("paraview-cases");
     let x = Xvfb::start();
-    for case in ["clip", "wireframe", "points", "glyphs", "translucent"] {
+    for case in ["clip", "wireframe", "points", "glyphs", "glyphs3d", "translucent"] {
         let mesa = dir.join(format!("{case}-mesa.png"));
         pvbatch_script(&x.display, "cases.py", &[case], &mesa, None, false);
         let gl = dir.join(format!("{case}-gl.png"));

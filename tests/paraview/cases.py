@@ -1,8 +1,9 @@
 # The other things ParaView draws, one per run, for tests/paraview.rs and docs/compatibility.md:
-#   pvbatch cases.py OUT.png clip|wireframe|points|glyphs|translucent [WIDTH HEIGHT]
+#   pvbatch cases.py OUT.png clip|wireframe|points|glyphs|glyphs3d|translucent [WIDTH HEIGHT]
 # clip: the Wavelet's contour clipped by a plane (a surface with a cut); wireframe, points: the
 # contour drawn as lines and as points; glyphs: the Glyph filter's arrows on the contour's
-# points (no normals); translucent: the contour at opacity 0.5 (depth peeling).
+# points (no normals); glyphs3d: the 3D Glyphs representation (instanced draws); translucent:
+# the contour at opacity 0.5 (depth peeling).
 import os
 import sys
 
@@ -30,12 +31,18 @@ elif case == "glyphs":
     glyphs.ScaleFactor = 4.0
     glyphs.MaximumNumberOfSamplePoints = 200
     Show(glyphs, view)
+elif case == "glyphs3d":
+    display = Show(contour, view)
+    ColorBy(display, ("POINTS", "RTData"))
+    display.SetRepresentationType("3D Glyphs")
+    display.GlyphType = "Arrow"
+    display.ScaleFactor = 2.0
 elif case == "translucent":
     display = Show(contour, view)
     ColorBy(display, ("POINTS", "RTData"))
     display.Opacity = 0.5
 else:
-    raise SystemExit("case: clip, wireframe, points, glyphs or translucent")
+    raise SystemExit("case: clip, wireframe, points, glyphs, glyphs3d or translucent")
 look(view)
 Render(view)
 SaveScreenshot(out, view, ImageResolution=[width, height])
