@@ -165,7 +165,7 @@ fn paraview_under_two_ranks_composites_the_ray_traced_picture_whole() {
 fn paraview_clips_lines_and_points_are_ray_traced_and_glyphs_and_translucency_left_to_paraview() {
     let dir: PathBuf = scratch("paraview-cases");
     let x = Xvfb::start();
-    for case in ["clip", "wireframe", "points", "glyphs", "glyphs3d", "translucent"] {
+    for case in ["clip", "specular", "wireframe", "points", "glyphs", "glyphs3d", "translucent"] {
         let mesa = dir.join(format!("{case}-mesa.png"));
         pvbatch_script(&x.display, "cases.py", &[case], &mesa, None, false);
         let gl = dir.join(format!("{case}-gl.png"));
@@ -181,8 +181,8 @@ fn paraview_clips_lines_and_points_are_ray_traced_and_glyphs_and_translucency_le
         );
         let traced = std::fs::read_to_string(&stats).unwrap_or_default();
         let told: Vec<&str> = said.lines().filter(|l| l.contains("left to the real GL")).collect();
-        if matches!(case, "clip" | "wireframe" | "points") {
-            // A surface with a cut, lines, points: ray traced, as the contour is.
+        if matches!(case, "clip" | "specular" | "wireframe" | "points") {
+            // A surface with a cut, highlights, lines, points: ray traced, as the contour is.
             compare_ok(&mesa, &gl, &format!("{case} in the GL look"));
             assert!(!traced.is_empty() && told.is_empty(), "{traced}\n{said}");
         } else {

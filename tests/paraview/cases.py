@@ -1,6 +1,7 @@
 # The other things ParaView draws, one per run, for tests/paraview.rs and docs/compatibility.md:
-#   pvbatch cases.py OUT.png clip|wireframe|points|glyphs|glyphs3d|translucent [WIDTH HEIGHT]
-# clip: the Wavelet's contour clipped by a plane (a surface with a cut); wireframe, points: the
+#   pvbatch cases.py OUT.png clip|specular|wireframe|points|glyphs|glyphs3d|translucent [WIDTH HEIGHT]
+# clip: the Wavelet's contour clipped by a plane (a surface with a cut); specular: the contour
+# with specular highlights (VTK's Phong term); wireframe, points: the
 # contour drawn as lines and as points; glyphs: the Glyph filter's arrows on the contour's
 # points (no normals); glyphs3d: the 3D Glyphs representation (instanced draws); translucent:
 # the contour at opacity 0.5 (depth peeling).
@@ -19,6 +20,11 @@ if case == "clip":
     shown.ClipType.Normal = [1.0, 0.3, 0.0]
     display = Show(shown, view)
     ColorBy(display, ("POINTS", "RTData"))
+elif case == "specular":
+    display = Show(contour, view)
+    ColorBy(display, ("POINTS", "RTData"))
+    display.Specular = 0.6
+    display.SpecularPower = 30.0
 elif case in ("wireframe", "points"):
     display = Show(contour, view)
     ColorBy(display, ("POINTS", "RTData"))
@@ -42,7 +48,7 @@ elif case == "translucent":
     ColorBy(display, ("POINTS", "RTData"))
     display.Opacity = 0.5
 else:
-    raise SystemExit("case: clip, wireframe, points, glyphs, glyphs3d or translucent")
+    raise SystemExit("case: clip, specular, wireframe, points, glyphs, glyphs3d or translucent")
 look(view)
 Render(view)
 SaveScreenshot(out, view, ImageResolution=[width, height])

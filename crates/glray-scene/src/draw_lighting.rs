@@ -44,7 +44,8 @@ impl Lighting {
         color_material: Option<ColorMaterial>,
     ) -> Lighting {
         let prepared = prepare(&lights, &model);
-        let positional = model.local_viewer || lights.iter().any(|l| l.enabled && l.position.w != 0.0);
+        let positional =
+            model.local_viewer || model.phong_specular || lights.iter().any(|l| l.enabled && l.position.w != 0.0);
         let sunlit = Sunlit::new(&lights, &model, &materials, color_material);
         Lighting { lights, model, materials, color_material, prepared, positional, sunlit }
     }

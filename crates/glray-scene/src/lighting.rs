@@ -83,6 +83,9 @@ pub struct LightModel {
     /// Lit per pixel, not per vertex: what a shader program computes per fragment (VTK's),
     /// drawn by glray as a fixed-function draw (`programs` in glray-capture). Not GL state.
     pub per_fragment: bool,
+    /// The specular term as VTK's shader has it (Phong: the light reflected about the normal,
+    /// against the true direction to the eye), not GL's half vector (Blinn). Not GL state.
+    pub phong_specular: bool,
 }
 
 impl Default for LightModel {
@@ -93,6 +96,7 @@ impl Default for LightModel {
             two_side: false,
             separate_specular: false,
             per_fragment: false,
+            phong_specular: false,
         }
     }
 }
@@ -248,7 +252,12 @@ pub fn light_vertex_prepared(
             let colour = m.specular.truncate() * l.specular.truncate();
             // No specular colour (VTK's default material): no power to raise (a pow was an
             // eighth of a ParaView frame's ambient occlusion, its result multiplied by zero).
-            if colour != DVec3::ZERO {
+            if colour != DVec3::ZERO && model.phong_specular {
+                // VTK: pow(max(1e-5, dot(reflect(-to_light, n), normalize(-position))), power).
+                let reflected = 2.0 * n_dot_l * normal - to_light;
+                let power = reflected.dot((-position).normalize_or_zero()).max(1e-5).powf(m.shininess);
+                specular += factor * power * colour;
+            } else if colour != DVec3::ZERO {
                 let half = match ready {
                     Some(r) if r.fixed_half => r.half,
                     _ => (to_light + eye).normalize_or_zero(),

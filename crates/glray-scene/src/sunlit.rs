@@ -90,7 +90,9 @@ impl Sunlit {
         color_material: Option<ColorMaterial>,
     ) -> Option<Sunlit> {
         let lights: Vec<&Light> = lights.iter().filter(|l| l.enabled).collect();
-        if model.local_viewer || lights.iter().any(|l| l.position.w != 0.0 || l.spot_cutoff != 180.0) {
+        // (VTK's Phong specular reads the direction to the eye: not a sunlit equation.)
+        let reads_position = model.local_viewer || model.phong_specular;
+        if reads_position || lights.iter().any(|l| l.position.w != 0.0 || l.spot_cutoff != 180.0) {
             return None;
         }
         let suns = lights

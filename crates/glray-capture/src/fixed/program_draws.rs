@@ -105,6 +105,7 @@ impl Context {
                 separate_specular: true,
                 local_viewer: false,
                 per_fragment: draw.per_fragment,
+                phong_specular: draw.per_fragment,
             },
             materials: [draw.material; 2],
             normalize: true,
