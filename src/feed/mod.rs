@@ -443,12 +443,16 @@ impl Live {
         let batch =
             offscreen && renderer.options.effects.beyond_gl() && renderer.options.effects.progressive && frame.cleared;
         let extra = if batch { self.batch_passes - 1 } else { 0 };
+        // What the extra passes traced, for the statistics (the last pass's are the renderer's).
+        let mut extra_work = (std::time::Duration::ZERO, 0u64, std::time::Duration::ZERO);
         if extra > 0 && !self.distribution.active() {
             for _ in 0..extra {
                 match &self.pool {
                     Some(pool) => pool.install(|| renderer.render(frame, w, h, last)),
                     None => renderer.render(frame, w, h, last),
                 };
+                let s = renderer.stats();
+                extra_work = (extra_work.0 + s.trace, extra_work.1 + s.rays, extra_work.2 + s.build);
             }
         } else if extra > 0 {
             // In an MPI rank: each pass a frame shared with the others (a fault ends them).
@@ -506,7 +510,12 @@ impl Live {
                 width: w,
                 height: h,
                 capture: std::mem::take(&mut self.capture_time),
-                render: self.renderer.stats(),
+                render: {
+                    let mut r = self.renderer.stats();
+                    (r.trace, r.rays, r.build) =
+                        (r.trace + extra_work.0, r.rays + extra_work.1, r.build + extra_work.2);
+                    r
+                },
                 present: start.elapsed(),
                 passed_draws: passed_total - self.passed_seen.insert(thread, passed_total).unwrap_or(0),
                 ranks,
