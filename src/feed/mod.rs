@@ -385,6 +385,20 @@ fn fire_in(live: &mut Live, c: usize, thread: u32, Firing { geometry, raster, at
     false
 }
 
+/// `frame` traced at its size on the tracer's threads (rayon's global pool without them).
+fn traced(
+    pool: Option<&rayon::ThreadPool>,
+    renderer: &mut glray_render::Renderer,
+    frame: &glray_scene::frame::Frame,
+    last: Option<&glray_render::Rendered>,
+) -> glray_render::Rendered {
+    let (w, h) = frame.size();
+    match pool {
+        Some(pool) => pool.install(|| renderer.render(frame, w, h, last)),
+        None => renderer.render(frame, w, h, last),
+    }
+}
+
 /// The first error `thread`'s context raised that the real GL could not (0: none).
 pub fn take_unseen_error(live: &mut Live, thread: u32) -> u32 {
     if !ON.load(Ordering::Relaxed) {
@@ -447,10 +461,7 @@ impl Live {
         let mut extra_work = (std::time::Duration::ZERO, 0u64, std::time::Duration::ZERO);
         if extra > 0 && !self.distribution.active() {
             for _ in 0..extra {
-                match &self.pool {
-                    Some(pool) => pool.install(|| renderer.render(frame, w, h, last)),
-                    None => renderer.render(frame, w, h, last),
-                };
+                traced(self.pool, renderer, frame, last);
                 let s = renderer.stats();
                 extra_work = (extra_work.0 + s.trace, extra_work.1 + s.rays, extra_work.2 + s.build);
             }
@@ -466,13 +477,7 @@ impl Live {
         let shared = self.distribution.frame(frame, last, renderer, self.pool);
         let (rendered, ranks) = match shared {
             Some(s) => (s.picture, Some(stats::RankStats { rank: s.rank, ranks: s.ranks, report: s.report })),
-            None => {
-                let rendered = match &self.pool {
-                    Some(pool) => pool.install(|| renderer.render(frame, w, h, last)),
-                    None => renderer.render(frame, w, h, last),
-                };
-                (rendered, None)
-            }
+            None => (traced(self.pool, renderer, frame, last), None),
         };
         if let Some(dir) = &self.dump {
             match self.dump_frames {

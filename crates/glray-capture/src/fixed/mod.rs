@@ -417,7 +417,7 @@ impl Context {
             }
             Concern::Programs => {
                 let returned = self.returned.take();
-                self.programs.command(op, ty, a, returned)
+                self.programs.command(op, ty, a, returned, self.client.array_buffer)
             }
         }
     }

@@ -64,12 +64,13 @@ impl Context {
 
     /// A draw (glDrawArrays, glDrawElements, glDrawRangeElements) while a program is in use.
     pub(crate) fn program_draw(&mut self, op: Op, a: &[Value]) -> GlResult {
-        if self.recognised_draw().is_some_and(|d| Self::declined(&d)) {
+        let recognised = self.recognised_draw();
+        if recognised.as_ref().is_some_and(Self::declined) {
             self.revision += 1;
             self.frame.unsupported_draws += 1;
             return Ok(());
         }
-        let Some(draw) = self.recognised_draw() else {
+        let Some(draw) = recognised else {
             if self.core_profile || self.frame.passed_draws > 0 || !self.frame.is_empty() {
                 // The real GL draws it; the frame is unchanged (its picture, once put in, stays):
                 // the overlays a program draws over its 3D scene.

@@ -43,8 +43,6 @@ pub struct Programs {
     pub active_unit: usize,
     /// The 2D texture bound on each unit.
     pub units: HashMap<usize, u32>,
-    /// The buffer bound to GL_ARRAY_BUFFER (glVertexAttribPointer reads it).
-    pub array_buffer: u32,
 }
 
 impl Programs {
@@ -59,7 +57,7 @@ impl Programs {
     }
 
     /// Follows the binding commands the fixed machine also follows: which program is in use,
-    /// the active texture unit and its 2D binding, the array buffer.
+    /// the active texture unit and its 2D binding.
     pub fn observe(&mut self, op: Op, a: &[Value]) {
         match op {
             Op::UseProgram => self.in_use = args::uint(a, 0),
@@ -72,14 +70,14 @@ impl Programs {
             Op::BindTexture if args::uint(a, 0) == GL_TEXTURE_2D => {
                 self.units.insert(self.active_unit, args::uint(a, 1));
             }
-            Op::BindBuffer if args::uint(a, 0) == glray_gl::GL_ARRAY_BUFFER => self.array_buffer = args::uint(a, 1),
             _ => {}
         }
     }
 
     /// Follows a command of the program layer (`Concern::Programs`); `returned` is the call's
-    /// return value (a program's name, a location).
-    pub fn command(&mut self, op: Op, ty: u32, a: &[Value], returned: Option<i64>) -> GlResult {
+    /// return value (a program's name, a location), `array_buffer` the buffer bound to
+    /// GL_ARRAY_BUFFER (the context's, which glVertexAttribPointer reads).
+    pub fn command(&mut self, op: Op, ty: u32, a: &[Value], returned: Option<i64>, array_buffer: u32) -> GlResult {
         match op {
             Op::CreateProgram => {
                 if let Some(name) = returned.filter(|&n| n > 0) {
@@ -130,14 +128,13 @@ impl Programs {
                 // glVertexAttribIPointer has no `normalized`.
                 let integer = a.len() == 5;
                 let (ty_at, stride_at, pointer_at) = if integer { (2, 3, 4) } else { (2, 4, 5) };
-                let buffer = self.array_buffer;
                 let attrib = self.vertex_arrays.attrib_mut(args::uint(a, 0)).ok_or(GlError::InvalidValue)?;
                 attrib.size = args::int(a, 1) as i32;
                 attrib.ty = args::uint(a, ty_at);
                 attrib.normalized = !integer && args::int(a, 3) != 0;
                 attrib.stride = args::int(a, stride_at) as i32;
                 attrib.offset = a.get(pointer_at).map_or(0, |v| v.as_int() as u64);
-                attrib.buffer = buffer;
+                attrib.buffer = array_buffer;
             }
             Op::VertexAttribDivisor => {
                 self.vertex_arrays.attrib_mut(args::uint(a, 0)).ok_or(GlError::InvalidValue)?.divisor =
@@ -177,7 +174,7 @@ mod tests {
 
     fn call(p: &mut Programs, name: &str, a: &[Value], ret: Option<i64>) {
         let (op, ty) = op_for(name).unwrap();
-        p.command(op, ty, a, ret).unwrap();
+        p.command(op, ty, a, ret, 9).unwrap();
     }
 
     #[test]
@@ -197,7 +194,7 @@ mod tests {
         let mcvc = prog.uniform("MCVCMatrix").unwrap();
         assert_eq!((mcvc[1], mcvc[4]), (4.0, 1.0), "a transposed matrix is kept column by column");
         assert_eq!(prog.attribute("vertexMC"), Some(1));
-        p.observe(op_for("glBindBuffer").unwrap().0, &[i(glray_gl::GL_ARRAY_BUFFER as i64), i(9)]);
+        // (The context's array buffer, 9, is handed to every command.)
         call(&mut p, "glBindVertexArray", &[i(4)], None);
         call(&mut p, "glVertexAttribPointer", &[i(1), i(3), i(GL_FLOAT as i64), i(0), i(24), Value::Offset(12)], None);
         call(&mut p, "glEnableVertexAttribArray", &[i(1)], None);
