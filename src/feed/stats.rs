@@ -103,7 +103,7 @@ impl StatsSink {
             StatsSink::Stderr => writeln!(
                 line,
                 "glray: frame {} ({}x{}): capture {:.2} ms, build {:.2} ms{}{}, trace {:.2} ms ({} rays, {:.2} Mrays/s), \
-                 present {:.2} ms; {}, {} per pixel{}{}{}{}",
+                 {}present {:.2} ms; {}, {} per pixel{}{}{}{}",
                 s.frame,
                 s.width,
                 s.height,
@@ -120,6 +120,7 @@ impl StatsSink {
                 ms(r.trace),
                 r.rays,
                 mrays,
+                if r.denoise.is_zero() { String::new() } else { format!("denoise {:.2} ms, ", ms(r.denoise)) },
                 ms(s.present),
                 glray_core::log::plural(r.triangles, "triangle"),
                 glray_core::log::plural(u64::from(r.samples), "sample"),
@@ -137,7 +138,7 @@ impl StatsSink {
             StatsSink::File(_) => writeln!(
                 line,
                 "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
-                 \"trace_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1},\"passed_draws\":{}{}}}",
+                 \"trace_ms\":{:.3},\"denoise_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1},\"passed_draws\":{}{}}}",
                 s.frame,
                 s.thread,
                 s.width,
@@ -145,6 +146,7 @@ impl StatsSink {
                 ms(s.capture),
                 ms(r.build),
                 ms(r.trace),
+                ms(r.denoise),
                 ms(s.present),
                 r.rays,
                 mrays,

@@ -138,6 +138,16 @@ pub const SETTINGS: &[Setting] = &[
               traced anew.",
     },
     Setting {
+        key: "denoise",
+        kind: Kind::Bool,
+        default: "true",
+        doc: "Denoise ambient occlusion: each frame's AO is averaged with the last frames' where the same \
+              surface points were (followed through the objects' and the camera's motion) and filtered \
+              along surfaces (edge-aware, guided by depth, normals and objects), so that one pass's few \
+              rays give a clean picture on a moving scene. The GL look under it is not filtered. false: \
+              the raw samples (progressive refinement still averages a still scene).",
+    },
+    Setting {
         key: "batch_passes",
         kind: Kind::Int(0, 64),
         default: "16",

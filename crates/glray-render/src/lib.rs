@@ -13,6 +13,8 @@
 //!   in drawing order;
 //! - `options`: how to render: the effects and their presets, lighting per pixel, BVH builds;
 //! - `effects`: ambient occlusion and shadows at a hit;
+//! - `denoise`: ambient occlusion kept apart from the colours, averaged over frames through
+//!   motion and filtered along surfaces;
 //! - `offset`: where a secondary ray leaves a surface;
 //! - `recent`: what was made of the triangles recent camera rays hit;
 //! - `sampling`: deterministic random numbers (a function of pixel and sample) and directions;
@@ -22,6 +24,7 @@
 
 pub mod bvh;
 pub mod bvh_choice;
+pub mod denoise;
 pub mod effects;
 pub mod fragment;
 mod gouraud;

@@ -21,6 +21,9 @@ pub struct Effects {
     /// While the scene and camera stay the same from frame to frame, each frame adds `samples`
     /// more to the ones before (up to `MAX_PASSES` frames): the picture converges.
     pub progressive: bool,
+    /// Denoise ambient occlusion (`denoise`): averaged over frames through motion, filtered
+    /// along surfaces.
+    pub denoise: bool,
 }
 
 /// The frames progressive refinement keeps adding samples for.
@@ -37,6 +40,7 @@ impl Effects {
         reflectivity: 0.2,
         samples: 1,
         progressive: true,
+        denoise: true,
     };
 
     /// A preset by name: `gl`; `ao`, the GL look times ambient occlusion; `full`, the advanced
@@ -103,6 +107,7 @@ impl Options {
             e.shadows = on;
         }
         e.progressive = config.flag("progressive").unwrap_or(true);
+        e.denoise = config.flag("denoise").unwrap_or(true);
         let bvh = BvhBuild::from_setting(config.bvh()).unwrap_or_default();
         Some(Options { per_pixel_lighting: config.per_pixel_lighting(), effects: e, bvh })
     }

@@ -12,6 +12,8 @@
 
 use glam::Vec4;
 
+use crate::denoise::AoPixel;
+
 /// The side of the square tiles that frames with secondary rays are traced in.
 pub const TILE: usize = 8;
 
@@ -27,6 +29,8 @@ pub(crate) struct Piece<'a> {
     pub rgba: Vec<&'a mut [u8]>,
     pub depth: Vec<&'a mut [f32]>,
     pub colors: Option<Vec<&'a mut [Vec4]>>,
+    /// The AO kept apart for the denoiser, when it is.
+    pub ao: Option<Vec<&'a mut [AoPixel]>>,
 }
 
 impl Piece<'_> {
@@ -47,6 +51,7 @@ pub(crate) fn split<'a>(
     rgba: &'a mut [u8],
     depth: &'a mut [f32],
     colors: Option<&'a mut [Vec4]>,
+    ao: Option<&'a mut [AoPixel]>,
     width: usize,
     tiled: bool,
 ) -> Vec<Piece<'a>> {
@@ -57,8 +62,10 @@ pub(crate) fn split<'a>(
         return pieces;
     }
     let mut colors = colors.map(|c| c.chunks_mut(width));
+    let mut ao = ao.map(|c| c.chunks_mut(width));
     for (y, (rgba_row, depth_row)) in rgba.chunks_mut(4 * width).zip(depth.chunks_mut(width)).enumerate() {
         let colors_row = colors.as_mut().and_then(|c| c.next());
+        let ao_row = ao.as_mut().and_then(|c| c.next());
         if y % band == 0 {
             // A new band: its pieces, from the left.
             let columns = (0..width).step_by(segment);
@@ -68,6 +75,7 @@ pub(crate) fn split<'a>(
                 rgba: Vec::with_capacity(band),
                 depth: Vec::with_capacity(band),
                 colors: colors_row.is_some().then(|| Vec::with_capacity(band)),
+                ao: ao_row.is_some().then(|| Vec::with_capacity(band)),
             }));
         }
         let first = pieces.len() - width.div_ceil(segment);
@@ -81,6 +89,11 @@ pub(crate) fn split<'a>(
         if let Some(c) = colors_row {
             for (p, row) in band.iter_mut().zip(c.chunks_mut(segment)) {
                 p.colors.as_mut().expect("colours in every piece").push(row);
+            }
+        }
+        if let Some(c) = ao_row {
+            for (p, row) in band.iter_mut().zip(c.chunks_mut(segment)) {
+                p.ao.as_mut().expect("AO in every piece").push(row);
             }
         }
     }
@@ -149,7 +162,7 @@ mod tests {
             let mut rgba: Vec<u8> = (0..w * h).flat_map(|i| (i as u32).to_le_bytes()).collect();
             let mut depth: Vec<f32> = (0..w * h).map(|i| i as f32).collect();
             let mut colors: Vec<Vec4> = (0..w * h).map(|i| Vec4::splat(i as f32)).collect();
-            let pieces = split(&mut rgba, &mut depth, Some(&mut colors), w, tiled);
+            let pieces = split(&mut rgba, &mut depth, Some(&mut colors), None, w, tiled);
             let mut seen = vec![0u8; w * h];
             for p in &pieces {
                 let (rows, columns) = (p.rows(), p.columns());
@@ -175,7 +188,7 @@ mod tests {
             }
         }
         for tiled in [true, false] {
-            assert!(split(&mut [], &mut [], None, 0, tiled).is_empty(), "a window without columns has no pieces");
+            assert!(split(&mut [], &mut [], None, None, 0, tiled).is_empty(), "a window without columns has no pieces");
         }
     }
 }

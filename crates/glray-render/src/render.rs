@@ -12,6 +12,7 @@ use glray_scene::frame::{Frame, TriangleId};
 use rayon::prelude::*;
 
 use crate::bvh_choice::ray_work;
+use crate::denoise::{AoPixel, Denoiser, Motion, MOVING_HISTORY};
 use crate::gouraud::Gouraud;
 use crate::meshes::Meshes;
 use crate::options::{Options, MAX_PASSES};
@@ -70,6 +71,8 @@ pub struct Stats {
     /// Bytes of freed big arrays kept for the next frame's (`glray_core::reuse`), as the frame
     /// ends: more than none only while the program replaces its meshes.
     pub kept_bytes: u64,
+    /// Denoising the frame's AO (`denoise`), and composing its picture.
+    pub denoise: Duration,
 }
 
 /// Samples added up over frames that show the same scene (for the GL look, one pass: the
@@ -93,7 +96,38 @@ pub struct Renderer {
     pub flatten_below: usize,
     meshes: Meshes,
     accumulation: Option<Accumulation>,
+    /// The AO of frames before, for denoising the next (`denoise`).
+    denoiser: Denoiser,
+    /// Frames traced with denoising: each takes other AO rays than the last.
+    traced: u32,
     stats: Stats,
+}
+
+/// A pass's AO kept apart, and what the denoiser needs of its frame.
+struct Denoised {
+    layer: Vec<AoPixel>,
+    camera: Camera,
+    motion: Motion,
+}
+
+/// The picture of `passes` passes' colours added up (`sum`), darkened by the fraction hidden
+/// of each pixel where `hidden` has one (the denoised AO: a NaN leaves the colour alone).
+fn compose(rgba: &mut [u8], sum: &[Vec4], passes: u32, hidden: Option<&[f32]>, intensity: f32) {
+    let passes = passes as f32;
+    match hidden {
+        Some(hidden) => {
+            for ((px, s), h) in rgba.chunks_mut(4).zip(sum).zip(hidden) {
+                let c = *s / passes;
+                let keep = if h.is_nan() { 1.0 } else { 1.0 - intensity * h };
+                px.copy_from_slice(&to_u8((c.truncate() * keep).extend(c.w)));
+            }
+        }
+        None => {
+            for (px, s) in rgba.chunks_mut(4).zip(sum) {
+                px.copy_from_slice(&to_u8(*s / passes));
+            }
+        }
+    }
 }
 
 impl Default for Renderer {
@@ -110,6 +144,8 @@ impl Renderer {
             flatten_below: FLATTEN_INSTANCES,
             meshes: Meshes::default(),
             accumulation: None,
+            denoiser: Denoiser::default(),
+            traced: 0,
             stats: Stats::default(),
         }
     }
@@ -143,13 +179,24 @@ impl Renderer {
             progress: self.progress,
             flatten_below: self.flatten_below,
             work: None,
+            seed: 0,
         };
-        let (rendered, linear, stats) = job.run(&mut self.meshes, key.is_some() && effects.beyond_gl());
+        let denoise = effects.denoise && effects.ao_samples > 0;
+        if denoise {
+            // Each frame's AO rays go new ways, so that frames averaged are independent.
+            self.traced = self.traced.wrapping_add(1).max(1);
+            job.seed = self.traced;
+        }
+        let (rendered, linear, stats, split) = job.run(&mut self.meshes, (key.is_some() && effects.beyond_gl()) || denoise);
         // A frame that built its scene took what it could refit; one that did not (no camera)
         // has no use for the trees either.
         self.meshes.forget_gone();
         self.stats = Stats { kept_bytes: glray_core::reuse::kept_bytes() as u64, ..stats };
-        self.add_pass(key, rendered, linear)
+        let start = Instant::now();
+        let denoised = split.map(|(layer, camera)| Denoised { layer, camera, motion: Motion::of(frame) });
+        let picture = self.add_pass_with(key, rendered, linear, denoised);
+        self.stats.denoise = start.elapsed();
+        picture
     }
 
     /// Traces this rank's share of `frame` (pass `pass` of its progressive refinement): the
@@ -178,8 +225,9 @@ impl Renderer {
             progress: false,
             flatten_below: self.flatten_below,
             work: Some(work),
+            seed: 0,
         };
-        let (_, _, stats) = job.run(&mut self.meshes, linear);
+        let (_, _, stats, _) = job.run(&mut self.meshes, linear);
         self.meshes.forget_gone();
         let samples = self.options.effects.samples.max(1);
         self.stats = Stats { kept_bytes: glray_core::reuse::kept_bytes() as u64, samples, ..stats };
@@ -195,8 +243,30 @@ impl Renderer {
     /// Adds one pass gathered from tiles (`rendered`, and its colours before rounding when
     /// `linear` is given) to the passes added up under `key`, and returns the picture of them
     /// all: what `render` does after tracing a whole frame.
-    pub fn add_pass(&mut self, key: Option<u64>, mut rendered: Rendered, linear: Option<Vec<Vec4>>) -> Rendered {
+    pub fn add_pass(&mut self, key: Option<u64>, rendered: Rendered, linear: Option<Vec<Vec4>>) -> Rendered {
+        self.add_pass_with(key, rendered, linear, None)
+    }
+
+    /// `add_pass`, with the pass's AO kept apart (`denoised`): the colours (without AO) are
+    /// added up as ever, the AO denoised, and the picture is the one times the other.
+    fn add_pass_with(
+        &mut self,
+        key: Option<u64>,
+        mut rendered: Rendered,
+        linear: Option<Vec<Vec4>>,
+        denoised: Option<Denoised>,
+    ) -> Rendered {
         let samples = self.options.effects.samples.max(1);
+        let width = rendered.width as usize;
+        let mut hidden = |passes: u32| {
+            let d = denoised.as_ref()?;
+            // A still scene's average spans as many passes as progressive refinement adds up;
+            // a moving one's fewer (`MOVING_HISTORY`), so that AO keeps up with the motion.
+            let span = if passes > 1 { MAX_PASSES as f32 } else { MOVING_HISTORY };
+            let rays = self.options.effects.ao_samples * samples;
+            Some(self.denoiser.denoise(&d.layer, width, &d.camera, &d.motion, rays, span))
+        };
+        let intensity = self.options.effects.ao_intensity;
         match (key, linear) {
             (Some(key), Some(linear)) => {
                 let (passes, sum) = match self.accumulation.take() {
@@ -209,9 +279,7 @@ impl Renderer {
                     }
                     _ => (1, linear),
                 };
-                for (px, s) in rendered.rgba.chunks_mut(4).zip(&sum) {
-                    px.copy_from_slice(&to_u8(*s / passes as f32));
-                }
+                compose(&mut rendered.rgba, &sum, passes, hidden(passes).as_deref(), intensity);
                 self.stats.samples = passes * samples;
                 self.accumulation = Some(Accumulation { key, passes, sum, last: rendered.clone() });
             }
@@ -230,6 +298,11 @@ impl Renderer {
                     None => rendered.clone(),
                 };
                 self.accumulation = Some(Accumulation { key, passes: 1, sum: Vec::new(), last });
+            }
+            (None, Some(linear)) if denoised.is_some() => {
+                compose(&mut rendered.rgba, &linear, 1, hidden(1).as_deref(), intensity);
+                self.accumulation = None;
+                self.stats.samples = samples;
             }
             _ => {
                 self.accumulation = None;
@@ -266,6 +339,7 @@ impl Renderer {
     /// skipped frames showing another scene since).
     pub fn restart(&mut self) {
         self.accumulation = None;
+        self.denoiser.restart();
     }
 
     /// What the last `render` took.
@@ -391,11 +465,18 @@ struct Job<'a> {
     flatten_below: usize,
     /// Only the tiles handed out here, when tracing a share of the frame (`render_tiles`).
     work: Option<&'a dyn TileWork>,
+    /// Which frame of a denoised sequence (0: not denoised): the AO rays' seed.
+    seed: u32,
 }
 
+/// What `Job::run` gives: the image, its colours before rounding (when asked), what it took,
+/// and the AO kept apart for the denoiser with the camera it was seen from (when it was).
+type Traced = (Rendered, Option<Vec<Vec4>>, Stats, Option<(Vec<AoPixel>, Camera)>);
+
 impl Job<'_> {
-    /// The image, its colours before rounding (when asked), and what it took.
-    fn run(&mut self, meshes: &mut Meshes, linear: bool) -> (Rendered, Option<Vec<Vec4>>, Stats) {
+    /// The image, its colours before rounding (when asked), what it took, and its AO kept apart
+    /// (see `Traced`).
+    fn run(&mut self, meshes: &mut Meshes, linear: bool) -> Traced {
         if let Some(views) = self.frame.by_viewport() {
             return self.run_views(&views, meshes, linear);
         }
@@ -444,7 +525,7 @@ impl Job<'_> {
             _ => None,
         };
         let Some(camera) = camera else {
-            return (Rendered { width, height, rgba, depth }, colors, stats);
+            return (Rendered { width, height, rgba, depth }, colors, stats, None);
         };
         let start = Instant::now();
         let pixels = u64::from(width) * u64::from(height);
@@ -455,6 +536,10 @@ impl Job<'_> {
         let start = Instant::now();
         let diagonal = scene.diagonal().max(1e-6);
         let simple = closest_hit_suffices(frame);
+        // The AO kept apart for the denoiser where the closest hit decides every pixel (and the
+        // whole frame is traced here, with its colours before rounding).
+        let split = self.seed != 0 && simple && self.work.is_none() && colors.is_some();
+        let mut ao = split.then(|| vec![AoPixel::NONE; w * h]);
         let tracer = Tracer {
             frame,
             camera: &camera,
@@ -466,6 +551,8 @@ impl Job<'_> {
             eps: diagonal * 1e-4,
             ao_distance: diagonal * self.options.effects.ao_distance,
             pass: self.pass,
+            split_ao: split,
+            seed: self.seed,
         };
         let rays = AtomicU64::new(0);
         let prefetch = frame.shading_bytes() >= PREFETCH_FROM;
@@ -534,6 +621,9 @@ impl Job<'_> {
                             if let Some(c) = piece.colors.as_mut() {
                                 c[row][at] = color.clamp(Vec4::ZERO, Vec4::ONE);
                             }
+                            if let (Some(ao), Some(a)) = (piece.ao.as_mut(), scratch.take_ao()) {
+                                ao[row][at] = a;
+                            }
                             if let Some(d) = d {
                                 *depth = d as f32;
                             }
@@ -549,7 +639,7 @@ impl Job<'_> {
         // and a piece's work is one frame of a profile.
         let process: &(dyn Fn(Piece) + Sync) = &process;
         match self.work {
-            None => pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), w, secondary)
+            None => pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), ao.as_deref_mut(), w, secondary)
                 .into_par_iter()
                 .for_each(process),
             Some(work) => {
@@ -560,7 +650,7 @@ impl Job<'_> {
                 while let Some(chunk) = work.next() {
                     let chunk: Vec<u32> = chunk.into_iter().filter(|&t| t < grid.count()).collect();
                     chunk.iter().for_each(|&t| wanted[t as usize] = true);
-                    pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), w, true)
+                    pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), None, w, true)
                         .into_par_iter()
                         .filter(|p| wanted[grid.tile_at(p.x0, p.y0) as usize])
                         .for_each(process);
@@ -574,19 +664,20 @@ impl Job<'_> {
         progress.finish();
         stats.trace = start.elapsed();
         stats.rays = rays.load(Ordering::Relaxed);
-        (Rendered { width, height, rgba, depth }, colors, stats)
+        let split = ao.map(|layer| (layer, camera));
+        (Rendered { width, height, rgba, depth }, colors, stats, split)
     }
 
     /// A frame drawn in several viewports (`Frame::by_viewport`): each view traced in turn, over
     /// the picture the ones before left (their colours before rounding too: each view's start
     /// from the picture under it).
-    fn run_views(&self, views: &[Frame], meshes: &mut Meshes, linear: bool) -> (Rendered, Option<Vec<Vec4>>, Stats) {
+    fn run_views(&self, views: &[Frame], meshes: &mut Meshes, linear: bool) -> Traced {
         let mut last: Option<(Rendered, Option<Vec<Vec4>>)> = None;
         let mut stats = Stats::default();
         for view in views {
             let previous = last.as_ref().map(|(r, _)| r).or(self.previous);
             let mut job = Job { frame: view, previous, ..*self };
-            let (rendered, colors, s) = job.run(meshes, linear);
+            let (rendered, colors, s, _) = job.run(meshes, linear);
             (stats.build, stats.trace) = (stats.build + s.build, stats.trace + s.trace);
             (stats.rays, stats.triangles) = (stats.rays + s.rays, stats.triangles + s.triangles);
             stats.fast_builds += s.fast_builds;
@@ -594,7 +685,7 @@ impl Job<'_> {
             last = Some((rendered, colors));
         }
         let (rendered, colors) = last.expect("by_viewport gives two views or more");
-        (rendered, colors, stats)
+        (rendered, colors, stats, None)
     }
 }
 
@@ -840,7 +931,9 @@ mod tests {
         let frame = c.frame().clone();
         assert!(!frame.is_empty() && Renderer::shares(&frame));
         for preset in ["gl", "full"] {
-            let options = Options { effects: Effects::preset(preset).unwrap(), ..Options::default() };
+            // Tiles carry no AO apart from the colours: a frame shared out is not denoised.
+            let effects = Effects { denoise: false, ..Effects::preset(preset).unwrap() };
+            let options = Options { effects, ..Options::default() };
             let mut whole = Renderer::new(options);
             let key = whole.accumulation_key(&frame, 150, 100);
             let expected = whole.render(&frame, 150, 100, None);

@@ -11,6 +11,7 @@ use glray_scene::lighting::Light;
 use glray_scene::triangle::Triangle;
 use obvhs::ray::Ray;
 
+use crate::denoise::AoPixel;
 use crate::effects::{lit_by, occlusion};
 use crate::fragment::{shade, Fragment};
 use crate::gouraud::{Corners, Gouraud};
@@ -38,8 +39,14 @@ pub(crate) struct Tracer<'a> {
     pub ao_distance: f32,
     /// The progressive-refinement pass: which samples this frame takes.
     pub pass: u32,
+    /// Which frame of a denoised sequence (0: not denoised): mixed into the samples' seeds, so
+    /// that frames the denoiser averages take other AO rays even when all are pass 0.
+    pub seed: u32,
     /// The hits shaded the short way, when the frame asks for the GL look alone.
     pub gouraud: Option<Gouraud>,
+    /// Ambient occlusion is left out of the colours and kept apart for the denoiser
+    /// (`Scratch::ao`): only where the closest hit decides a pixel (`simple`).
+    pub split_ao: bool,
 }
 
 /// Per-thread buffers, reused from pixel to pixel, and the rays traced (for the statistics).
@@ -52,6 +59,16 @@ pub(crate) struct Scratch {
     /// colours of those shaded the short way (`Gouraud`).
     triangles: Recent<Triangle>,
     corners: Recent<Corners>,
+    /// With `Tracer::split_ao`: the AO of the sample being traced, then (after `pixel`) of the
+    /// whole pixel.
+    ao: Cell<Option<AoPixel>>,
+}
+
+impl Scratch {
+    /// The AO `pixel` kept apart for the pixel it last traced (with `Tracer::split_ao`).
+    pub fn take_ao(&self) -> Option<AoPixel> {
+        self.ao.take()
+    }
 }
 
 /// Adds `n` rays to a thread's count (for the statistics).
@@ -76,9 +93,15 @@ impl Tracer<'_> {
         let mut sum = Vec4::ZERO;
         let mut depth = None;
         let mut any = false;
+        // With the AO kept apart: the first sample's surface, and the samples' AO added up.
+        let (mut first, mut hidden, mut hits) = (None, 0.0f32, 0u32);
         for i in 0..n {
+            s.ao.set(None);
             let k = self.pass * n + i;
-            let mut sampler = Sampler::new(&[x as u32, y as u32, k]);
+            let mut sampler = match self.seed {
+                0 => Sampler::new(&[x as u32, y as u32, k]),
+                seed => Sampler::new(&[x as u32, y as u32, k, seed]),
+            };
             // The first sample of all at the pixel centre: exactly where GL samples.
             let at = if k == 0 { Vec2::splat(0.5) } else { stratified(i, n, sampler.next2()) };
             let known = if k == 0 { center } else { None };
@@ -100,7 +123,13 @@ impl Tracer<'_> {
                 }
                 None => sum += under,
             }
+            if let Some(a) = s.ao.take() {
+                first = first.or(Some(a));
+                hidden += a.hidden;
+                hits += 1;
+            }
         }
+        s.ao.set(first.map(|a| AoPixel { hidden: hidden / hits as f32, ..a }));
         any.then(|| (sum / n as f32, depth))
     }
 
@@ -165,7 +194,12 @@ impl Tracer<'_> {
                 }
                 _ => {
                     let t = s.triangles.get(hit.id, || self.frame.triangle(hit.id))?;
-                    self.surface(t, at(&hit), r.direction, sampler, &s.rays, 0)
+                    let split = self.split_ao.then_some(&s.ao);
+                    let f = self.surface(t, at(&hit), r.direction, sampler, &s.rays, split, 0);
+                    if let Some(a) = s.ao.get() {
+                        s.ao.set(Some(AoPixel { object: hit.id.instance, ..a }));
+                    }
+                    f
                 }
             };
             // Over the last frame (no clear), or a depth cleared nearer than the far plane, the
@@ -192,7 +226,7 @@ impl Tracer<'_> {
             }
             last = Some((*hit, t.positions));
             let p = on_plane(&r, &t.positions).unwrap_or_else(|| at(hit));
-            let mut f = self.surface(&t, p, r.direction, sampler, &s.rays, 0);
+            let mut f = self.surface(&t, p, r.direction, sampler, &s.rays, None, 0);
             if let Some(offset) = self.frame.surfaces[f.surface as usize].polygon_offset {
                 f.depth = offset_depth(self.camera, &t, f.depth, offset);
             }
@@ -202,7 +236,9 @@ impl Tracer<'_> {
     }
 
     /// The fragment of triangle `t` at eye-space point `p`, reached along `dir`, with the
-    /// effects: shadows, ambient occlusion (first surfaces only), reflections up to the depth.
+    /// effects: shadows, ambient occlusion (first surfaces only; kept apart in `split` rather
+    /// than darkening the colour, when given), reflections up to the depth.
+    #[allow(clippy::too_many_arguments)]
     fn surface(
         &self,
         t: &Triangle,
@@ -210,6 +246,7 @@ impl Tracer<'_> {
         dir: DVec3,
         sampler: &mut Sampler,
         rays: &Cell<u64>,
+        split: Option<&Cell<Option<AoPixel>>>,
         bounce: u32,
     ) -> Fragment {
         let e = &self.options.effects;
@@ -234,8 +271,13 @@ impl Tracer<'_> {
         if e.ao_samples > 0 && bounce == 0 {
             count(rays, e.ao_samples as u64);
             let hidden = occlusion(self.scene, &from, e.ao_samples, self.ao_distance, self.eps, sampler);
-            let keep = 1.0 - e.ao_intensity * hidden;
-            f.color = (f.color.xyz() * keep).extend(f.color.w);
+            match split {
+                Some(ao) => ao.set(Some(AoPixel { eye: from.p, normal: n, object: 0, hidden })),
+                None => {
+                    let keep = 1.0 - e.ao_intensity * hidden;
+                    f.color = (f.color.xyz() * keep).extend(f.color.w);
+                }
+            }
         }
         if reflects {
             let d = dir.as_vec3().normalize_or_zero();
@@ -245,7 +287,7 @@ impl Tracer<'_> {
             let seen = match self.scene.closest(ray).and_then(|h| Some((h, self.frame.triangle(h.id)?))) {
                 Some((hit, t2)) => {
                     let p2 = (Vec3::from(ray.origin) + reflected * hit.t).as_dvec3();
-                    self.surface(&t2, p2, reflected.as_dvec3(), sampler, rays, bounce + 1).color
+                    self.surface(&t2, p2, reflected.as_dvec3(), sampler, rays, None, bounce + 1).color
                 }
                 None => self.frame.clear_color,
             };

@@ -149,6 +149,19 @@ impl Camera {
 
     /// The window position (x, y) an eye-space point lands on.
     #[inline]
+    /// How wide one pixel is, in eye units, at eye-space point `eye` (across the window's x):
+    /// how far apart the points two neighbouring pixels see there are. For a perspective
+    /// camera it grows with the distance; for an orthographic one it is the same everywhere.
+    pub fn pixel_size(&self, eye: DVec3) -> f64 {
+        let w = (self.projection * eye.extend(1.0)).w.abs();
+        let scale = self.projection.x_axis.x.abs() * self.viewport.width as f64;
+        if scale > 0.0 {
+            2.0 * w / scale
+        } else {
+            0.0
+        }
+    }
+
     pub fn window_position(&self, eye: DVec3) -> (f64, f64) {
         let clip = self.projection * eye.extend(1.0);
         let v = self.viewport;

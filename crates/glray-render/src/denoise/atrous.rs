@@ -1,0 +1,214 @@
+//! The spatial half of denoising: an edge-aware à-trous wavelet filter (Dammertz et al. 2010,
+//! with SVGF's variance-guided weight, Schied et al. 2017). Five passes of a 3x3 kernel whose
+//! taps spread out twice as far each pass (1, 2, 4, 8, 16 pixels): a wide blur for the cost of
+//! 45 taps a pixel. A tap counts only as far as it lies on the same surface: on the pixel's
+//! plane (within its own pixel footprint times the spread), facing the same way, on the same
+//! object, and with an AO value the pixel's own noise could explain. The noise is known, not
+//! estimated: one pass's value is the share of `rays` AO rays that hit, a binomial mean, so its
+//! variance is m (1 - m) / rays, divided by the passes averaged; the filter narrows itself as
+//! the passes add up, and a still scene's average converges to the unfiltered one.
+
+use glam::{Vec3, Vec4};
+use glray_scene::camera::Camera;
+use rayon::prelude::*;
+
+use super::temporal::Averaged;
+use super::AoPixel;
+
+/// The passes of the kernel, each twice as wide as the one before.
+const LEVELS: u32 = 5;
+
+/// How many standard deviations of a pixel's noise a neighbour's value may differ by and still
+/// count fully (SVGF's sigma_l).
+const VALUE_SIGMA: f32 = 4.0;
+
+/// How sharply the weight falls with the angle between normals: cos^32 (facets of a 32-sided
+/// cylinder, 11 degrees apart, still count half), as five squarings.
+#[inline(always)]
+fn along(cos: f32) -> f32 {
+    let c2 = cos * cos;
+    let c4 = c2 * c2;
+    let c8 = c4 * c4;
+    let c16 = c8 * c8;
+    c16 * c16
+}
+
+/// What guides the filter, a plane per quantity (structure of arrays: the kernel's loops run
+/// along a row, and the compiler makes them SIMD, four or eight pixels a step).
+struct Guides {
+    eye: [Vec<f32>; 3],
+    normal: [Vec<f32>; 3],
+    /// n . eye: the pixel's plane.
+    plane: Vec<f32>,
+    /// The pixel's object (an instance's index, exact as a float up to 2^24; -1 for the
+    /// frame's own triangles): compared four at a time as floats.
+    object: Vec<f32>,
+    /// 1 / the pixel's width at its point (eye units).
+    per_size: Vec<f32>,
+    /// 1 where the pixel has a surface, else 0.
+    valid: Vec<f32>,
+}
+
+/// The filtered fraction hidden of each pixel (NaN where there is no surface).
+pub fn filter(layer: &[AoPixel], averaged: &[Averaged], width: usize, camera: &Camera, rays: u32) -> Vec<f32> {
+    let rays = rays as f32;
+    let n = layer.len();
+    let valid: Vec<f32> =
+        layer.iter().zip(averaged).map(|(a, m)| if a.is_surface() && m.count > 0.0 { 1.0 } else { 0.0 }).collect();
+    let plane_of = |f: fn(&Vec3) -> f32, of_normal: bool| -> Vec<f32> {
+        layer.iter().map(|a| f(if of_normal { &a.normal } else { &a.eye })).collect()
+    };
+    let g = Guides {
+        eye: [plane_of(|v| v.x, false), plane_of(|v| v.y, false), plane_of(|v| v.z, false)],
+        normal: [plane_of(|v| v.x, true), plane_of(|v| v.y, true), plane_of(|v| v.z, true)],
+        plane: layer.iter().map(|a| a.normal.dot(a.eye)).collect(),
+        object: layer
+            .iter()
+            .map(|a| if a.object == glray_scene::frame::TriangleId::FLAT { -1.0 } else { a.object as f32 })
+            .collect(),
+        per_size: layer
+            .par_iter()
+            .zip(&valid)
+            .map(|(a, &v)| if v > 0.0 { 1.0 / (camera.pixel_size(a.eye.as_dvec3()) as f32).max(1e-12) } else { 0.0 })
+            .collect(),
+        valid,
+    };
+    let mut mean: Vec<f32> = averaged.iter().zip(&g.valid).map(|(m, &v)| if v > 0.0 { m.mean } else { 0.0 }).collect();
+    // A binomial mean's variance, with a floor: a pixel none of whose few rays hit may still be
+    // partly hidden.
+    let mut variance: Vec<f32> = averaged
+        .iter()
+        .map(|m| {
+            let p = m.mean.clamp(0.0, 1.0);
+            (p * (1.0 - p) + 0.25 / rays) / (rays * m.count.max(1.0))
+        })
+        .collect();
+    let (mut next_mean, mut next_variance) = (vec![0.0; n], vec![0.0; n]);
+    for level in 0..LEVELS {
+        pass(&g, [&mean, &variance], [&mut next_mean, &mut next_variance], width, 1 << level);
+        std::mem::swap(&mut mean, &mut next_mean);
+        std::mem::swap(&mut variance, &mut next_variance);
+    }
+    mean.iter().zip(&g.valid).map(|(&m, &v)| if v > 0.0 { m } else { f32::NAN }).collect()
+}
+
+/// e^-x for x >= 0, near enough for weights: (1 + x/8)^-8 (three squarings and a division;
+/// within 0.03 of it everywhere, and 0 as it should be far out).
+#[inline(always)]
+fn falloff(x: f32) -> f32 {
+    let a = 1.0 + x * 0.125;
+    let a2 = a * a;
+    let a4 = a2 * a2;
+    1.0 / (a4 * a4)
+}
+
+/// `falloff` of four values.
+#[inline(always)]
+fn falloff4(x: Vec4) -> Vec4 {
+    let a = Vec4::ONE + x * 0.125;
+    let a2 = a * a;
+    let a4 = a2 * a2;
+    Vec4::ONE / (a4 * a4)
+}
+
+/// `along` of four values.
+#[inline(always)]
+fn along4(cos: Vec4) -> Vec4 {
+    let c2 = cos * cos;
+    let c4 = c2 * c2;
+    let c8 = c4 * c4;
+    let c16 = c8 * c8;
+    c16 * c16
+}
+
+/// One pass of the kernel with taps `step` pixels apart, from `from` (means, variances) into
+/// `to`. Each row: for each of the nine taps, a loop along the row adding that tap's weighted
+/// value to every pixel's sums, without branches (a tap off the surface weighs 0).
+fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: usize) {
+    const KERNEL: [f32; 3] = [0.25, 0.5, 0.25];
+    let [mean, variance] = from;
+    let [to_mean, to_variance] = to;
+    let height = mean.len() / width.max(1);
+    to_mean.par_chunks_mut(width.max(1)).zip(to_variance.par_chunks_mut(width.max(1))).enumerate().for_each(
+        |(y, (out_mean, out_variance))| {
+            let row = y * width..(y + 1) * width;
+            let (row_mean, pv) = (&mean[row.clone()], &g.valid[row.clone()]);
+            // Only the row's pixels from its first surface to its last are filtered (most of a
+            // small program's window is background).
+            let (Some(first), Some(last)) = (pv.iter().position(|&v| v > 0.0), pv.iter().rposition(|&v| v > 0.0))
+            else {
+                out_mean.fill(0.0);
+                out_variance.fill(0.0);
+                return;
+            };
+            let per_tolerance: Vec<f32> =
+                variance[row.clone()].iter().map(|v| 1.0 / (VALUE_SIGMA * v.sqrt() + 1e-4)).collect();
+            let per_reach: Vec<f32> = g.per_size[row.clone()].iter().map(|s| s / step as f32).collect();
+            let (mut sum, mut weights, mut spread) = (vec![0.0f32; width], vec![0.0f32; width], vec![0.0f32; width]);
+            for (j, ky) in KERNEL.iter().enumerate() {
+                let qy = y as isize + (j as isize - 1) * step as isize;
+                if qy < 0 || qy >= height as isize {
+                    continue;
+                }
+                for (i, kx) in KERNEL.iter().enumerate() {
+                    let dx = (i as isize - 1) * step as isize;
+                    // The pixels x whose tap x + dx lies in the row.
+                    let (x0, x1) = ((-dx).max(0) as usize, (width as isize - dx.max(0)).max(0) as usize);
+                    let (x0, x1) = (x0.max(first), x1.min(last + 1));
+                    if x0 >= x1 {
+                        continue;
+                    }
+                    let q0 = (qy as usize * width) as isize + x0 as isize + dx;
+                    let q = q0 as usize..q0 as usize + (x1 - x0);
+                    let p = y * width + x0..y * width + x1;
+                    let k = kx * ky;
+                    let (qm, qv, qvalid, qobj) = (&mean[q.clone()], &variance[q.clone()], &g.valid[q.clone()], &g.object[q.clone()]);
+                    let [qex, qey, qez] = [&g.eye[0][q.clone()], &g.eye[1][q.clone()], &g.eye[2][q.clone()]];
+                    let [qnx, qny, qnz] = [&g.normal[0][q.clone()], &g.normal[1][q.clone()], &g.normal[2][q.clone()]];
+                    let [nx, ny, nz] = [&g.normal[0][p.clone()], &g.normal[1][p.clone()], &g.normal[2][p.clone()]];
+                    let (plane, obj) = (&g.plane[p.clone()], &g.object[p.clone()]);
+                    let n = x1 - x0;
+                    let (pm, per_reach, per_tolerance) = (&row_mean[x0..x1], &per_reach[x0..x1], &per_tolerance[x0..x1]);
+                    let (sum, weights, spread) = (&mut sum[x0..x1], &mut weights[x0..x1], &mut spread[x0..x1]);
+                    // Four pixels a step (glam's Vec4 is an SSE register), then the rest one by one.
+                    let v = |s: &[f32], t: usize| Vec4::from_slice(&s[t..t + 4]);
+                    let mut t = 0;
+                    while t + 4 <= n {
+                        let facing =
+                            (v(nx, t) * v(qnx, t) + v(ny, t) * v(qny, t) + v(nz, t) * v(qnz, t)).max(Vec4::ZERO);
+                        let off_plane = (v(nx, t) * v(qex, t) + v(ny, t) * v(qey, t) + v(nz, t) * v(qez, t)
+                            - v(plane, t))
+                        .abs()
+                            * v(per_reach, t);
+                        let off_value = (v(pm, t) - v(qm, t)).abs() * v(per_tolerance, t);
+                        let same = Vec4::select(v(obj, t).cmpeq(v(qobj, t)), v(qvalid, t), Vec4::ZERO);
+                        let w = k * same * along4(facing) * falloff4(off_plane + off_value);
+                        (v(sum, t) + w * v(qm, t)).write_to_slice(&mut sum[t..t + 4]);
+                        (v(weights, t) + w).write_to_slice(&mut weights[t..t + 4]);
+                        (v(spread, t) + w * w * v(qv, t)).write_to_slice(&mut spread[t..t + 4]);
+                        t += 4;
+                    }
+                    for t in t..n {
+                        let facing = (nx[t] * qnx[t] + ny[t] * qny[t] + nz[t] * qnz[t]).max(0.0);
+                        let off_plane = (nx[t] * qex[t] + ny[t] * qey[t] + nz[t] * qez[t] - plane[t]).abs() * per_reach[t];
+                        let off_value = (pm[t] - qm[t]).abs() * per_tolerance[t];
+                        let same = if obj[t] == qobj[t] { qvalid[t] } else { 0.0 };
+                        let w = k * same * along(facing) * falloff(off_plane + off_value);
+                        sum[t] += w * qm[t];
+                        weights[t] += w;
+                        spread[t] += w * w * qv[t];
+                    }
+                }
+            }
+            for x in 0..width {
+                // A pixel with a surface weighs itself 1/4 at least, so its weights are > 0.
+                if pv[x] > 0.0 {
+                    out_mean[x] = sum[x] / weights[x];
+                    out_variance[x] = spread[x] / (weights[x] * weights[x]);
+                } else {
+                    (out_mean[x], out_variance[x]) = (0.0, 0.0);
+                }
+            }
+        },
+    );
+}

@@ -1,0 +1,169 @@
+//! Averaging a pixel's AO over the frames before, through motion: a surface point a pixel sees
+//! now is followed back to where it was in the last frame (an instance's point through the
+//! instance's last placement, the frame's own triangles where they are: they are made in eye
+//! coordinates every frame), projected with the last camera, and the average kept there is
+//! taken on if that pixel saw the same point: the same object, within two pixels of where the
+//! point was, the normal turned less than ~25 degrees. Otherwise the pixel starts afresh.
+
+use std::collections::HashMap;
+
+use glam::{DMat4, DVec3, Vec3};
+use glray_scene::camera::Camera;
+use glray_scene::frame::{Frame, TriangleId};
+use rayon::prelude::*;
+
+use super::AoPixel;
+
+/// A frame's objects as the denoiser follows them: each instance's stable id (its mesh, and
+/// which drawing of that mesh in the frame it is: glxgears' three gears are three lists) and
+/// placement (object to eye).
+#[derive(Debug, Clone, Default)]
+pub struct Motion {
+    ids: Vec<u32>,
+    placements: Vec<DMat4>,
+}
+
+/// The id of the frame's own triangles (`TriangleId::FLAT`).
+const FLAT: u32 = u32::MAX;
+
+impl Motion {
+    pub fn of(frame: &Frame) -> Motion {
+        let mut drawn: HashMap<u64, u32> = HashMap::new();
+        let ids = frame
+            .instances
+            .iter()
+            .map(|i| {
+                let n = drawn.entry(i.mesh.id).or_default();
+                *n += 1;
+                // Never FLAT.
+                crate::sampling::hash(&[i.mesh.id as u32, (i.mesh.id >> 32) as u32, *n]).min(FLAT - 1)
+            })
+            .collect();
+        Motion { ids, placements: frame.instances.iter().map(|i| i.modelview).collect() }
+    }
+
+    /// Instances with these ids and placements (for tests).
+    #[cfg(test)]
+    pub fn placed(instances: Vec<(u32, DMat4)>) -> Motion {
+        let (ids, placements) = instances.into_iter().unzip();
+        Motion { ids, placements }
+    }
+
+    /// The stable id of the object `instance` (an index into the frame's instances, or
+    /// `TriangleId::FLAT`).
+    pub fn id(&self, instance: u32) -> u32 {
+        if instance == TriangleId::FLAT {
+            FLAT
+        } else {
+            self.ids.get(instance as usize).copied().unwrap_or(FLAT)
+        }
+    }
+}
+
+/// A pixel's average as kept for the next frame.
+#[derive(Debug, Clone, Copy)]
+struct Past {
+    eye: Vec3,
+    normal: Vec3,
+    id: u32,
+    mean: f32,
+    /// The passes averaged (0: no surface).
+    count: f32,
+}
+
+const NOTHING: Past = Past { eye: Vec3::ZERO, normal: Vec3::ZERO, id: FLAT, mean: 0.0, count: 0.0 };
+
+/// A pixel's AO averaged over frames.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Averaged {
+    pub mean: f32,
+    /// The passes in it (0 where there is no surface).
+    pub count: f32,
+}
+
+/// The last frame's averages, where they were, and its camera and placements.
+#[derive(Default)]
+pub struct History {
+    width: usize,
+    past: Vec<Past>,
+    camera: Option<Camera>,
+    placements: HashMap<u32, DMat4>,
+}
+
+impl History {
+    /// Every pixel's AO averaged with what the last frame had where its point was (up to
+    /// `span` passes), kept as the history for the next frame.
+    pub fn follow(
+        &mut self,
+        layer: &[AoPixel],
+        width: usize,
+        camera: &Camera,
+        motion: &Motion,
+        span: f32,
+    ) -> Vec<Averaged> {
+        // For each instance, the way from its point now to where it was: the last placement
+        // after the inverse of this one (None: not drawn last frame).
+        let back: Vec<Option<DMat4>> = motion
+            .ids
+            .iter()
+            .zip(&motion.placements)
+            .map(|(id, now)| {
+                let before = self.placements.get(id)?;
+                let inverse = now.inverse();
+                inverse.is_finite().then(|| *before * inverse)
+            })
+            .collect();
+        let last = (self.width == width && self.past.len() == layer.len()).then_some(()).and(self.camera.as_ref());
+        let height = layer.len() / width.max(1);
+        let mut past = vec![NOTHING; layer.len()];
+        let mut averaged = vec![Averaged { mean: f32::NAN, count: 0.0 }; layer.len()];
+        past.par_chunks_mut(width.max(1)).zip(averaged.par_chunks_mut(width.max(1))).enumerate().for_each(
+            |(y, (past_row, out_row))| {
+                for x in 0..width {
+                    let a = &layer[y * width + x];
+                    if !a.is_surface() {
+                        continue;
+                    }
+                    let id = motion.id(a.object);
+                    let found = last.and_then(|before| {
+                        let (eye, normal) = match a.object {
+                            TriangleId::FLAT => (a.eye.as_dvec3(), a.normal.as_dvec3()),
+                            i => {
+                                let m = back.get(i as usize).copied().flatten()?;
+                                (m.transform_point3(a.eye.as_dvec3()), m.transform_vector3(a.normal.as_dvec3()))
+                            }
+                        };
+                        self.seen(before, eye, normal.normalize_or_zero(), id, width, height)
+                    });
+                    let (mean, count) = match found {
+                        Some(q) => {
+                            let count = (q.count + 1.0).min(span.max(1.0));
+                            (q.mean + (a.hidden - q.mean) / count, count)
+                        }
+                        None => (a.hidden, 1.0),
+                    };
+                    past_row[x] = Past { eye: a.eye, normal: a.normal, id, mean, count };
+                    out_row[x] = Averaged { mean, count };
+                }
+            },
+        );
+        self.past = past;
+        self.width = width;
+        self.camera = Some(camera.clone());
+        self.placements = motion.ids.iter().copied().zip(motion.placements.iter().copied()).collect();
+        averaged
+    }
+
+    /// What the last frame kept at the pixel where eye-space point `eye` (facing `normal`,
+    /// on object `id`) was, if that pixel saw it.
+    fn seen(&self, camera: &Camera, eye: DVec3, normal: DVec3, id: u32, width: usize, height: usize) -> Option<Past> {
+        let (x, y) = camera.window_position(eye);
+        if !(x >= 0.0 && y >= 0.0 && x < width as f64 && y < height as f64) {
+            return None;
+        }
+        let q = self.past[y as usize * width + x as usize];
+        let reach = 2.0 * camera.pixel_size(eye) + 1e-6 * eye.length();
+        let close = (q.eye.as_dvec3() - eye).length() <= reach;
+        (q.count > 0.0 && q.id == id && close && q.normal.as_dvec3().dot(normal) > 0.9).then_some(q)
+    }
+}
