@@ -77,6 +77,11 @@ fn the_trace_suite_ray_traces_like_osmesa() {
 /// Runs `program args` under frameshot without glray and with it (ray tracing), and compares
 /// frame `frame`.
 fn ray_traced_like_mesa(name: &str, program: &Path, args: &[&str], frame: u32, limit: f64) {
+    ray_traced_like_mesa_with(name, program, args, frame, limit, &[]);
+}
+
+/// `ray_traced_like_mesa` with more of the environment set in both runs (`env`).
+fn ray_traced_like_mesa_with(name: &str, program: &Path, args: &[&str], frame: u32, limit: f64, env: &[(&str, &str)]) {
     let x = Xvfb::start();
     let dir = scratch(&format!("rt-{name}"));
     let mut ppms = Vec::new();
@@ -84,6 +89,7 @@ fn ray_traced_like_mesa(name: &str, program: &Path, args: &[&str], frame: u32, l
         let ppm = dir.join(format!("{way:?}.ppm"));
         let mut cmd = frameshot_command(way, program, args, &x.display, &ppm, frame);
         cmd.env("GLRAY_PRESET", "gl").env("GLRAY_DUMP_SCENE", dir.join("scenes"));
+        cmd.envs(env.iter().copied());
         let out = run_ok(&mut cmd, &format!("{name} {way:?}"));
         assert!(!stderr(&out).contains("glray: error"), "{name}: {}", stderr(&out));
         ppms.push(ppm);
@@ -129,6 +135,20 @@ fn xscreensaver_hacks_are_ray_traced_like_mesa() {
     ] {
         eprintln!("{name}: {kind}");
         ray_traced_like_mesa(name, &hack(name), &["-window"], 4, 0.02);
+    }
+}
+
+#[test]
+fn glplanet_day_and_night_are_ray_traced_like_mesa_at_several_times_of_day() {
+    // glplanet places its sun by the time of day. It draws the day side, then clears the
+    // alpha channel alone (glColorMask(0, 0, 0, 1); glClear), writes the sunlit hemisphere's
+    // alpha, and blends the night side in by destination alpha: a masked clear must keep what
+    // was drawn (it once started the frame over: the day side and the stars were lost, 15% of
+    // the pixels). frameshot's clock starts at each of these instants.
+    for (hour, at) in [(0, "1699920800"), (12, "1699964000"), (18, "1699985600")] {
+        eprintln!("glplanet at {hour} h");
+        let name = format!("glplanet-{hour}h");
+        ray_traced_like_mesa_with(&name, &hack("glplanet"), &["-window"], 4, 0.02, &[("FRAMESHOT_TIME", at)]);
     }
 }
 

@@ -12,6 +12,10 @@
  * triangles instead of boxes, seen by the anchors' camera and light (scripts/bench-mpi); rank 0
  * prints each frame's time.
  *
+ * ICET_LIKE_ORBIT=DEGREES[:FIRST] turns the scene (not the light) about its vertical axis by DEGREES
+ * a frame, frame f at (FIRST + f) x DEGREES: a moving scene, for glray's quality benchmark
+ * (scripts/bench-quality), whose frame FIRST + n a one-frame run with FIRST + n shows alone.
+ *
  * ICET_LIKE_STALL=RANK:FRAME makes that rank stop itself (SIGSTOP) as that frame begins: a rank
  * that stops answering, for glray's tests of its time limits.
  *
@@ -153,6 +157,9 @@ int main(int argc, char **argv) {
   int objects = argc > 5 ? atoi(argv[5]) : 8;
   const char *mesh_path = argc > 6 ? argv[6] : NULL;
   if (frames < 1 || w < 1 || h < 1 || objects < 1) die("bad arguments");
+  float orbit = 0.0f;
+  int orbit_first = 0;
+  if (getenv("ICET_LIKE_ORBIT")) sscanf(getenv("ICET_LIKE_ORBIT"), "%f:%d", &orbit, &orbit_first);
   int stall_rank = -1, stall_frame = -1;
   if (getenv("ICET_LIKE_STALL")) sscanf(getenv("ICET_LIKE_STALL"), "%d:%d", &stall_rank, &stall_frame);
   /* For tests that signal a rank from outside. */
@@ -204,6 +211,7 @@ int main(int argc, char **argv) {
       const GLfloat dir[4] = {-0.5f, 0.8f, 0.35f, 0.0f};
       look_at(eye);
       glLightfv(GL_LIGHT0, GL_POSITION, dir);
+      glRotatef(orbit * (orbit_first + frame), 0.0f, 1.0f, 0.0f);
       glColor3f(0.8f, 0.7f, 0.5f);
       glNormal3f(0.0f, 0.0f, 1.0f);
       glCallList(2);
@@ -213,6 +221,7 @@ int main(int argc, char **argv) {
       glRotatef(-20.0f, 0.0f, 1.0f, 0.0f);
       const GLfloat light[4] = {-3.0f, 8.0f, 5.0f, 1.0f};
       glLightfv(GL_LIGHT0, GL_POSITION, light);
+      glRotatef(orbit * (orbit_first + frame), 0.0f, 1.0f, 0.0f);
       if (rank == 0) {
         glColor3f(0.85f, 0.85f, 0.8f);
         glBegin(GL_QUADS);

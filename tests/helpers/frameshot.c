@@ -3,7 +3,7 @@
  * repeatable and takes its picture.
  *
  * - Clock: clock_gettime, gettimeofday and time return a fake time that starts at a fixed
- *   instant and advances 1/60 s per swap, so animations (glxgears' angle, a hack's motion) depend
+ *   instant (FRAMESHOT_TIME, seconds since 1970, if set) and advances 1/60 s per swap, so animations (glxgears' angle, a hack's motion) depend
  *   on the frame number only. getpid returns a constant, so that seeds built from time and pid
  *   (xscreensaver's ya_rand_init) are the same in every run.
  * - Picture: at swap number FRAMESHOT_FRAME (default 3) of glXSwapBuffers or eglSwapBuffers, the
@@ -31,9 +31,19 @@ typedef unsigned int GLenum;
 #define GL_BACK 0x0405
 
 static long frame_no;
-static const long long START_NS = 1700000000LL * 1000000000LL;
 
-static long long fake_ns(void) { return START_NS + frame_no * 16666667LL; }
+/* The fake clock's first instant: FRAMESHOT_TIME (seconds since 1970), else a fixed one. A hack
+ * that draws by the time of day (glplanet's sun) shows another picture at another time. */
+static long long start_ns(void) {
+    static long long start = -1;
+    if (start < 0) {
+        const char *at = getenv("FRAMESHOT_TIME");
+        start = (at ? atoll(at) : 1700000000LL) * 1000000000LL;
+    }
+    return start;
+}
+
+static long long fake_ns(void) { return start_ns() + frame_no * 16666667LL; }
 
 int clock_gettime(clockid_t clk, struct timespec *ts) {
     (void)clk;

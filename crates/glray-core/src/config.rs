@@ -119,7 +119,8 @@ pub const SETTINGS: &[Setting] = &[
         key: "reflectivity",
         kind: Kind::Float(0.0, 1.0),
         default: "",
-        doc: "How much of every surface is mirror when reflections are on (default 0.2).",
+        doc: "How much of every surface is mirror, seen head-on, when reflections are on (default 0.04, \
+              as glass or plastic); more at grazing angles, all at the most (Fresnel, as Schlick has it).",
     },
     Setting {
         key: "samples",

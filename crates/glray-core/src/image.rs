@@ -94,6 +94,11 @@ pub struct Comparison {
     pub differing: u64,
     /// Peak signal-to-noise ratio in dB over all channels (infinite when identical).
     pub psnr: f64,
+    /// The same over the pixels of the pictures' objects only: those that are not, in both
+    /// images, the colour of the first image's first pixel (the background of a picture whose
+    /// corner shows it). A small object on a big background otherwise scores high whatever it
+    /// looks like.
+    pub psnr_objects: f64,
     pub max_channel_error: u8,
     /// Red where pixels differ, a dimmed grey copy of the first image elsewhere.
     pub diff: Image,
@@ -119,12 +124,19 @@ pub fn compare(a: &Image, b: &Image, fuzz: f64) -> Result<Comparison, String> {
     let mut sq_sum = 0f64;
     let mut max_err = 0u8;
     let mut diff = Vec::with_capacity(a.rgb.len());
+    let background = a.rgb.get(..3).unwrap_or(&[]);
+    let (mut object_sq_sum, mut object_samples) = (0f64, 0u64);
     for (pa, pb) in a.rgb.chunks(3).zip(b.rgb.chunks(3)) {
         let mut worst = 0u8;
+        let object = pa != background || pb != background;
         for c in 0..3 {
             let e = pa[c].abs_diff(pb[c]);
             worst = worst.max(e);
             sq_sum += (e as f64) * (e as f64);
+            if object {
+                object_sq_sum += (e as f64) * (e as f64);
+                object_samples += 1;
+            }
         }
         max_err = max_err.max(worst);
         if worst as f64 > limit {
@@ -137,11 +149,12 @@ pub fn compare(a: &Image, b: &Image, fuzz: f64) -> Result<Comparison, String> {
     }
     let samples = a.rgb.len().max(1) as f64;
     let mse = sq_sum / samples;
-    let psnr = if mse == 0.0 { f64::INFINITY } else { 10.0 * (255.0f64 * 255.0 / mse).log10() };
+    let db = |mse: f64| if mse == 0.0 { f64::INFINITY } else { 10.0 * (255.0f64 * 255.0 / mse).log10() };
     Ok(Comparison {
         pixels: (a.rgb.len() / 3) as u64,
         differing,
-        psnr,
+        psnr: db(mse),
+        psnr_objects: db(object_sq_sum / object_samples.max(1) as f64),
         max_channel_error: max_err,
         diff: Image { width: a.width, height: a.height, rgb: diff },
     })

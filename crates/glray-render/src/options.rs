@@ -37,7 +37,7 @@ impl Effects {
         ao_intensity: 1.0,
         shadows: false,
         reflections: 0,
-        reflectivity: 0.2,
+        reflectivity: 0.04,
         samples: 1,
         progressive: true,
         denoise: true,

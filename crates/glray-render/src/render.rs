@@ -12,7 +12,7 @@ use glray_scene::frame::{Frame, TriangleId};
 use rayon::prelude::*;
 
 use crate::bvh_choice::ray_work;
-use crate::denoise::{AoPixel, Denoiser, Motion, MOVING_HISTORY};
+use crate::denoise::{AoPixel, Denoiser, Motion};
 use crate::gouraud::Gouraud;
 use crate::meshes::Meshes;
 use crate::options::{Options, MAX_PASSES};
@@ -110,16 +110,17 @@ struct Denoised {
     motion: Motion,
 }
 
-/// The picture of `passes` passes' colours added up (`sum`), darkened by the fraction hidden
-/// of each pixel where `hidden` has one (the denoised AO: a NaN leaves the colour alone).
-fn compose(rgba: &mut [u8], sum: &[Vec4], passes: u32, hidden: Option<&[f32]>, intensity: f32) {
+/// The picture of `passes` passes' colours added up (`sum`), where `ao` has a pixel's denoised
+/// fraction hidden, the share of its colour AO darkens (`AoPixel::lit`) darkened by it (a NaN
+/// leaves the colour alone).
+fn compose(rgba: &mut [u8], sum: &[Vec4], passes: u32, ao: Option<(&[f32], &[AoPixel])>, intensity: f32) {
     let passes = passes as f32;
-    match hidden {
-        Some(hidden) => {
-            for ((px, s), h) in rgba.chunks_mut(4).zip(sum).zip(hidden) {
+    match ao {
+        Some((hidden, layer)) => {
+            for (((px, s), h), a) in rgba.chunks_mut(4).zip(sum).zip(hidden).zip(layer) {
                 let c = *s / passes;
-                let keep = if h.is_nan() { 1.0 } else { 1.0 - intensity * h };
-                px.copy_from_slice(&to_u8((c.truncate() * keep).extend(c.w)));
+                let darker = if h.is_nan() { Vec4::ZERO } else { (a.lit * (intensity * h)).extend(0.0) };
+                px.copy_from_slice(&to_u8(c - darker));
             }
         }
         None => {
@@ -187,7 +188,8 @@ impl Renderer {
             self.traced = self.traced.wrapping_add(1).max(1);
             job.seed = self.traced;
         }
-        let (rendered, linear, stats, split) = job.run(&mut self.meshes, (key.is_some() && effects.beyond_gl()) || denoise);
+        let (rendered, linear, stats, split) =
+            job.run(&mut self.meshes, (key.is_some() && effects.beyond_gl()) || denoise);
         // A frame that built its scene took what it could refit; one that did not (no camera)
         // has no use for the trees either.
         self.meshes.forget_gone();
@@ -260,12 +262,12 @@ impl Renderer {
         let width = rendered.width as usize;
         let mut hidden = |passes: u32| {
             let d = denoised.as_ref()?;
-            // A still scene's average spans as many passes as progressive refinement adds up;
-            // a moving one's fewer (`MOVING_HISTORY`), so that AO keeps up with the motion.
-            let span = if passes > 1 { MAX_PASSES as f32 } else { MOVING_HISTORY };
+            // A still scene (the same as the last frame's: a pass added to its samples) keeps
+            // its averages; a moving one's are followed and held to what the frame shows.
             let rays = self.options.effects.ao_samples * samples;
-            Some(self.denoiser.denoise(&d.layer, width, &d.camera, &d.motion, rays, span))
+            Some(self.denoiser.denoise(&d.layer, width, &d.camera, &d.motion, rays, passes > 1))
         };
+        let layer = denoised.as_ref().map(|d| &d.layer[..]);
         let intensity = self.options.effects.ao_intensity;
         match (key, linear) {
             (Some(key), Some(linear)) => {
@@ -279,7 +281,8 @@ impl Renderer {
                     }
                     _ => (1, linear),
                 };
-                compose(&mut rendered.rgba, &sum, passes, hidden(passes).as_deref(), intensity);
+                let h = hidden(passes);
+                compose(&mut rendered.rgba, &sum, passes, h.as_deref().zip(layer), intensity);
                 self.stats.samples = passes * samples;
                 self.accumulation = Some(Accumulation { key, passes, sum, last: rendered.clone() });
             }
@@ -300,7 +303,8 @@ impl Renderer {
                 self.accumulation = Some(Accumulation { key, passes: 1, sum: Vec::new(), last });
             }
             (None, Some(linear)) if denoised.is_some() => {
-                compose(&mut rendered.rgba, &linear, 1, hidden(1).as_deref(), intensity);
+                let h = hidden(1);
+                compose(&mut rendered.rgba, &linear, 1, h.as_deref().zip(layer), intensity);
                 self.accumulation = None;
                 self.stats.samples = samples;
             }

@@ -16,6 +16,7 @@ use crate::scene::Hit;
 /// Whether the closest hit decides every pixel of the frame.
 pub fn closest_hit_suffices(frame: &Frame) -> bool {
     frame.depth_clears.is_empty()
+        && frame.masked_clears.is_empty()
         && frame.surfaces.iter().all(|s| {
             s.depth_test
                 && s.depth_mask
@@ -109,17 +110,35 @@ fn logic(op: LogicOp, src: Vec4, dst: Vec4) -> Vec4 {
     Vec4::from_array(out)
 }
 
+/// What a pixel's colour `color` is after the frame's masked colour clears (`Frame::
+/// masked_clears`) before draw `sequence` (all of them: `u32::MAX`), from `from` on.
+fn masked(frame: &Frame, from: &mut usize, sequence: u32, mut color: Vec4) -> Vec4 {
+    while let Some(c) = frame.masked_clears.get(*from).filter(|c| c.before <= sequence) {
+        color = Vec4::select(BVec4A::from(c.mask), c.color, color);
+        *from += 1;
+    }
+    color
+}
+
+/// A pixel's colour after the frame's masked colour clears, when none of its draws reach it.
+pub fn cleared_only(frame: &Frame, color: Vec4) -> Vec4 {
+    masked(frame, &mut 0, u32::MAX, color)
+}
+
 /// A pixel's colour and depth after all its fragments, in drawing order. `hits` come with
 /// their fragments; `color` and `depth` are what the pixel held before the frame's draws. A
-/// glClear of the depth buffer between draws (`Frame::depth_clears`) sets the depth to its value.
+/// glClear of the depth buffer between draws (`Frame::depth_clears`) sets the depth to its value,
+/// one of some colour channels (`Frame::masked_clears`) those channels.
 pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4, depth: f64) -> (Vec4, f64) {
     hits.sort_by_key(|(h, _)| (h.sequence, h.id));
     let (mut color, mut depth) = (color, depth);
     let mut clears = frame.depth_clears.iter().peekable();
+    let mut masked_from = 0;
     for (h, f) in hits.iter() {
         while let Some(c) = clears.next_if(|c| c.before <= h.sequence) {
             depth = c.depth as f64;
         }
+        color = masked(frame, &mut masked_from, h.sequence, color);
         let s = &frame.surfaces[f.surface as usize];
         if s.clip_planes.iter().any(|p| p.dot(f.eye.extend(1.0)) < 0.0) {
             continue;
@@ -147,7 +166,7 @@ pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4
         // Clears after the pixel's last fragment: the last one's depth stands.
         depth = c.depth as f64;
     }
-    (color, depth)
+    (masked(frame, &mut masked_from, u32::MAX, color), depth)
 }
 
 /// The colour a fragment leaves over the background when it is the closest hit.
@@ -210,6 +229,44 @@ mod tests {
         let mut hits = [(hit(0), fragment(Vec4::ONE, 0.5, 0))];
         let (color, _) = in_drawing_order(&frame, &mut hits, Vec4::new(0.0, 0.25, 0.0, 1.0), 1.0);
         assert_eq!(color, Vec4::new(1.0, 0.25, 1.0, 1.0));
+    }
+
+    #[test]
+    fn a_masked_colour_clear_sets_its_channels_between_draws_and_keeps_the_rest() {
+        // glplanet: the day side drawn opaque (alpha 1), the alpha channel alone cleared to 0,
+        // then the night side blended by destination alpha: where the clear reached, the night
+        // side lands whole; without it, the day side would stay.
+        use glray_scene::frame::MaskedClear;
+        let hit = |sequence: u32| Hit {
+            id: TriangleId { instance: 0, index: sequence },
+            t: 1.0,
+            sequence,
+            normal: Vec3::Z,
+            uv: Default::default(),
+        };
+        let fragment = |color: Vec4, surface: u32| Fragment { color, depth: 0.5, eye: DVec3::ZERO, surface };
+        let by_dst_alpha = Surface {
+            blend: Some((BlendFactor::OneMinusDstAlpha, BlendFactor::DstAlpha)),
+            depth_test: false,
+            ..Surface::depth_tested()
+        };
+        let (day, night) = (Vec4::new(0.2, 0.6, 1.0, 1.0), Vec4::new(0.1, 0.1, 0.3, 1.0));
+        let clear = MaskedClear { before: 1, color: Vec4::ZERO, mask: [false, false, false, true] };
+        let mut frame = Frame { surfaces: vec![Surface::depth_tested(), by_dst_alpha], ..Frame::default() };
+        let hits = || vec![(hit(0), fragment(day, 0)), (hit(1), fragment(night, 1))];
+        let (kept, _) = in_drawing_order(&frame, &mut hits(), Vec4::ZERO, 1.0);
+        assert_eq!(kept.truncate(), day.truncate(), "no clear: the day side's alpha keeps it");
+        frame.masked_clears = vec![clear];
+        assert!(!closest_hit_suffices(&frame));
+        let (color, _) = in_drawing_order(&frame, &mut hits(), Vec4::ZERO, 1.0);
+        assert_eq!(color.truncate(), night.truncate(), "the cleared alpha lets the night side in");
+        // A clear after every draw of the pixel, and one over a pixel nothing reached: its
+        // channels are set, the others kept.
+        frame.masked_clears =
+            vec![MaskedClear { before: 2, color: Vec4::new(0.5, 0.5, 0.5, 0.0), mask: [true, false, false, false] }];
+        let (color, _) = in_drawing_order(&frame, &mut hits()[..1].to_vec(), Vec4::ZERO, 1.0);
+        assert_eq!(color, Vec4::new(0.5, 0.6, 1.0, 1.0));
+        assert_eq!(cleared_only(&frame, Vec4::ONE), Vec4::new(0.5, 1.0, 1.0, 1.0));
     }
 
     #[test]

@@ -113,6 +113,10 @@ pub(crate) fn signature(frame: &Frame, width: u32, height: u32, options: &Option
     for c in &frame.depth_clears {
         (c.before, c.depth.to_bits()).hash(&mut h);
     }
+    for c in &frame.masked_clears {
+        (c.before, c.mask).hash(&mut h);
+        floats(&mut h, c.color.to_array());
+    }
     for s in &frame.surfaces {
         // Textures by version: every change to a texture gives it a new one.
         if let Some(t) = &s.texturing {

@@ -73,6 +73,18 @@ pub(crate) fn mirror(d: Vec3, n: Vec3, smooth: Option<Vec3>) -> Vec3 {
     smooth.map(about).filter(|r| r.dot(n) > 0.0).unwrap_or_else(|| about(n))
 }
 
+/// The share of light a surface of `reflectivity` (its reflectance head-on) mirrors when a ray
+/// along `d` leaves it along `reflected`: Schlick's approximation to Fresnel's equations,
+/// reflectivity + (1 - reflectivity) (1 - cos)^5, with cos the angle between the ray and the
+/// normal it was mirrored about. Surfaces seen head-on mirror little, at grazing angles much:
+/// a floor shows what stands on it, while the facets of a tessellated cylinder or sphere (each a
+/// flat mirror turned its own way) no longer show the world in stripes and patches.
+pub(crate) fn reflectance(reflectivity: f32, d: Vec3, reflected: Vec3) -> f32 {
+    let cos = (reflected - d).normalize_or_zero().dot(-d).clamp(0.0, 1.0);
+    let grazing = (1.0 - cos).powi(5);
+    reflectivity + (1.0 - reflectivity) * grazing
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

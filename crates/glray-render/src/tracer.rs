@@ -18,10 +18,10 @@ use crate::gouraud::{Corners, Gouraud};
 use crate::offset::{leaving, Origin};
 use crate::options::Options;
 use crate::recent::Recent;
-use crate::resolve::{in_drawing_order, offset_depth, opaque};
+use crate::resolve::{cleared_only, in_drawing_order, offset_depth, opaque};
 use crate::sampling::{stratified, Sampler};
 use crate::scene::{Hit, Scene};
-use crate::smooth::{mirror, Smooth};
+use crate::smooth::{mirror, reflectance, Smooth};
 
 /// What a frame's pixels share.
 pub(crate) struct Tracer<'a> {
@@ -94,7 +94,7 @@ impl Tracer<'_> {
         let mut depth = None;
         let mut any = false;
         // With the AO kept apart: the first sample's surface, and the samples' AO added up.
-        let (mut first, mut hidden, mut hits) = (None, 0.0f32, 0u32);
+        let (mut first, mut hidden, mut hits, mut lit) = (None, 0.0f32, 0u32, Vec3::ZERO);
         for i in 0..n {
             s.ao.set(None);
             let k = self.pass * n + i;
@@ -127,9 +127,12 @@ impl Tracer<'_> {
                 first = first.or(Some(a));
                 hidden += a.hidden;
                 hits += 1;
+                lit += a.lit;
             }
         }
-        s.ao.set(first.map(|a| AoPixel { hidden: hidden / hits as f32, ..a }));
+        // The hidden fraction of the samples that hit; what it darkens, of all the samples
+        // (those that missed add nothing to darken).
+        s.ao.set(first.map(|a| AoPixel { hidden: hidden / hits as f32, lit: lit / n as f32, ..a }));
         any.then(|| (sum / n as f32, depth))
     }
 
@@ -211,7 +214,12 @@ impl Tracer<'_> {
         }
         self.scene.all(Self::traced(&r), &mut s.hits);
         if s.hits.is_empty() {
-            // No fragment; a depth clear between draws still leaves its depth.
+            // No fragment; a depth clear between draws still leaves its depth, a masked colour
+            // clear its channels.
+            if !self.frame.masked_clears.is_empty() {
+                let depth = self.frame.depth_clears.last().map_or(depth_under, |c| c.depth as f64);
+                return Some((cleared_only(self.frame, under), depth));
+            }
             return self.frame.depth_clears.last().map(|c| (under, c.depth as f64));
         }
         s.hits.sort_by(|a, b| a.sequence.cmp(&b.sequence).then(a.t.total_cmp(&b.t)).then(a.id.cmp(&b.id)));
@@ -272,7 +280,8 @@ impl Tracer<'_> {
             count(rays, e.ao_samples as u64);
             let hidden = occlusion(self.scene, &from, e.ao_samples, self.ao_distance, self.eps, sampler);
             match split {
-                Some(ao) => ao.set(Some(AoPixel { eye: from.p, normal: n, object: 0, hidden })),
+                // What AO darkens: the surface's own colour, not what it reflects (below).
+                Some(ao) => ao.set(Some(AoPixel { eye: from.p, normal: n, object: 0, hidden, lit: f.color.xyz() })),
                 None => {
                     let keep = 1.0 - e.ao_intensity * hidden;
                     f.color = (f.color.xyz() * keep).extend(f.color.w);
@@ -291,8 +300,11 @@ impl Tracer<'_> {
                 }
                 None => self.frame.clear_color,
             };
-            let r = e.reflectivity;
+            let r = reflectance(e.reflectivity, d, reflected);
             f.color = (f.color.xyz() * (1.0 - r) + seen.xyz() * r).extend(f.color.w);
+            if let Some(Some(a)) = split.map(Cell::get) {
+                split.expect("split").set(Some(AoPixel { lit: a.lit * (1.0 - r), ..a }));
+            }
         }
         f
     }

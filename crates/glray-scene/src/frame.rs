@@ -54,6 +54,18 @@ pub struct DepthClear {
     pub depth: f32,
 }
 
+/// A glClear of the colour buffer with some of its channels masked (glColorMask) between a
+/// frame's draws: it sets those channels only, and keeps what was drawn. glplanet clears the
+/// alpha of its day side so, then blends its night side by that alpha.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MaskedClear {
+    /// The sequence number of the draw after it (`Triangle::sequence`).
+    pub before: u32,
+    /// glClearColor's colour, and which channels it sets.
+    pub color: Vec4,
+    pub mask: [bool; 4],
+}
+
 /// Which triangle of a frame: one of `Frame::triangles`, or one of an instance's mesh.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct TriangleId {
@@ -93,6 +105,9 @@ pub struct Frame {
     /// there on are depth tested against the cleared depth only, so they land over all that
     /// came before (skytentacles draws each tentacle so).
     pub depth_clears: Vec<DepthClear>,
+    /// Where a glClear of some of the colour buffer's channels came between the frame's draws.
+    #[serde(default)]
+    pub masked_clears: Vec<MaskedClear>,
     /// Clears within a scissor box smaller than the drawable since the last full one (each view
     /// of several clearing its own part of the window), in order.
     pub scissored_clears: Vec<ScissoredClear>,
@@ -274,6 +289,7 @@ impl Frame {
             cleared,
             depth_cleared,
             depth_clears,
+            masked_clears,
             scissored_clears,
             lightings,
             cameras,
@@ -294,6 +310,7 @@ impl Frame {
             cleared: *cleared,
             depth_cleared: *depth_cleared,
             depth_clears: depth_clears.clone(),
+            masked_clears: masked_clears.clone(),
             scissored_clears: scissored_clears.clone(),
             lightings: lightings.clone(),
             cameras: cameras.clone(),

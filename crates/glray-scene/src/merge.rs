@@ -98,6 +98,10 @@ fn append(out: &mut Frame, frame: Frame) {
         d.before += map.sequence;
         d
     }));
+    out.masked_clears.extend(frame.masked_clears.into_iter().map(|mut c| {
+        c.before += map.sequence;
+        c
+    }));
     out.unsupported_draws += frame.unsupported_draws;
     out.passed_draws += frame.passed_draws;
 }

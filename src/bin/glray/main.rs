@@ -461,25 +461,29 @@ fn compare(
             c.diff.write_png(d)?;
         }
         let pass = c.differing_share() <= max_differing && min_psnr.is_none_or(|m| c.psnr >= m);
-        let psnr = if c.psnr.is_finite() { format!("{:.2}", c.psnr) } else { "inf".into() };
+        let db = |x: f64| if x.is_finite() { format!("{x:.2}") } else { "inf".into() };
+        let psnr = db(c.psnr);
+        let json_db = |x: f64| if x.is_finite() { db(x) } else { "null".into() };
         if json {
             println!(
-                "{{\"pixels\":{},\"differing\":{},\"differing_share\":{},\"psnr\":{},\"max_channel_error\":{},\"fuzz\":{},\"pass\":{}}}",
+                "{{\"pixels\":{},\"differing\":{},\"differing_share\":{},\"psnr\":{},\"psnr_objects\":{},\"max_channel_error\":{},\"fuzz\":{},\"pass\":{}}}",
                 c.pixels,
                 c.differing,
                 c.differing_share(),
-                if c.psnr.is_finite() { psnr.clone() } else { "null".into() },
+                json_db(c.psnr),
+                json_db(c.psnr_objects),
                 c.max_channel_error,
                 fuzz,
                 pass
             );
         } else {
             println!(
-                "{} of {} pixels differ by more than {:.1}% ({:.3}%); PSNR {psnr} dB; largest channel error {}; {}",
+                "{} of {} pixels differ by more than {:.1}% ({:.3}%); PSNR {psnr} dB ({} dB over the objects); largest channel error {}; {}",
                 c.differing,
                 c.pixels,
                 fuzz * 100.0,
                 c.differing_share() * 100.0,
+                db(c.psnr_objects),
                 c.max_channel_error,
                 if pass { "pass" } else { "FAIL" }
             );

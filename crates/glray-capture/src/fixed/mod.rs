@@ -47,7 +47,7 @@ use std::sync::Arc;
 use glam::{DMat3, DMat4, DVec3, DVec4, Vec4};
 use glray_core::trace::{ArrayData, Value};
 use glray_scene::camera::Viewport;
-use glray_scene::frame::{DepthClear, Frame, ScissoredClear};
+use glray_scene::frame::{DepthClear, Frame, MaskedClear, ScissoredClear};
 use glray_scene::texture::{Level, Texture};
 
 use crate::args;
@@ -430,8 +430,18 @@ impl Context {
             Op::Clear => {
                 let (color, depth) =
                     (args::uint(a, 0) & GL_COLOR_BUFFER_BIT != 0, args::uint(a, 0) & GL_DEPTH_BUFFER_BIT != 0);
-                // With every colour channel masked, glClear leaves the colour buffer alone.
-                let color = color && self.raster.color_mask.contains(&true);
+                // With every colour channel masked, glClear leaves the colour buffer alone. With
+                // red, green or blue masked, it sets the others and keeps what was drawn (in
+                // drawing order, as a draw would). With alpha alone masked it counts as a clear
+                // of the whole buffer: the picture starts afresh (its alpha is the clear's).
+                let mask = self.raster.color_mask;
+                let keeps = color && mask.contains(&true) && mask[..3].contains(&false);
+                if keeps && !self.scissored() {
+                    self.revision += 1;
+                    let clear = MaskedClear { before: self.sequence, color: self.raster.clear_color, mask };
+                    self.frame.masked_clears.push(clear);
+                }
+                let color = color && !keeps && mask.contains(&true);
                 // A clear of the depth buffer alone changes the picture only through the draws
                 // after it (which count themselves): the frame put in before it (VTK's scene,
                 // before its orientation axes) is not traced again for it.
@@ -476,6 +486,7 @@ impl Context {
                     self.frame.cameras.clear();
                     self.frame.scissored_clears.clear();
                     self.frame.depth_clears.clear();
+                    self.frame.masked_clears.clear();
                     self.frame.clear_color = self.raster.clear_color;
                     self.frame.cleared = true;
                     // Draws are numbered from the frame's start: a program that never swaps

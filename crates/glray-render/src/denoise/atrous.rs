@@ -35,7 +35,7 @@ fn along(cos: f32) -> f32 {
 
 /// What guides the filter, a plane per quantity (structure of arrays: the kernel's loops run
 /// along a row, and the compiler makes them SIMD, four or eight pixels a step).
-struct Guides {
+pub struct Guides {
     eye: [Vec<f32>; 3],
     normal: [Vec<f32>; 3],
     /// n . eye: the pixel's plane.
@@ -49,43 +49,65 @@ struct Guides {
     valid: Vec<f32>,
 }
 
-/// The filtered fraction hidden of each pixel (NaN where there is no surface).
-pub fn filter(layer: &[AoPixel], averaged: &[Averaged], width: usize, camera: &Camera, rays: u32) -> Vec<f32> {
+impl Guides {
+    /// The guides of the pixels of `layer`, seen by `camera`.
+    pub fn new(layer: &[AoPixel], camera: &Camera) -> Guides {
+        let valid: Vec<f32> = layer.iter().map(|a| if a.is_surface() { 1.0 } else { 0.0 }).collect();
+        let plane_of = |f: fn(&Vec3) -> f32, of_normal: bool| -> Vec<f32> {
+            layer.iter().map(|a| f(if of_normal { &a.normal } else { &a.eye })).collect()
+        };
+        Guides {
+            eye: [plane_of(|v| v.x, false), plane_of(|v| v.y, false), plane_of(|v| v.z, false)],
+            normal: [plane_of(|v| v.x, true), plane_of(|v| v.y, true), plane_of(|v| v.z, true)],
+            plane: layer.iter().map(|a| a.normal.dot(a.eye)).collect(),
+            object: layer
+                .iter()
+                .map(|a| if a.object == glray_scene::frame::TriangleId::FLAT { -1.0 } else { a.object as f32 })
+                .collect(),
+            per_size: layer
+                .par_iter()
+                .zip(&valid)
+                .map(
+                    |(a, &v)| if v > 0.0 { 1.0 / (camera.pixel_size(a.eye.as_dvec3()) as f32).max(1e-12) } else { 0.0 },
+                )
+                .collect(),
+            valid,
+        }
+    }
+}
+
+/// Each pixel's value (`values`: 0 where there is no surface) averaged over its neighbourhood
+/// on the same surface (two passes of the kernel, weighed by the surfaces alone): what this
+/// frame alone says the AO around a pixel is, where one pixel's few rays cannot.
+pub fn neighbourhood(g: &Guides, values: &[f32], width: usize) -> Vec<f32> {
+    let n = values.len();
+    let (mut near, mut once) = (vec![0.0; n], vec![0.0; n]);
+    let (ignored, mut spare) = (vec![0.0; n], vec![0.0; n]);
+    pass(g, [values, &ignored], [&mut once, &mut spare], width, 1, false);
+    pass(g, [&once, &ignored], [&mut near, &mut spare], width, 2, false);
+    near
+}
+
+/// The filtered fraction hidden of each pixel (NaN where there is no surface), from its average
+/// over frames, and `near`, this frame's AO around it (`neighbourhood`), which says how noisy a
+/// pass is there: a binomial mean's variance p (1 - p) / rays (a pixel's own value is too noisy
+/// to say it: one none of whose few rays hit would count as certain, and keep its speckle),
+/// with a floor, over the passes averaged.
+pub fn filter(g: &Guides, averaged: &[Averaged], near: &[f32], width: usize, rays: u32) -> Vec<f32> {
     let rays = rays as f32;
-    let n = layer.len();
-    let valid: Vec<f32> =
-        layer.iter().zip(averaged).map(|(a, m)| if a.is_surface() && m.count > 0.0 { 1.0 } else { 0.0 }).collect();
-    let plane_of = |f: fn(&Vec3) -> f32, of_normal: bool| -> Vec<f32> {
-        layer.iter().map(|a| f(if of_normal { &a.normal } else { &a.eye })).collect()
-    };
-    let g = Guides {
-        eye: [plane_of(|v| v.x, false), plane_of(|v| v.y, false), plane_of(|v| v.z, false)],
-        normal: [plane_of(|v| v.x, true), plane_of(|v| v.y, true), plane_of(|v| v.z, true)],
-        plane: layer.iter().map(|a| a.normal.dot(a.eye)).collect(),
-        object: layer
-            .iter()
-            .map(|a| if a.object == glray_scene::frame::TriangleId::FLAT { -1.0 } else { a.object as f32 })
-            .collect(),
-        per_size: layer
-            .par_iter()
-            .zip(&valid)
-            .map(|(a, &v)| if v > 0.0 { 1.0 / (camera.pixel_size(a.eye.as_dvec3()) as f32).max(1e-12) } else { 0.0 })
-            .collect(),
-        valid,
-    };
+    let n = averaged.len();
     let mut mean: Vec<f32> = averaged.iter().zip(&g.valid).map(|(m, &v)| if v > 0.0 { m.mean } else { 0.0 }).collect();
-    // A binomial mean's variance, with a floor: a pixel none of whose few rays hit may still be
-    // partly hidden.
-    let mut variance: Vec<f32> = averaged
+    let mut variance: Vec<f32> = near
         .iter()
-        .map(|m| {
-            let p = m.mean.clamp(0.0, 1.0);
+        .zip(averaged)
+        .map(|(p, m)| {
+            let p = p.clamp(0.0, 1.0);
             (p * (1.0 - p) + 0.25 / rays) / (rays * m.count.max(1.0))
         })
         .collect();
     let (mut next_mean, mut next_variance) = (vec![0.0; n], vec![0.0; n]);
     for level in 0..LEVELS {
-        pass(&g, [&mean, &variance], [&mut next_mean, &mut next_variance], width, 1 << level);
+        pass(&g, [&mean, &variance], [&mut next_mean, &mut next_variance], width, 1 << level, true);
         std::mem::swap(&mut mean, &mut next_mean);
         std::mem::swap(&mut variance, &mut next_variance);
     }
@@ -122,9 +144,10 @@ fn along4(cos: Vec4) -> Vec4 {
 }
 
 /// One pass of the kernel with taps `step` pixels apart, from `from` (means, variances) into
-/// `to`. Each row: for each of the nine taps, a loop along the row adding that tap's weighted
+/// `to`; `by_value`: weighing taps by how far their value is from the pixel's too (else by the
+/// surfaces alone). Each row: for each of the nine taps, a loop along the row adding that tap's weighted
 /// value to every pixel's sums, without branches (a tap off the surface weighs 0).
-fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: usize) {
+fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: usize, by_value: bool) {
     const KERNEL: [f32; 3] = [0.25, 0.5, 0.25];
     let [mean, variance] = from;
     let [to_mean, to_variance] = to;
@@ -141,8 +164,11 @@ fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: 
                 out_variance.fill(0.0);
                 return;
             };
-            let per_tolerance: Vec<f32> =
-                variance[row.clone()].iter().map(|v| 1.0 / (VALUE_SIGMA * v.sqrt() + 1e-4)).collect();
+            let per_tolerance: Vec<f32> = if by_value {
+                variance[row.clone()].iter().map(|v| 1.0 / (VALUE_SIGMA * v.sqrt() + 1e-4)).collect()
+            } else {
+                vec![0.0; width]
+            };
             let per_reach: Vec<f32> = g.per_size[row.clone()].iter().map(|s| s / step as f32).collect();
             let (mut sum, mut weights, mut spread) = (vec![0.0f32; width], vec![0.0f32; width], vec![0.0f32; width]);
             for (j, ky) in KERNEL.iter().enumerate() {
@@ -162,13 +188,15 @@ fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: 
                     let q = q0 as usize..q0 as usize + (x1 - x0);
                     let p = y * width + x0..y * width + x1;
                     let k = kx * ky;
-                    let (qm, qv, qvalid, qobj) = (&mean[q.clone()], &variance[q.clone()], &g.valid[q.clone()], &g.object[q.clone()]);
+                    let (qm, qv, qvalid, qobj) =
+                        (&mean[q.clone()], &variance[q.clone()], &g.valid[q.clone()], &g.object[q.clone()]);
                     let [qex, qey, qez] = [&g.eye[0][q.clone()], &g.eye[1][q.clone()], &g.eye[2][q.clone()]];
                     let [qnx, qny, qnz] = [&g.normal[0][q.clone()], &g.normal[1][q.clone()], &g.normal[2][q.clone()]];
                     let [nx, ny, nz] = [&g.normal[0][p.clone()], &g.normal[1][p.clone()], &g.normal[2][p.clone()]];
                     let (plane, obj) = (&g.plane[p.clone()], &g.object[p.clone()]);
                     let n = x1 - x0;
-                    let (pm, per_reach, per_tolerance) = (&row_mean[x0..x1], &per_reach[x0..x1], &per_tolerance[x0..x1]);
+                    let (pm, per_reach, per_tolerance) =
+                        (&row_mean[x0..x1], &per_reach[x0..x1], &per_tolerance[x0..x1]);
                     let (sum, weights, spread) = (&mut sum[x0..x1], &mut weights[x0..x1], &mut spread[x0..x1]);
                     // Four pixels a step (glam's Vec4 is an SSE register), then the rest one by one.
                     let v = |s: &[f32], t: usize| Vec4::from_slice(&s[t..t + 4]);
@@ -176,10 +204,9 @@ fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: 
                     while t + 4 <= n {
                         let facing =
                             (v(nx, t) * v(qnx, t) + v(ny, t) * v(qny, t) + v(nz, t) * v(qnz, t)).max(Vec4::ZERO);
-                        let off_plane = (v(nx, t) * v(qex, t) + v(ny, t) * v(qey, t) + v(nz, t) * v(qez, t)
-                            - v(plane, t))
-                        .abs()
-                            * v(per_reach, t);
+                        let off_plane =
+                            (v(nx, t) * v(qex, t) + v(ny, t) * v(qey, t) + v(nz, t) * v(qez, t) - v(plane, t)).abs()
+                                * v(per_reach, t);
                         let off_value = (v(pm, t) - v(qm, t)).abs() * v(per_tolerance, t);
                         let same = Vec4::select(v(obj, t).cmpeq(v(qobj, t)), v(qvalid, t), Vec4::ZERO);
                         let w = k * same * along4(facing) * falloff4(off_plane + off_value);
@@ -190,7 +217,8 @@ fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: 
                     }
                     for t in t..n {
                         let facing = (nx[t] * qnx[t] + ny[t] * qny[t] + nz[t] * qnz[t]).max(0.0);
-                        let off_plane = (nx[t] * qex[t] + ny[t] * qey[t] + nz[t] * qez[t] - plane[t]).abs() * per_reach[t];
+                        let off_plane =
+                            (nx[t] * qex[t] + ny[t] * qey[t] + nz[t] * qez[t] - plane[t]).abs() * per_reach[t];
                         let off_value = (pm[t] - qm[t]).abs() * per_tolerance[t];
                         let same = if obj[t] == qobj[t] { qvalid[t] } else { 0.0 };
                         let w = k * same * along(facing) * falloff(off_plane + off_value);

@@ -30,10 +30,14 @@ pub struct AoPixel {
     /// The fraction of the hemisphere hidden (averaged over the pixel's samples that hit);
     /// NaN where no surface was hit (the pixel's colour is left alone).
     pub hidden: f32,
+    /// The share of the pixel's colour that AO darkens (its surfaces' own colour, averaged over
+    /// all its samples; not what they reflect, nor the background a sample missed to).
+    pub lit: Vec3,
 }
 
 impl AoPixel {
-    pub const NONE: AoPixel = AoPixel { eye: Vec3::ZERO, normal: Vec3::ZERO, object: 0, hidden: f32::NAN };
+    pub const NONE: AoPixel =
+        AoPixel { eye: Vec3::ZERO, normal: Vec3::ZERO, object: 0, hidden: f32::NAN, lit: Vec3::ZERO };
 
     pub fn is_surface(&self) -> bool {
         !self.hidden.is_nan()
@@ -55,8 +59,9 @@ impl Denoiser {
     /// The denoised fraction hidden of every pixel of a `width` x `height` frame (NaN where
     /// `layer` has no surface). `rays` is the AO rays one pass traced per pixel (all its
     /// samples'), which says how noisy one pass's value is; `camera` and `motion` are the
-    /// frame's; `span` the most passes an average may span (`MOVING_HISTORY` while things
-    /// move; progressive refinement's passes while the scene stays the same).
+    /// frame's; `still`: the frame shows what the last one did (the same scene and camera), so
+    /// the last frame's averages are all valid and go on up to `MAX_PASSES` (else up to
+    /// `MOVING_HISTORY`, held to what this frame shows around each point).
     pub fn denoise(
         &mut self,
         layer: &[AoPixel],
@@ -64,10 +69,16 @@ impl Denoiser {
         camera: &glray_scene::camera::Camera,
         motion: &Motion,
         rays: u32,
-        span: f32,
+        still: bool,
     ) -> Vec<f32> {
-        let averaged = self.history.follow(layer, width, camera, motion, span);
-        atrous::filter(layer, &averaged, width, camera, rays.max(1))
+        let guides = atrous::Guides::new(layer, camera);
+        let raw: Vec<f32> = layer.iter().map(|a| if a.is_surface() { a.hidden } else { 0.0 }).collect();
+        let raw_near = atrous::neighbourhood(&guides, &raw, width);
+        let near = &raw_near;
+        let span = if still { crate::options::MAX_PASSES as f32 } else { MOVING_HISTORY };
+        let near = (!still).then_some(&near[..]);
+        let averaged = self.history.follow(layer, near, width, camera, motion, span, rays.max(1));
+        atrous::filter(&guides, &averaged, &raw_near, width, rays.max(1))
     }
 
     /// Forgets the frames before: the next starts afresh.

@@ -4,6 +4,12 @@
 //! coordinates every frame), projected with the last camera, and the average kept there is
 //! taken on if that pixel saw the same point: the same object, within two pixels of where the
 //! point was, the normal turned less than ~25 degrees. Otherwise the pixel starts afresh.
+//!
+//! A point that is followed can still have changed its AO: something moved near it (a box
+//! turning over a floor whose every point stays where it was). So the history is also held to
+//! what this frame says: clamped to within a few standard deviations of the AO this frame's
+//! pixels around the point show (`near`), and shortened when it had to be clamped (TAA's
+//! neighbourhood clamping, by the known binomial noise rather than a measured one).
 
 use std::collections::HashMap;
 
@@ -60,6 +66,16 @@ impl Motion {
     }
 }
 
+/// About how many pixels' values `atrous::neighbourhood` averages (the inverse of the sum of its
+/// squared weights).
+const NEIGHBOURS: f32 = 12.0;
+
+/// How many standard deviations of that mean's noise a history may be off before it is clamped.
+const CLAMP: f32 = 2.0;
+
+/// The passes a clamped history counts for at most: it was stale.
+const CLAMPED: f32 = 2.0;
+
 /// A pixel's average as kept for the next frame.
 #[derive(Debug, Clone, Copy)]
 struct Past {
@@ -93,14 +109,20 @@ pub struct History {
 impl History {
     /// Every pixel's AO averaged with what the last frame had where its point was (up to
     /// `span` passes), kept as the history for the next frame.
+    /// `near`: this frame's AO around each pixel (`atrous::neighbourhood`), from `rays` rays
+    /// per pixel, to hold the history to (None: the scene is still, and the history holds).
+    #[allow(clippy::too_many_arguments)]
     pub fn follow(
         &mut self,
         layer: &[AoPixel],
+        near: Option<&[f32]>,
         width: usize,
         camera: &Camera,
         motion: &Motion,
         span: f32,
+        rays: u32,
     ) -> Vec<Averaged> {
+        let rays = rays as f32;
         // For each instance, the way from its point now to where it was: the last placement
         // after the inverse of this one (None: not drawn last frame).
         let back: Vec<Option<DMat4>> = motion
@@ -137,8 +159,22 @@ impl History {
                     });
                     let (mean, count) = match found {
                         Some(q) => {
-                            let count = (q.count + 1.0).min(span.max(1.0));
-                            (q.mean + (a.hidden - q.mean) / count, count)
+                            // How far this frame's AO around the point may be from the history's
+                            // by noise alone: the neighbourhood's mean is over a dozen pixels'.
+                            let (before, count) = match near.map(|n| n[y * width + x].clamp(0.0, 1.0)) {
+                                Some(p) => {
+                                    let sigma = ((p * (1.0 - p) + 0.25 / rays) / (rays * NEIGHBOURS)).sqrt();
+                                    let (low, high) = (p - CLAMP * sigma - 0.01, p + CLAMP * sigma + 0.01);
+                                    if q.mean < low || q.mean > high {
+                                        (q.mean.clamp(low, high), q.count.min(CLAMPED))
+                                    } else {
+                                        (q.mean, q.count)
+                                    }
+                                }
+                                None => (q.mean, q.count),
+                            };
+                            let count = (count + 1.0).min(span.max(1.0));
+                            (before + (a.hidden - before) / count, count)
                         }
                         None => (a.hidden, 1.0),
                     };

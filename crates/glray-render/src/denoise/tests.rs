@@ -11,7 +11,22 @@ const W: usize = 64;
 fn camera() -> Camera {
     // glOrtho(-1, 1, -1, 1, 1, 10).
     let projection = DMat4::from_cols_array(&[
-        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -2.0 / 9.0, 0.0, 0.0, 0.0, -11.0 / 9.0, 1.0,
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        -2.0 / 9.0,
+        0.0,
+        0.0,
+        0.0,
+        -11.0 / 9.0,
+        1.0,
     ]);
     Camera::new(projection, Viewport { x: 0, y: 0, width: W as i32, height: W as i32 }, (0.0, 1.0)).unwrap()
 }
@@ -34,7 +49,13 @@ fn noisy(
             let (x, y) = (k % W, k / W);
             let mut s = Sampler::new(&[x as u32, y as u32, seed]);
             let hits = (0..rays).filter(|_| s.uniform() < truth(x, y)).count();
-            AoPixel { eye: eye(x, y), normal: Vec3::Z, object: object(x, y), hidden: hits as f32 / rays as f32 }
+            AoPixel {
+                eye: eye(x, y),
+                normal: Vec3::Z,
+                object: object(x, y),
+                hidden: hits as f32 / rays as f32,
+                lit: Vec3::ONE,
+            }
         })
         .collect()
 }
@@ -50,7 +71,7 @@ fn one_noisy_pass_comes_out_close_to_the_truth() {
     let truth = |x: usize, _y: usize| 0.2 + 0.5 * x as f32 / W as f32;
     let layer = noisy(truth, |_, _| TriangleIdFlat::ID, 16, 1);
     let raw: Vec<f32> = layer.iter().map(|a| a.hidden).collect();
-    let out = Denoiser::default().denoise(&layer, W, &camera(), &Motion::default(), 16, MOVING_HISTORY);
+    let out = Denoiser::default().denoise(&layer, W, &camera(), &Motion::default(), 16, false);
     let (before, after) = (rms(&raw, truth), rms(&out, truth));
     assert!(before > 0.08, "the input is noisy: {before}");
     assert!(after < before / 4.0, "denoised: {after} (from {before})");
@@ -62,7 +83,7 @@ fn values_do_not_bleed_across_objects_or_creases() {
     // darken the left near the seam.
     let truth = |x: usize, _y: usize| if x < W / 2 { 0.0 } else { 0.5 };
     let layer = noisy(truth, |x, _| if x < W / 2 { 1 } else { 2 }, 16, 2);
-    let out = Denoiser::default().denoise(&layer, W, &camera(), &Motion::default(), 16, MOVING_HISTORY);
+    let out = Denoiser::default().denoise(&layer, W, &camera(), &Motion::default(), 16, false);
     for y in 0..W {
         assert_eq!(out[y * W + W / 2 - 1], 0.0, "row {y}: the open side stays open at the seam");
     }
@@ -73,7 +94,7 @@ fn values_do_not_bleed_across_objects_or_creases() {
             a.normal = Vec3::X;
         }
     }
-    let out = Denoiser::default().denoise(&folded, W, &camera(), &Motion::default(), 16, MOVING_HISTORY);
+    let out = Denoiser::default().denoise(&folded, W, &camera(), &Motion::default(), 16, false);
     for y in 0..W {
         assert_eq!(out[y * W + W / 2 - 1], 0.0, "row {y}: the crease stops the blur");
     }
@@ -90,7 +111,7 @@ fn a_still_scene_averages_its_passes_and_converges_to_the_unfiltered_mean() {
         for (s, a) in sum.iter_mut().zip(&layer) {
             *s += a.hidden;
         }
-        last = history.follow(&layer, W, &camera(), &Motion::default(), 64.0);
+        last = history.follow(&layer, None, W, &camera(), &Motion::default(), 64.0, 16);
     }
     for (k, a) in last.iter().enumerate() {
         assert_eq!(a.count, 64.0);
@@ -99,7 +120,8 @@ fn a_still_scene_averages_its_passes_and_converges_to_the_unfiltered_mean() {
     // The filter hardly moves a converged average (the checker's edges stay).
     let averaged: Vec<Averaged> = last.clone();
     let layer = noisy(truth, |_, _| TriangleIdFlat::ID, 16, 1);
-    let out = super::atrous::filter(&layer, &averaged, W, &camera(), 16);
+    let guides = super::atrous::Guides::new(&layer, &camera());
+    let out = super::atrous::filter(&guides, &averaged, &near(&layer), W, 16);
     let means: Vec<f32> = last.iter().map(|a| a.mean).collect();
     assert!(rms(&out, truth) <= rms(&means, truth) * 1.1 + 0.003, "{} {}", rms(&out, truth), rms(&means, truth));
 }
@@ -113,20 +135,26 @@ fn a_moved_object_is_followed_and_a_new_one_starts_afresh() {
     let motion = |dx: f64| Motion::placed(vec![(7, place(dx))]);
     let mut history = History::default();
     let first: Vec<AoPixel> = (0..W * W)
-        .map(|k| AoPixel { eye: eye(k % W, k / W), normal: Vec3::Z, object: 0, hidden: 0.25 })
+        .map(|k| AoPixel { eye: eye(k % W, k / W), normal: Vec3::Z, object: 0, hidden: 0.25, lit: Vec3::ONE })
         .collect();
-    history.follow(&first, W, &camera(), &motion(0.0), 16.0);
+    history.follow(&first, Some(&near(&first)), W, &camera(), &motion(0.0), 16.0, 16);
     let second: Vec<AoPixel> = (0..W * W)
-        .map(|k| AoPixel { eye: eye(k % W, k / W), normal: Vec3::Z, object: 0, hidden: 0.75 })
+        .map(|k| AoPixel { eye: eye(k % W, k / W), normal: Vec3::Z, object: 0, hidden: 0.75, lit: Vec3::ONE })
         .collect();
-    let out = history.follow(&second, W, &camera(), &motion(shift), 16.0);
+    let out = history.follow(&second, Some(&near(&first)), W, &camera(), &motion(shift), 16.0, 16);
     // Pixel x now saw the point pixel x - 8 saw before.
     assert_eq!(out[10 * W + 20], Averaged { mean: 0.5, count: 2.0 }, "followed back 8 pixels");
     assert_eq!(out[10 * W + 3], Averaged { mean: 0.75, count: 1.0 }, "came from outside the last frame");
     // Another object's id, or a frame of flat triangles only: nothing to follow.
     let other = Motion::placed(vec![(8, place(shift))]);
-    let out = history.follow(&second, W, &camera(), &other, 16.0);
+    let out = history.follow(&second, Some(&near(&first)), W, &camera(), &other, 16.0, 16);
     assert!(out.iter().all(|a| a.count == 1.0));
+}
+
+/// What each pixel's neighbourhood shows of `layer` this frame: its own values (they are
+/// noiseless in these tests, or their history is not clamped by them).
+fn near(layer: &[AoPixel]) -> Vec<f32> {
+    layer.iter().map(|a| a.hidden).collect()
 }
 
 /// Flat triangles' object.
@@ -141,21 +169,23 @@ impl TriangleIdFlat {
 #[ignore]
 fn denoise_time() {
     let w = 300;
-    let camera = Camera::new(*camera().projection(), Viewport { x: 0, y: 0, width: w as i32, height: w as i32 }, (0.0, 1.0)).unwrap();
+    let camera =
+        Camera::new(*camera().projection(), Viewport { x: 0, y: 0, width: w as i32, height: w as i32 }, (0.0, 1.0))
+            .unwrap();
     let layer: Vec<AoPixel> = (0..w * w)
         .map(|k| AoPixel {
             eye: Vec3::new((k % w) as f32 * 0.01, (k / w) as f32 * 0.01, -5.0),
             normal: Vec3::Z,
             object: 1,
             hidden: (k % 7) as f32 / 7.0,
+            lit: Vec3::ONE,
         })
         .collect();
     let mut d = Denoiser::default();
     for _ in 0..3 {
         let t = std::time::Instant::now();
-        let averaged = d.history.follow(&layer, w, &camera, &Motion::default(), 16.0);
+        let out = d.denoise(&layer, w, &camera, &Motion::default(), 16, false);
         let t1 = t.elapsed();
-        let out = super::atrous::filter(&layer, &averaged, w, &camera, 16);
         eprintln!("follow {:?}, filter {:?} ({})", t1, t.elapsed() - t1, out[5]);
     }
 }
