@@ -540,9 +540,9 @@ impl Job<'_> {
         let start = Instant::now();
         let diagonal = scene.diagonal().max(1e-6);
         let simple = closest_hit_suffices(frame);
-        // The AO kept apart for the denoiser where the closest hit decides every pixel (and the
-        // whole frame is traced here, with its colours before rounding).
-        let split = self.seed != 0 && simple && self.work.is_none() && colors.is_some();
+        // The AO kept apart for the denoiser (when the whole frame is traced here, with its
+        // colours before rounding).
+        let split = self.seed != 0 && self.work.is_none() && colors.is_some();
         let mut ao = split.then(|| vec![AoPixel::NONE; w * h]);
         let tracer = Tracer {
             frame,

@@ -130,11 +130,28 @@ pub fn cleared_only(frame: &Frame, color: Vec4) -> Vec4 {
 /// glClear of the depth buffer between draws (`Frame::depth_clears`) sets the depth to its value,
 /// one of some colour channels (`Frame::masked_clears`) those channels.
 pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4, depth: f64) -> (Vec4, f64) {
+    let r = resolve_in_order(frame, hits, color, depth);
+    (r.color, r.depth)
+}
+
+/// What `resolve_in_order` found: the pixel's colour and depth, which of the hits (once sorted)
+/// wrote its colour last, if any did, and whether any write mixed the fragment with what was
+/// there (blending that was not just the fragment's own colour, a logic op).
+pub struct Resolved {
+    pub color: Vec4,
+    pub depth: f64,
+    pub last: Option<usize>,
+    pub mixed: bool,
+}
+
+/// `in_drawing_order`, saying which fragment wrote last and whether any mixed (`Resolved`).
+pub fn resolve_in_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4, depth: f64) -> Resolved {
     hits.sort_by_key(|(h, _)| (h.sequence, h.id));
+    let (mut last, mut mixed) = (None, false);
     let (mut color, mut depth) = (color, depth);
     let mut clears = frame.depth_clears.iter().peekable();
     let mut masked_from = 0;
-    for (h, f) in hits.iter() {
+    for (k, (h, f)) in hits.iter().enumerate() {
         while let Some(c) = clears.next_if(|c| c.before <= h.sequence) {
             depth = c.depth as f64;
         }
@@ -160,13 +177,18 @@ pub fn in_drawing_order(frame: &Frame, hits: &mut [(Hit, Fragment)], color: Vec4
             Some(op) => logic(op, f.color, color),
             None => blend(s, f.color, color),
         };
-        color = Vec4::select(BVec4A::from(s.color_mask), blended, color);
+        let mask = BVec4A::from(s.color_mask);
+        mixed |= Vec4::select(mask, (blended - f.color).abs(), Vec4::ZERO).max_element() > 1e-6;
+        color = Vec4::select(mask, blended, color);
+        if s.color_mask.contains(&true) {
+            last = Some(k);
+        }
     }
     if let Some(c) = clears.last() {
         // Clears after the pixel's last fragment: the last one's depth stands.
         depth = c.depth as f64;
     }
-    (masked(frame, &mut masked_from, u32::MAX, color), depth)
+    Resolved { color: masked(frame, &mut masked_from, u32::MAX, color), depth, last, mixed }
 }
 
 /// The colour a fragment leaves over the background when it is the closest hit.

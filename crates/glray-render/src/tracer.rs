@@ -18,7 +18,7 @@ use crate::gouraud::{Corners, Gouraud};
 use crate::offset::{leaving, Origin};
 use crate::options::Options;
 use crate::recent::Recent;
-use crate::resolve::{cleared_only, in_drawing_order, offset_depth, opaque};
+use crate::resolve::{cleared_only, in_drawing_order, offset_depth, opaque, resolve_in_order};
 use crate::sampling::{stratified, Sampler};
 use crate::scene::{Hit, Scene};
 use crate::smooth::{mirror, reflectance, Smooth};
@@ -45,7 +45,7 @@ pub(crate) struct Tracer<'a> {
     /// The hits shaded the short way, when the frame asks for the GL look alone.
     pub gouraud: Option<Gouraud>,
     /// Ambient occlusion is left out of the colours and kept apart for the denoiser
-    /// (`Scratch::ao`): only where the closest hit decides a pixel (`simple`).
+    /// (`Scratch::ao`), except at pixels where a draw blends.
     pub split_ao: bool,
 }
 
@@ -54,6 +54,8 @@ pub(crate) struct Tracer<'a> {
 pub(crate) struct Scratch {
     hits: Vec<Hit>,
     frags: Vec<(Hit, Fragment)>,
+    /// The AO each of `frags` kept apart (with `Tracer::split_ao`).
+    frag_ao: Vec<Option<AoPixel>>,
     pub rays: Cell<u64>,
     /// What recent camera rays' triangles were made into: whole triangles, and the corners'
     /// colours of those shaded the short way (`Gouraud`).
@@ -224,6 +226,8 @@ impl Tracer<'_> {
         }
         s.hits.sort_by(|a, b| a.sequence.cmp(&b.sequence).then(a.t.total_cmp(&b.t)).then(a.id.cmp(&b.id)));
         s.frags.clear();
+        s.frag_ao.clear();
+        let split = self.split_ao;
         let mut last: Option<(Hit, [Vec3; 3])> = None;
         for hit in &s.hits {
             let Some(t) = self.frame.triangle(hit.id) else { continue };
@@ -234,13 +238,41 @@ impl Tracer<'_> {
             }
             last = Some((*hit, t.positions));
             let p = on_plane(&r, &t.positions).unwrap_or_else(|| at(hit));
-            let mut f = self.surface(&t, p, r.direction, sampler, &s.rays, None, 0);
+            s.ao.set(None);
+            let mut f = self.surface(&t, p, r.direction, sampler, &s.rays, split.then_some(&s.ao), 0);
             if let Some(offset) = self.frame.surfaces[f.surface as usize].polygon_offset {
                 f.depth = offset_depth(self.camera, &t, f.depth, offset);
             }
             s.frags.push((*hit, f));
+            s.frag_ao.push(s.ao.take().map(|a| AoPixel { object: hit.id.instance, ..a }));
         }
-        Some(in_drawing_order(self.frame, &mut s.frags, under, depth_under))
+        if !split {
+            return Some(in_drawing_order(self.frame, &mut s.frags, under, depth_under));
+        }
+        // In the order `in_drawing_order` takes them (it sorts stably, so it keeps this one),
+        // so that the fragment that wrote the pixel last names its AO.
+        let mut order: Vec<usize> = (0..s.frags.len()).collect();
+        order.sort_by_key(|&k| (s.frags[k].0.sequence, s.frags[k].0.id));
+        let frags: Vec<_> = order.iter().map(|&k| s.frags[k]).collect();
+        let frag_ao: Vec<_> = order.iter().map(|&k| s.frag_ao[k]).collect();
+        (s.frags, s.frag_ao) = (frags, frag_ao);
+        let resolved = resolve_in_order(self.frame, &mut s.frags, under, depth_under);
+        if !resolved.mixed {
+            // The last fragment's colour is the pixel's: its AO is the pixel's, to denoise.
+            s.ao.set(resolved.last.and_then(|k| s.frag_ao[k]));
+            return Some((resolved.color, resolved.depth));
+        }
+        // Fragments blended (or combined by a logic op): each darkened by its own AO first, as
+        // without denoising, and the pixel resolved again; its AO is not one fragment's.
+        let intensity = self.options.effects.ao_intensity;
+        for ((_, f), ao) in s.frags.iter_mut().zip(&s.frag_ao) {
+            if let Some(a) = ao {
+                f.color -= (a.lit * (intensity * a.hidden)).extend(0.0);
+            }
+        }
+        s.ao.set(None);
+        let again = resolve_in_order(self.frame, &mut s.frags, under, depth_under);
+        Some((again.color, again.depth))
     }
 
     /// The fragment of triangle `t` at eye-space point `p`, reached along `dir`, with the
