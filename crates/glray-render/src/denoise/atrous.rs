@@ -107,7 +107,7 @@ pub fn filter(g: &Guides, averaged: &[Averaged], near: &[f32], width: usize, ray
         .collect();
     let (mut next_mean, mut next_variance) = (vec![0.0; n], vec![0.0; n]);
     for level in 0..LEVELS {
-        pass(&g, [&mean, &variance], [&mut next_mean, &mut next_variance], width, 1 << level, true);
+        pass(g, [&mean, &variance], [&mut next_mean, &mut next_variance], width, 1 << level, true);
         std::mem::swap(&mut mean, &mut next_mean);
         std::mem::swap(&mut variance, &mut next_variance);
     }
