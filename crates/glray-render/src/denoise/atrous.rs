@@ -22,17 +22,6 @@ const LEVELS: u32 = 5;
 /// count fully (SVGF's sigma_l).
 const VALUE_SIGMA: f32 = 4.0;
 
-/// How sharply the weight falls with the angle between normals: cos^32 (facets of a 32-sided
-/// cylinder, 11 degrees apart, still count half), as five squarings.
-#[inline(always)]
-fn along(cos: f32) -> f32 {
-    let c2 = cos * cos;
-    let c4 = c2 * c2;
-    let c8 = c4 * c4;
-    let c16 = c8 * c8;
-    c16 * c16
-}
-
 /// What guides the filter, a plane per quantity (structure of arrays: the kernel's loops run
 /// along a row, and the compiler makes them SIMD, four or eight pixels a step).
 pub struct Guides {
@@ -114,17 +103,8 @@ pub fn filter(g: &Guides, averaged: &[Averaged], near: &[f32], width: usize, ray
     mean.iter().zip(&g.valid).map(|(&m, &v)| if v > 0.0 { m } else { f32::NAN }).collect()
 }
 
-/// e^-x for x >= 0, near enough for weights: (1 + x/8)^-8 (three squarings and a division;
-/// within 0.03 of it everywhere, and 0 as it should be far out).
-#[inline(always)]
-fn falloff(x: f32) -> f32 {
-    let a = 1.0 + x * 0.125;
-    let a2 = a * a;
-    let a4 = a2 * a2;
-    1.0 / (a4 * a4)
-}
-
-/// `falloff` of four values.
+/// e^-x for x >= 0 (four at a time), near enough for weights: (1 + x/8)^-8 (three squarings
+/// and a division; within 0.03 of it everywhere, and 0 as it should be far out).
 #[inline(always)]
 fn falloff4(x: Vec4) -> Vec4 {
     let a = Vec4::ONE + x * 0.125;
@@ -133,7 +113,8 @@ fn falloff4(x: Vec4) -> Vec4 {
     Vec4::ONE / (a4 * a4)
 }
 
-/// `along` of four values.
+/// How sharply the weight falls with the angle between normals (four at a time): cos^32
+/// (facets of a 32-sided cylinder, 11 degrees apart, still count half), as five squarings.
 #[inline(always)]
 fn along4(cos: Vec4) -> Vec4 {
     let c2 = cos * cos;
@@ -221,7 +202,8 @@ fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: 
                             (nx[t] * qex[t] + ny[t] * qey[t] + nz[t] * qez[t] - plane[t]).abs() * per_reach[t];
                         let off_value = (pm[t] - qm[t]).abs() * per_tolerance[t];
                         let same = if obj[t] == qobj[t] { qvalid[t] } else { 0.0 };
-                        let w = k * same * along(facing) * falloff(off_plane + off_value);
+                        let w =
+                            k * same * along4(Vec4::splat(facing)).x * falloff4(Vec4::splat(off_plane + off_value)).x;
                         sum[t] += w * qm[t];
                         weights[t] += w;
                         spread[t] += w * w * qv[t];
