@@ -6,7 +6,9 @@
 //! - `temporal`: each pixel's surface point is followed back into the last frame (through its
 //!   instance's motion and the last camera) and the AO found there is averaged with the new
 //!   one, unless the point was not seen there (another object, another place, a turned
-//!   normal): a moving scene keeps its samples instead of starting over;
+//!   normal): a moving scene keeps its samples instead of starting over. What is followed is
+//!   also held to what the new frame shows around the point (something may have moved near
+//!   it), and shortened when it was not;
 //! - `atrous`: an edge-aware à-trous wavelet filter, guided by the surfaces' planes, normals
 //!   and objects, and by how noisy each pixel's average still is (few samples: wide; many:
 //!   hardly at all, so a still scene converges to the unfiltered picture).
@@ -25,7 +27,9 @@ pub struct AoPixel {
     pub eye: Vec3,
     /// Its facet's normal, facing the camera.
     pub normal: Vec3,
-    /// Which object (`Motion::id`): an instance, or the frame's own triangles.
+    /// Which object: an instance's index in the frame (`TriangleId::instance`), or
+    /// `TriangleId::FLAT` for the frame's own triangles (`Motion` knows each instance across
+    /// frames).
     pub object: u32,
     /// The fraction of the hemisphere hidden (averaged over the pixel's samples that hit);
     /// NaN where no surface was hit (the pixel's colour is left alone).
@@ -74,9 +78,8 @@ impl Denoiser {
         let guides = atrous::Guides::new(layer, camera);
         let raw: Vec<f32> = layer.iter().map(|a| if a.is_surface() { a.hidden } else { 0.0 }).collect();
         let raw_near = atrous::neighbourhood(&guides, &raw, width);
-        let near = &raw_near;
         let span = if still { crate::options::MAX_PASSES as f32 } else { MOVING_HISTORY };
-        let near = (!still).then_some(&near[..]);
+        let near = (!still).then_some(&raw_near[..]);
         let averaged = self.history.follow(layer, near, width, camera, motion, span, rays.max(1));
         atrous::filter(&guides, &averaged, &raw_near, width, rays.max(1))
     }
