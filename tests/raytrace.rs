@@ -244,6 +244,9 @@ fn openscad_replayed_by_glretrace_is_traced_at_its_framebuffers_size() {
         let mut cmd = command(way, &[], &which("glretrace"), 120);
         cmd.arg("-s").arg(dir.join(format!("{prefix}-"))).arg(&trace).env("DISPLAY", &x.display);
         cmd.env("GLRAY_PRESET", preset).env("GLRAY_STATS", &stats).env("GLRAY_BATCH_PASSES", "1");
+        // Occluders as far as half the scene's size: the model's sphere cavity darkens well
+        // beyond noise (at the default reach its AO is faint, and denoised it is smooth).
+        cmd.env("GLRAY_AO_DISTANCE", "0.5");
         run_ok(&mut cmd, &format!("glretrace {prefix}"));
         let pngs = files_ending(&dir, "png");
         pngs.into_iter()

@@ -81,8 +81,10 @@ fn frames_of(rank: usize, ranks: usize, frames: usize) -> Vec<Frame> {
         .collect()
 }
 
+/// A preset's options, without denoising: frames traced in tiles are not denoised (tiles carry
+/// no AO apart from the colours yet), and the one-process picture compared with them must not be.
 fn options(preset: &str) -> Options {
-    Options { effects: Effects::preset(preset).unwrap(), ..Options::default() }
+    Options { effects: Effects { denoise: false, ..Effects::preset(preset).unwrap() }, ..Options::default() }
 }
 
 /// Rank 0's pictures of `frames` frames over `ranks` ranks in threads.

@@ -265,7 +265,8 @@ impl Renderer {
             // A still scene (the same as the last frame's: a pass added to its samples) keeps
             // its averages; a moving one's are followed and held to what the frame shows.
             let rays = self.options.effects.ao_samples * samples;
-            Some(self.denoiser.denoise(&d.layer, width, &d.camera, &d.motion, rays, passes > 1))
+            let h = self.denoiser.denoise(&d.layer, width, &d.camera, &d.motion, rays, passes > 1);
+            Some(h)
         };
         let layer = denoised.as_ref().map(|d| &d.layer[..]);
         let intensity = self.options.effects.ao_intensity;
@@ -680,7 +681,9 @@ impl Job<'_> {
         let mut stats = Stats::default();
         for view in views {
             let previous = last.as_ref().map(|(r, _)| r).or(self.previous);
-            let mut job = Job { frame: view, previous, ..*self };
+            // Each view's AO stays in its colours: the views' layers are not put together for
+            // the denoiser (a frame in several viewports is not denoised).
+            let mut job = Job { frame: view, previous, seed: 0, ..*self };
             let (rendered, colors, s, _) = job.run(meshes, linear);
             (stats.build, stats.trace) = (stats.build + s.build, stats.trace + s.trace);
             (stats.rays, stats.triangles) = (stats.rays + s.rays, stats.triangles + s.triangles);

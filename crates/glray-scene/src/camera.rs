@@ -152,11 +152,20 @@ impl Camera {
     /// How wide one pixel is, in eye units, at eye-space point `eye` (across the window's x):
     /// how far apart the points two neighbouring pixels see there are. For a perspective
     /// camera it grows with the distance; for an orthographic one it is the same everywhere.
+    /// Worked out from the rays through the point's pixel and the next one (any projection,
+    /// rotated or sheared: OpenSCAD's hold the view's rotation), at the point's distance along
+    /// its ray.
     pub fn pixel_size(&self, eye: DVec3) -> f64 {
-        let w = (self.projection * eye.extend(1.0)).w.abs();
-        let scale = self.projection.x_axis.x.abs() * self.viewport.width as f64;
-        if scale > 0.0 {
-            2.0 * w / scale
+        let (x, y) = self.window_position(eye);
+        let (here, next) = (self.ray(x, y), self.ray(x + 1.0, y));
+        let along = here.direction.length_squared();
+        if along.is_nan() || along <= 0.0 {
+            return 0.0;
+        }
+        let t = (eye - here.origin).dot(here.direction) / along;
+        let size = (next.origin + next.direction * t - eye).length();
+        if size.is_finite() {
+            size
         } else {
             0.0
         }

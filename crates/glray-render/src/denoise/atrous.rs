@@ -211,8 +211,13 @@ fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: 
                 }
             }
             for x in 0..width {
-                // A pixel with a surface weighs itself 1/4 at least, so its weights are > 0.
-                if pv[x] > 0.0 {
+                // A pixel with a surface weighs itself 1/4 at most: its own plane and value (a
+                // rounding off its own plane can weigh it down to nothing where a pixel's width
+                // is tiny, and then it keeps its value).
+                if pv[x] > 0.0 && (weights[x].is_nan() || weights[x] <= 1e-6) {
+                    out_mean[x] = row_mean[x];
+                    out_variance[x] = variance[y * width + x];
+                } else if pv[x] > 0.0 {
                     out_mean[x] = sum[x] / weights[x];
                     out_variance[x] = spread[x] / (weights[x] * weights[x]);
                 } else {
