@@ -119,8 +119,7 @@ fn compose(rgba: &mut [u8], sum: &[Vec4], passes: u32, ao: Option<(&[f32], &[AoP
         Some((hidden, layer)) => {
             for (((px, s), h), a) in rgba.chunks_mut(4).zip(sum).zip(hidden).zip(layer) {
                 let c = *s / passes;
-                let darker = if h.is_nan() { Vec4::ZERO } else { (a.lit * (intensity * h)).extend(0.0) };
-                px.copy_from_slice(&to_u8(c - darker));
+                px.copy_from_slice(&to_u8(if h.is_nan() { c } else { a.darken(c, *h, intensity) }));
             }
         }
         None => {
@@ -265,8 +264,7 @@ impl Renderer {
             // A still scene (the same as the last frame's: a pass added to its samples) keeps
             // its averages; a moving one's are followed and held to what the frame shows.
             let rays = self.options.effects.ao_samples * samples;
-            let h = self.denoiser.denoise(&d.layer, width, &d.camera, &d.motion, rays, passes > 1);
-            Some(h)
+            Some(self.denoiser.denoise(&d.layer, width, &d.camera, &d.motion, rays, passes > 1))
         };
         let layer = denoised.as_ref().map(|d| &d.layer[..]);
         let intensity = self.options.effects.ao_intensity;

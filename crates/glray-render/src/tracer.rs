@@ -54,8 +54,10 @@ pub(crate) struct Tracer<'a> {
 pub(crate) struct Scratch {
     hits: Vec<Hit>,
     frags: Vec<(Hit, Fragment)>,
-    /// The AO each of `frags` kept apart (with `Tracer::split_ao`).
+    /// The AO each of `frags` kept apart (with `Tracer::split_ao`), in the order they were
+    /// made, and for each place of `frags` once resolving sorted them, where it was made.
     frag_ao: Vec<Option<AoPixel>>,
+    made_at: Vec<usize>,
     pub rays: Cell<u64>,
     /// What recent camera rays' triangles were made into: whole triangles, and the corners'
     /// colours of those shaded the short way (`Gouraud`).
@@ -249,25 +251,24 @@ impl Tracer<'_> {
         if !split {
             return Some(in_drawing_order(self.frame, &mut s.frags, under, depth_under));
         }
-        // In the order `in_drawing_order` takes them (it sorts stably, so it keeps this one),
-        // so that the fragment that wrote the pixel last names its AO.
-        let mut order: Vec<usize> = (0..s.frags.len()).collect();
-        order.sort_by_key(|&k| (s.frags[k].0.sequence, s.frags[k].0.id));
-        let frags: Vec<_> = order.iter().map(|&k| s.frags[k]).collect();
-        let frag_ao: Vec<_> = order.iter().map(|&k| s.frag_ao[k]).collect();
-        (s.frags, s.frag_ao) = (frags, frag_ao);
+        // Where each fragment lands once `resolve_in_order` sorts them (by draw, stably: the
+        // same sort), so that the one it names as the last writer finds its AO.
+        s.made_at.clear();
+        s.made_at.extend(0..s.frags.len());
+        let frags = &s.frags;
+        s.made_at.sort_by_key(|&k| (frags[k].0.sequence, frags[k].0.id));
         let resolved = resolve_in_order(self.frame, &mut s.frags, under, depth_under);
         if !resolved.mixed {
             // The last fragment's colour is the pixel's: its AO is the pixel's, to denoise.
-            s.ao.set(resolved.last.and_then(|k| s.frag_ao[k]));
+            s.ao.set(resolved.last.and_then(|k| s.frag_ao[s.made_at[k]]));
             return Some((resolved.color, resolved.depth));
         }
         // Fragments blended (or combined by a logic op): each darkened by its own AO first, as
         // without denoising, and the pixel resolved again; its AO is not one fragment's.
         let intensity = self.options.effects.ao_intensity;
-        for ((_, f), ao) in s.frags.iter_mut().zip(&s.frag_ao) {
-            if let Some(a) = ao {
-                f.color -= (a.lit * (intensity * a.hidden)).extend(0.0);
+        for ((_, f), &k) in s.frags.iter_mut().zip(&s.made_at) {
+            if let Some(a) = s.frag_ao[k] {
+                f.color = a.darken(f.color, a.hidden, intensity);
             }
         }
         s.ao.set(None);
@@ -334,8 +335,8 @@ impl Tracer<'_> {
             };
             let r = reflectance(e.reflectivity, d, reflected);
             f.color = (f.color.xyz() * (1.0 - r) + seen.xyz() * r).extend(f.color.w);
-            if let Some(Some(a)) = split.map(Cell::get) {
-                split.expect("split").set(Some(AoPixel { lit: a.lit * (1.0 - r), ..a }));
+            if let Some((ao, a)) = split.and_then(|ao| Some((ao, ao.get()?))) {
+                ao.set(Some(AoPixel { lit: a.lit * (1.0 - r), ..a }));
             }
         }
         f

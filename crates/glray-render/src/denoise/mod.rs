@@ -46,6 +46,11 @@ impl AoPixel {
     pub fn is_surface(&self) -> bool {
         !self.hidden.is_nan()
     }
+
+    /// `color` with the share AO darkens (`lit`) darkened by `hidden` at `intensity`.
+    pub fn darken(&self, color: glam::Vec4, hidden: f32, intensity: f32) -> glam::Vec4 {
+        color - (self.lit * (intensity * hidden)).extend(0.0)
+    }
 }
 
 /// What the denoiser keeps from frame to frame: the last frame's averages, for the next to

@@ -135,7 +135,7 @@ impl History {
                 inverse.is_finite().then(|| *before * inverse)
             })
             .collect();
-        let last = (self.width == width && self.past.len() == layer.len()).then_some(()).and(self.camera.as_ref());
+        let last = self.camera.as_ref().filter(|_| self.width == width && self.past.len() == layer.len());
         let height = layer.len() / width.max(1);
         let mut past = vec![NOTHING; layer.len()];
         let mut averaged = vec![Averaged { mean: f32::NAN, count: 0.0 }; layer.len()];
