@@ -107,9 +107,8 @@ fn denoised_ambient_occlusion_is_close_to_the_converged_picture_still_and_moving
 #[test]
 fn image_parallel_pictures_are_one_process_picture_for_any_rank_count() {
     let dir = scratch("mpi-ranks");
-    // Tiles carry no AO apart from the colours yet: frames shared out are not denoised, so the
-    // one-process picture to match is not either.
-    let full = [("GLRAY_PRESET", "full"), ("GLRAY_DENOISE", "false")];
+    // As users run it: AO denoised (tiles carry it apart, rank 0 denoises the frame whole).
+    let full = [("GLRAY_PRESET", "full"), ("GLRAY_STATS", "stderr")];
     // One process drawing all the data, glray without MPI: the picture to match.
     let alone = dir.join("alone.png");
     let mut cmd = command(Way::Preload, &[], &icet_like(), 120);
@@ -117,7 +116,7 @@ fn image_parallel_pictures_are_one_process_picture_for_any_rank_count() {
     run_ok(&mut cmd, "icet_like alone");
     for np in 1..=4 {
         let png = dir.join(format!("replicated-{np}.png"));
-        let said = ranks(np, &[full[0], full[1], ("GLRAY_STATS", "stderr")], &png, "2");
+        let said = ranks(np, &full, &png, "2");
         assert!(pixels(&png) == pixels(&alone), "{np} ranks: not the one-process picture\n{said}");
         if np > 1 {
             // Every rank traced a share, and rank 0 says how even the shares were.

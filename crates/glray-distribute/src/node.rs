@@ -20,7 +20,8 @@ use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use glray_render::tiles::{TileGrid, TilePixels, TileWork};
+use glray_render::denoise::AoPixel;
+use glray_render::tiles::{LayersMut, TileGrid, TilePixels, TileWork};
 use glray_render::{Rendered, Renderer};
 use glray_scene::encode::{decode, encode, ObjectStore};
 use glray_scene::frame::Frame;
@@ -240,11 +241,15 @@ impl<T: Transport> Node<T> {
             // picture again), or a frame drawn over the last or in several viewports: rank 0
             // renders it alone, as one process would.
             report.untraced = true;
+            if me != 0 {
+                // Counted all the same: every rank's AO rays stay rank 0's.
+                renderer.pass_frame();
+            }
             (me == 0).then(|| renderer.render(&merged, w, h, previous))
         } else {
             self.run = key.map(|k| (k, pass + 1));
-            let linear = key.is_some() && renderer.options.effects.beyond_gl();
-            let shared = Shared { frame, merged: &merged, key, pass, linear };
+            let (linear, ao) = (renderer.linear(key), renderer.denoises());
+            let shared = Shared { frame, merged: &merged, key, pass, linear, ao };
             self.trace(&shared, renderer, pool, &mut report)?
         };
         // Every rank's framebuffer gets the picture (see `Message::Picture`).
@@ -375,7 +380,8 @@ impl<T: Transport> Node<T> {
         let tracer = &mut *renderer;
         let traces = self.master.traces(self.rank());
         if !traces {
-            // A dedicated master: nothing to trace here.
+            // A dedicated master: nothing to trace here (the frame counted all the same).
+            tracer.pass_frame();
             traced.store(true, Ordering::Release);
         }
         let served = pool.in_place_scope(|s| {
@@ -395,7 +401,7 @@ impl<T: Transport> Node<T> {
         });
         let gathered = served?;
         (report.trace, report.rays) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
-        Ok(gathered.map(|(picture, colors)| renderer.add_pass(shared.key, picture, colors)))
+        Ok(gathered.map(|(picture, colors, ao)| renderer.add_pass(shared.merged, shared.key, picture, colors, ao)))
     }
 
     /// The message loop of a frame's tracing, until this rank's part is done: rank 0 hands out
@@ -412,7 +418,7 @@ impl<T: Transport> Node<T> {
         let (me, size, frame) = (self.rank(), self.size(), shared.frame);
         let tiles = grid.count();
         // Rank 0: the picture being gathered, and who has reported.
-        let mut gather = (me == 0).then(|| Gather::new(grid, shared.linear));
+        let mut gather = (me == 0).then(|| Gather::new(grid, shared.linear, shared.ao));
         let mut reports: Vec<Option<RankReport>> = vec![None; size];
         let mut reserve: VecDeque<Vec<u32>> = VecDeque::new();
         let (mut asked, mut exhausted, mut tracer_waits) = (false, false, false);
@@ -510,8 +516,8 @@ impl<T: Transport> Node<T> {
                             reserve.push_back(tiles);
                         }
                     }
-                    Message::Tile { tile, rgba, depth, colors, .. } if me == 0 => {
-                        let pasted = tile_pixels(tile, rgba, &depth, &colors)
+                    Message::Tile { tile, rgba, depth, colors, ao, .. } if me == 0 => {
+                        let pasted = tile_pixels(tile, rgba, &depth, &colors, &ao)
                             .is_some_and(|t| gather.as_mut().is_some_and(|g| g.paste(&t)));
                         if !pasted {
                             return Err(Fault::Damaged { rank: from, why: format!("tile {tile} of another size") });
@@ -613,8 +619,9 @@ impl<T: Transport> Node<T> {
     }
 }
 
-/// Rank 0's picture of a pass, and its colours before rounding when passes are added up.
-type Gathered = (Rendered, Option<Vec<glam::Vec4>>);
+/// Rank 0's picture of a pass, its colours before rounding when kept, and its AO apart when
+/// denoised.
+type Gathered = (Rendered, Option<Vec<glam::Vec4>>, Option<Vec<AoPixel>>);
 
 /// What every rank traces this frame.
 struct Shared<'a> {
@@ -623,7 +630,9 @@ struct Shared<'a> {
     /// Its accumulation key (`Renderer::accumulation_key`), and which pass this is under it.
     key: Option<u64>,
     pass: u32,
+    /// Tiles carry colours before rounding (`Renderer::linear`), and AO apart (`denoises`).
     linear: bool,
+    ao: bool,
 }
 
 /// The message loop's ends of the channels to the tracer.
@@ -670,25 +679,33 @@ struct Gather {
     rgba: Vec<u8>,
     depth: Vec<f32>,
     colors: Option<Vec<glam::Vec4>>,
+    ao: Option<Vec<AoPixel>>,
     have: Vec<bool>,
     count: u32,
 }
 
 impl Gather {
-    fn new(grid: TileGrid, linear: bool) -> Gather {
+    fn new(grid: TileGrid, linear: bool, ao: bool) -> Gather {
         let n = grid.width as usize * grid.height as usize;
         Gather {
             grid,
             rgba: vec![0; 4 * n],
             depth: vec![1.0; n],
             colors: linear.then(|| vec![glam::Vec4::ZERO; n]),
+            ao: ao.then(|| vec![AoPixel::NONE; n]),
             have: vec![false; grid.count() as usize],
             count: 0,
         }
     }
 
     fn paste(&mut self, t: &TilePixels) -> bool {
-        if !self.grid.paste(t, &mut self.rgba, &mut self.depth, self.colors.as_deref_mut()) {
+        let image = LayersMut {
+            rgba: &mut self.rgba,
+            depth: &mut self.depth,
+            colors: self.colors.as_deref_mut(),
+            ao: self.ao.as_deref_mut(),
+        };
+        if !self.grid.paste(t, image) {
             return false;
         }
         if !std::mem::replace(&mut self.have[t.tile as usize], true) {
@@ -697,9 +714,9 @@ impl Gather {
         true
     }
 
-    fn finish(self) -> (Rendered, Option<Vec<glam::Vec4>>) {
+    fn finish(self) -> Gathered {
         let (width, height) = (self.grid.width, self.grid.height);
-        (Rendered { width, height, rgba: self.rgba, depth: self.depth }, self.colors)
+        (Rendered { width, height, rgba: self.rgba, depth: self.depth }, self.colors, self.ao)
     }
 }
 

@@ -4,6 +4,7 @@
 //! scene encoding checks the byte order of the first message).
 
 use serde::{Deserialize, Serialize};
+use glray_render::denoise::AoPixel;
 
 /// What a rank says of its frame to rank 0 when its share is traced.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -27,7 +28,8 @@ pub enum Message {
     Ask { frame: u64 },
     /// The master's answer: tiles to trace, or none (the frame's tiles are all handed out).
     Grant { frame: u64, tiles: Vec<u32> },
-    /// A traced tile for the display rank: RGBA bytes, depths and linear colours as bytes.
+    /// A traced tile for the display rank: RGBA bytes, and as bytes its depths, linear colours
+    /// and the AO kept apart for denoising (`AoPixel`s; empty when not denoised).
     Tile {
         frame: u64,
         tile: u32,
@@ -37,6 +39,8 @@ pub enum Message {
         depth: Vec<u8>,
         #[serde(with = "serde_bytes")]
         colors: Vec<u8>,
+        #[serde(with = "serde_bytes")]
+        ao: Vec<u8>,
     },
     /// A rank's share is traced and every tile of it sent.
     Done { frame: u64, report: RankReport },
@@ -79,7 +83,7 @@ impl Message {
         }
         let room = 64
             + match &self {
-                Message::Tile { rgba, depth, colors, .. } => rgba.len() + depth.len() + colors.len(),
+                Message::Tile { rgba, depth, colors, ao, .. } => rgba.len() + depth.len() + colors.len() + ao.len(),
                 Message::Picture { rgba, depth, .. } => rgba.len() + depth.len(),
                 Message::Grant { tiles, .. } => 5 * tiles.len(),
                 _ => 0,
@@ -115,6 +119,7 @@ pub fn tile_message(frame: u64, t: &glray_render::tiles::TilePixels) -> Message 
         rgba: t.rgba.clone(),
         depth: bytemuck::cast_slice(&t.depth).to_vec(),
         colors: bytemuck::cast_slice(&t.colors).to_vec(),
+        ao: bytemuck::cast_slice(&t.ao).to_vec(),
     }
 }
 
@@ -139,16 +144,25 @@ pub fn picture(width: u32, height: u32, rgba: Vec<u8>, depth: &[u8]) -> Option<g
     Some(glray_render::Rendered { width, height, rgba, depth })
 }
 
-/// A tile's pixels from a message's fields (None when the byte counts are not whole floats).
-pub fn tile_pixels(tile: u32, rgba: Vec<u8>, depth: &[u8], colors: &[u8]) -> Option<glray_render::tiles::TilePixels> {
-    if depth.len() % 4 != 0 || colors.len() % 16 != 0 {
+/// A tile's pixels from a message's fields (None when the byte counts are not whole values).
+pub fn tile_pixels(
+    tile: u32,
+    rgba: Vec<u8>,
+    depth: &[u8],
+    colors: &[u8],
+    ao: &[u8],
+) -> Option<glray_render::tiles::TilePixels> {
+    let ao_size = std::mem::size_of::<AoPixel>();
+    if depth.len() % 4 != 0 || colors.len() % 16 != 0 || ao.len() % ao_size != 0 {
         return None;
     }
     let floats =
         |b: &[u8]| -> Vec<f32> { b.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect() };
     let depth = floats(depth);
     let colors = floats(colors).chunks_exact(4).map(glam::Vec4::from_slice).collect();
-    Some(glray_render::tiles::TilePixels { tile, rgba, depth, colors })
+    // Copied out (the bytes need not sit at a float's alignment).
+    let ao = bytemuck::pod_collect_to_vec(ao);
+    Some(glray_render::tiles::TilePixels { tile, rgba, depth, colors, ao })
 }
 
 #[cfg(test)]
@@ -162,11 +176,16 @@ mod tests {
             rgba: vec![1, 2, 3, 4, 5, 6, 7, 8],
             depth: vec![0.25, 1.0],
             colors: vec![glam::Vec4::new(0.1, 0.2, 0.3, 1.0), glam::Vec4::ONE],
+            ao: vec![
+                AoPixel { eye: glam::Vec3::new(1.0, 2.0, -3.0), object: 7, hidden: 0.25, ..AoPixel::NONE },
+                AoPixel { normal: glam::Vec3::Z, lit: glam::Vec3::ONE, hidden: 1.0, ..AoPixel::NONE },
+            ],
         };
         let m = Message::decode(tile_message(9, &t).encode()).unwrap();
         assert_eq!(m.frame(), 9);
-        let Message::Tile { tile, rgba, depth, colors, .. } = m else { panic!("{m:?}") };
-        assert_eq!(tile_pixels(tile, rgba, &depth, &colors), Some(t));
+        let Message::Tile { tile, rgba, depth, colors, ao, .. } = m else { panic!("{m:?}") };
+        assert_eq!(tile_pixels(tile, rgba.clone(), &depth, &colors, &ao), Some(t));
+        assert_eq!(tile_pixels(tile, rgba, &depth, &colors, &ao[1..]), None, "AO cut short");
         assert!(Message::decode(vec![200, 1]).is_err());
         let scene = Message::Scene { frame: 3, settings: 99, scene: vec![1, 2, 3] };
         assert_eq!(Message::decode(scene.clone().encode()), Ok(scene));

@@ -81,10 +81,9 @@ fn frames_of(rank: usize, ranks: usize, frames: usize) -> Vec<Frame> {
         .collect()
 }
 
-/// A preset's options, without denoising: frames traced in tiles are not denoised (tiles carry
-/// no AO apart from the colours yet), and the one-process picture compared with them must not be.
+/// A preset's options, as a user gets them (AO denoised where the preset has AO).
 fn options(preset: &str) -> Options {
-    Options { effects: Effects { denoise: false, ..Effects::preset(preset).unwrap() }, ..Options::default() }
+    Options { effects: Effects::preset(preset).unwrap(), ..Options::default() }
 }
 
 /// Rank 0's pictures of `frames` frames over `ranks` ranks in threads.
@@ -128,7 +127,7 @@ fn traced_with(ranks: usize, preset: &str, frames: usize, roles: Roles) -> Vec<g
 
 #[test]
 fn a_scene_split_over_ranks_is_traced_as_one_process_traces_it_all() {
-    for preset in ["gl", "full"] {
+    for preset in ["gl", "ao", "full"] {
         let whole = frames_of(0, 1, 2);
         let mut one = Renderer::new(options(preset));
         let expected: Vec<_> = whole.iter().map(|f| one.render(f, W, H, None)).collect();

@@ -21,7 +21,7 @@ use crate::progress::Progress;
 use crate::resolve::closest_hit_suffices;
 use crate::scene::{Hit, Scene};
 use crate::signature::signature;
-use crate::tiles::{TileGrid, TileWork};
+use crate::tiles::{Layers, TileGrid, TileWork};
 use crate::tracer::{count, Scratch, Tracer};
 
 /// A rendered frame, laid out as GL's framebuffer: rows bottom-up.
@@ -98,8 +98,10 @@ pub struct Renderer {
     accumulation: Option<Accumulation>,
     /// The AO of frames before, for denoising the next (`denoise`).
     denoiser: Denoiser,
-    /// Frames traced with denoising: each takes other AO rays than the last.
-    traced: u32,
+    /// Frames rendered, or passed over while another rank showed them (`pass_frame`): a
+    /// denoised frame's AO rays are seeded by it, so that each frame's go new ways, and ranks
+    /// sharing a frame (each counting every frame) trace with the same seed.
+    frames: u32,
     stats: Stats,
 }
 
@@ -145,7 +147,7 @@ impl Renderer {
             meshes: Meshes::default(),
             accumulation: None,
             denoiser: Denoiser::default(),
-            traced: 0,
+            frames: 0,
             stats: Stats::default(),
         }
     }
@@ -156,6 +158,7 @@ impl Renderer {
         // Big arrays freed before the last frame began, and not taken since, go back.
         glray_core::reuse::frame_begins();
         self.meshes.prune();
+        let seed = self.next_seed();
         let effects = self.options.effects;
         let key = self.accumulation_key(frame, width, height);
         let pass = key.map_or(0, |k| self.passes(k));
@@ -179,16 +182,10 @@ impl Renderer {
             progress: self.progress,
             flatten_below: self.flatten_below,
             work: None,
-            seed: 0,
+            seed,
         };
-        let denoise = effects.denoise && effects.ao_samples > 0;
-        if denoise {
-            // Each frame's AO rays go new ways, so that frames averaged are independent.
-            self.traced = self.traced.wrapping_add(1).max(1);
-            job.seed = self.traced;
-        }
-        let (rendered, linear, stats, split) =
-            job.run(&mut self.meshes, (key.is_some() && effects.beyond_gl()) || denoise);
+        let linear = self.linear(key);
+        let (rendered, linear, stats, split) = job.run(&mut self.meshes, linear);
         // A frame that built its scene took what it could refit; one that did not (no camera)
         // has no use for the trees either.
         self.meshes.forget_gone();
@@ -200,11 +197,36 @@ impl Renderer {
         picture
     }
 
+    /// Whether frames under accumulation key `key` keep their colours before rounding: to add
+    /// passes up, or to put denoised AO on them.
+    pub fn linear(&self, key: Option<u64>) -> bool {
+        (key.is_some() && self.options.effects.beyond_gl()) || self.denoises()
+    }
+
+    /// Whether AO is kept apart and denoised (`denoise`, with AO on).
+    pub fn denoises(&self) -> bool {
+        let e = &self.options.effects;
+        e.denoise && e.ao_samples > 0
+    }
+
+    /// The next frame's seed for its AO rays (0: not denoised, none).
+    fn next_seed(&mut self) -> u32 {
+        self.frames = self.frames.wrapping_add(1).max(1);
+        if self.denoises() { self.frames } else { 0 }
+    }
+
+    /// A frame this renderer takes no part in (another rank traces and shows it): counted all
+    /// the same, so that the next frame's AO rays are every rank's (see `frames`).
+    pub fn pass_frame(&mut self) {
+        self.next_seed();
+    }
+
     /// Traces this rank's share of `frame` (pass `pass` of its progressive refinement): the
     /// tiles `work` hands out, each handed back as it is done, with its colours before
-    /// rounding when the passes are added up (`linear`). Nothing is added up here: the rank
-    /// that gathers the tiles does that (`add_pass`). Only for a frame that clears and is drawn
-    /// in one view (`shares`).
+    /// rounding when kept (`linear(key)`) and its AO apart when denoised. Nothing is added up
+    /// here: the rank that gathers the tiles does that (`add_pass`). Only for a frame that
+    /// clears and is drawn in one view (`shares`). Every rank sharing the frame calls this (or
+    /// `pass_frame`) once per frame.
     pub fn render_tiles(
         &mut self,
         frame: &Frame,
@@ -216,6 +238,7 @@ impl Renderer {
     ) -> Stats {
         glray_core::reuse::frame_begins();
         self.meshes.prune();
+        let seed = self.next_seed();
         let mut job = Job {
             frame,
             width,
@@ -226,7 +249,7 @@ impl Renderer {
             progress: false,
             flatten_below: self.flatten_below,
             work: Some(work),
-            seed: 0,
+            seed,
         };
         let (_, _, stats, _) = job.run(&mut self.meshes, linear);
         self.meshes.forget_gone();
@@ -241,11 +264,22 @@ impl Renderer {
         frame.cleared && frame.by_viewport().is_none()
     }
 
-    /// Adds one pass gathered from tiles (`rendered`, and its colours before rounding when
-    /// `linear` is given) to the passes added up under `key`, and returns the picture of them
-    /// all: what `render` does after tracing a whole frame.
-    pub fn add_pass(&mut self, key: Option<u64>, rendered: Rendered, linear: Option<Vec<Vec4>>) -> Rendered {
-        self.add_pass_with(key, rendered, linear, None)
+    /// Adds one pass of `frame` gathered from tiles (`rendered`, its colours before rounding
+    /// when kept, and its AO apart when denoised) to the passes added up under `key`, and
+    /// returns the picture of them all: what `render` does after tracing a whole frame.
+    pub fn add_pass(
+        &mut self,
+        frame: &Frame,
+        key: Option<u64>,
+        rendered: Rendered,
+        linear: Option<Vec<Vec4>>,
+        ao: Option<Vec<AoPixel>>,
+    ) -> Rendered {
+        let start = Instant::now();
+        let denoised = ao.zip(camera_of(frame)).map(|(layer, camera)| Denoised { layer, camera, motion: Motion::of(frame) });
+        let picture = self.add_pass_with(key, rendered, linear, denoised);
+        self.stats.denoise = start.elapsed();
+        picture
     }
 
     /// `add_pass`, with the pass's AO kept apart (`denoised`): the colours (without AO) are
@@ -451,6 +485,22 @@ fn fill_scissored_clears(frame: &Frame, w: usize, rgba: &mut [u8], depth: &mut [
     }
 }
 
+/// The camera `frame`'s pixels are traced from (None: nothing to trace). A frame drawn with
+/// several cameras is traced from its main one's (`Frame::unified`).
+fn camera_of(frame: &Frame) -> Option<Camera> {
+    if frame.is_empty() {
+        return None;
+    }
+    let (projection, viewport) = match frame.cameras.len() {
+        0 | 1 => (frame.projection?, frame.viewport?),
+        _ => {
+            let main = frame.cameras[frame.main_camera() as usize];
+            (main.projection, main.viewport)
+        }
+    };
+    Camera::new(projection, viewport, frame.depth_range)
+}
+
 /// Up to this many triangles in instances, a frame of camera rays alone is traced as flat
 /// triangles (see `Renderer::flatten_below`).
 pub const FLATTEN_INSTANCES: usize = 8192;
@@ -523,11 +573,7 @@ impl Job<'_> {
         });
         fill_scissored_clears(frame, w, &mut rgba, &mut depth, colors.as_deref_mut());
         let mut stats = Stats { triangles: frame.triangle_count() as u64, ..Stats::default() };
-        let camera = match (frame.projection, frame.viewport) {
-            (Some(p), Some(v)) if !frame.is_empty() => Camera::new(p, v, frame.depth_range),
-            _ => None,
-        };
-        let Some(camera) = camera else {
+        let Some(camera) = camera_of(frame) else {
             return (Rendered { width, height, rgba, depth }, colors, stats, None);
         };
         let start = Instant::now();
@@ -539,9 +585,8 @@ impl Job<'_> {
         let start = Instant::now();
         let diagonal = scene.diagonal().max(1e-6);
         let simple = closest_hit_suffices(frame);
-        // The AO kept apart for the denoiser (when the whole frame is traced here, with its
-        // colours before rounding).
-        let split = self.seed != 0 && self.work.is_none() && colors.is_some();
+        // The AO kept apart for the denoiser (with its colours before rounding).
+        let split = self.seed != 0 && colors.is_some();
         let mut ao = split.then(|| vec![AoPixel::NONE; w * h]);
         let tracer = Tracer {
             frame,
@@ -653,13 +698,14 @@ impl Job<'_> {
                 while let Some(chunk) = work.next() {
                     let chunk: Vec<u32> = chunk.into_iter().filter(|&t| t < grid.count()).collect();
                     chunk.iter().for_each(|&t| wanted[t as usize] = true);
-                    pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), None, w, true)
+                    pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), ao.as_deref_mut(), w, true)
                         .into_par_iter()
                         .filter(|p| wanted[grid.tile_at(p.x0, p.y0) as usize])
                         .for_each(process);
+                    let image = Layers { rgba: &rgba, depth: &depth, colors: colors.as_deref(), ao: ao.as_deref() };
                     for &t in &chunk {
                         wanted[t as usize] = false;
-                        work.done(grid.cut(t, &rgba, &depth, colors.as_deref()));
+                        work.done(grid.cut(t, image));
                     }
                 }
             }
@@ -935,29 +981,43 @@ mod tests {
         let c = followed_at(150, 100, &calls);
         let frame = c.frame().clone();
         assert!(!frame.is_empty() && Renderer::shares(&frame));
-        for preset in ["gl", "full"] {
-            // Tiles carry no AO apart from the colours: a frame shared out is not denoised.
-            let effects = Effects { denoise: false, ..Effects::preset(preset).unwrap() };
-            let options = Options { effects, ..Options::default() };
-            let mut whole = Renderer::new(options);
-            let key = whole.accumulation_key(&frame, 150, 100);
-            let expected = whole.render(&frame, 150, 100, None);
-            let grid = crate::tiles::TileGrid::new(150, 100);
-            let work =
-                Chunks { left: std::sync::Mutex::new((0..grid.count()).collect()), chunk: 2, back: Default::default() };
-            let linear = options.effects.beyond_gl();
-            let mut shared = Renderer::new(options);
-            shared.render_tiles(&frame, 150, 100, 0, linear, &work);
-            let (mut rgba, mut depth) = (vec![0u8; 4 * 150 * 100], vec![0f32; 150 * 100]);
-            let mut colors = vec![Vec4::ZERO; 150 * 100];
-            let back = work.back.into_inner().unwrap();
-            assert_eq!(back.len(), grid.count() as usize);
-            for t in &back {
-                assert!(grid.paste(t, &mut rgba, &mut depth, linear.then_some(&mut colors[..])));
+        for preset in ["gl", "ao", "full"] {
+            // Twice: the second pass adds up to the first (and the AO's history is followed).
+            let options = Options { effects: Effects::preset(preset).unwrap(), ..Options::default() };
+            let (mut whole, mut shared) = (Renderer::new(options), Renderer::new(options));
+            for pass in 0..2 {
+                let key = whole.accumulation_key(&frame, 150, 100);
+                if key.is_some_and(|k| whole.passes(k) >= whole.converged_passes()) {
+                    // Converged (the GL look after one pass): shown again, not traced.
+                    break;
+                }
+                let expected = whole.render(&frame, 150, 100, None);
+                let grid = crate::tiles::TileGrid::new(150, 100);
+                let left = std::sync::Mutex::new((0..grid.count()).collect());
+                let work = Chunks { left, chunk: 2, back: Default::default() };
+                let linear = shared.linear(key);
+                let ao = shared.denoises();
+                assert_eq!(ao, preset != "gl");
+                shared.render_tiles(&frame, 150, 100, pass, linear, &work);
+                let n = 150 * 100;
+                let (mut rgba, mut depth) = (vec![0u8; 4 * n], vec![0f32; n]);
+                let (mut colors, mut layer) = (vec![Vec4::ZERO; n], vec![AoPixel::NONE; n]);
+                let back = work.back.into_inner().unwrap();
+                assert_eq!(back.len(), grid.count() as usize);
+                for t in &back {
+                    let into = crate::tiles::LayersMut {
+                        rgba: &mut rgba,
+                        depth: &mut depth,
+                        colors: linear.then_some(&mut colors[..]),
+                        ao: ao.then_some(&mut layer[..]),
+                    };
+                    assert!(grid.paste(t, into));
+                }
+                let gathered = Rendered { width: 150, height: 100, rgba, depth };
+                let gathered =
+                    shared.add_pass(&frame, key, gathered, linear.then_some(colors), ao.then_some(layer));
+                assert!(gathered == expected, "{preset}, pass {pass}: the tiles gathered are the whole frame's picture");
             }
-            let gathered = Rendered { width: 150, height: 100, rgba, depth };
-            let gathered = shared.add_pass(key, gathered, linear.then_some(colors));
-            assert!(gathered == expected, "{preset}: the tiles gathered are the whole frame's picture");
         }
     }
 

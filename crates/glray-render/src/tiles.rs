@@ -5,6 +5,8 @@
 
 use glam::Vec4;
 
+use crate::denoise::AoPixel;
+
 /// The side of a tile: eight bands of the pieces frames with secondary rays are traced in, and
 /// one segment of their columns (`pieces::TILE`, `pieces::SEGMENT`).
 pub const TILE_SIDE: usize = crate::pieces::SEGMENT;
@@ -45,7 +47,8 @@ impl TileGrid {
     }
 
     /// Tile `tile`'s pixels cut out of a whole image's (rows bottom-up, as `Rendered`).
-    pub fn cut(&self, tile: u32, rgba: &[u8], depth: &[f32], colors: Option<&[Vec4]>) -> TilePixels {
+    pub fn cut(&self, tile: u32, image: Layers<'_>) -> TilePixels {
+        let Layers { rgba, depth, colors, ao } = image;
         let (x0, y0, w, h) = self.rect(tile);
         let width = self.width as usize;
         let mut out = TilePixels {
@@ -53,6 +56,7 @@ impl TileGrid {
             rgba: Vec::with_capacity(4 * w * h),
             depth: Vec::with_capacity(w * h),
             colors: Vec::with_capacity(if colors.is_some() { w * h } else { 0 }),
+            ao: Vec::with_capacity(if ao.is_some() { w * h } else { 0 }),
         };
         for y in y0..y0 + h {
             let row = y * width + x0;
@@ -61,23 +65,31 @@ impl TileGrid {
             if let Some(c) = colors {
                 out.colors.extend_from_slice(&c[row..row + w]);
             }
+            if let Some(a) = ao {
+                out.ao.extend_from_slice(&a[row..row + w]);
+            }
         }
         out
     }
 
     /// Puts a tile's pixels into a whole image's. False (and nothing written) when they do not
-    /// have the tile's size: a message from another window size or a damaged one.
-    pub fn paste(&self, t: &TilePixels, rgba: &mut [u8], depth: &mut [f32], colors: Option<&mut [Vec4]>) -> bool {
+    /// have the tile's size, or lack a layer the image has: a message from another window size
+    /// or a damaged one.
+    pub fn paste(&self, t: &TilePixels, image: LayersMut<'_>) -> bool {
         if t.tile >= self.count() {
             return false;
         }
+        let LayersMut { rgba, depth, mut colors, mut ao } = image;
         let (x0, y0, w, h) = self.rect(t.tile);
-        let with_colors = colors.is_some() && t.colors.len() == w * h;
-        if t.rgba.len() != 4 * w * h || t.depth.len() != w * h || (colors.is_some() && !with_colors) {
+        let sized = |has: bool, len: usize| !has || len == w * h;
+        if t.rgba.len() != 4 * w * h
+            || t.depth.len() != w * h
+            || !sized(colors.is_some(), t.colors.len())
+            || !sized(ao.is_some(), t.ao.len())
+        {
             return false;
         }
         let width = self.width as usize;
-        let mut colors = colors;
         for (k, y) in (y0..y0 + h).enumerate() {
             let row = y * width + x0;
             rgba[4 * row..4 * (row + w)].copy_from_slice(&t.rgba[4 * k * w..4 * (k + 1) * w]);
@@ -85,19 +97,42 @@ impl TileGrid {
             if let Some(c) = colors.as_deref_mut() {
                 c[row..row + w].copy_from_slice(&t.colors[k * w..(k + 1) * w]);
             }
+            if let Some(a) = ao.as_deref_mut() {
+                a[row..row + w].copy_from_slice(&t.ao[k * w..(k + 1) * w]);
+            }
         }
         true
     }
 }
 
-/// One traced tile: its pixels row by row from the bottom, and their colours before rounding
-/// when samples are added up over passes (else empty).
+/// A whole image's layers, as a frame's render holds them: colours, depths, and where kept,
+/// colours before rounding and the AO kept apart for the denoiser.
+#[derive(Clone, Copy)]
+pub struct Layers<'a> {
+    pub rgba: &'a [u8],
+    pub depth: &'a [f32],
+    pub colors: Option<&'a [Vec4]>,
+    pub ao: Option<&'a [AoPixel]>,
+}
+
+/// `Layers`, to paste tiles into.
+pub struct LayersMut<'a> {
+    pub rgba: &'a mut [u8],
+    pub depth: &'a mut [f32],
+    pub colors: Option<&'a mut [Vec4]>,
+    pub ao: Option<&'a mut [AoPixel]>,
+}
+
+/// One traced tile: its pixels row by row from the bottom, their colours before rounding
+/// when samples are added up over passes or the AO is denoised (else empty), and the AO kept
+/// apart for the denoiser (else empty).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TilePixels {
     pub tile: u32,
     pub rgba: Vec<u8>,
     pub depth: Vec<f32>,
     pub colors: Vec<Vec4>,
+    pub ao: Vec<AoPixel>,
 }
 
 /// Where the tiles a render traces come from and where they go: a rank's share of a frame,
@@ -124,13 +159,21 @@ mod tests {
         let rgba: Vec<u8> = (0..4 * n).map(|i| (i % 251) as u8).collect();
         let depth: Vec<f32> = (0..n).map(|i| i as f32).collect();
         let colors: Vec<Vec4> = (0..n).map(|i| Vec4::splat(i as f32)).collect();
+        let ao: Vec<AoPixel> = (0..n).map(|i| AoPixel { object: i as u32, hidden: 0.5, ..AoPixel::NONE }).collect();
         let (mut r2, mut d2, mut c2) = (vec![0u8; 4 * n], vec![0f32; n], vec![Vec4::ZERO; n]);
+        let mut a2 = vec![AoPixel::NONE; n];
+        let whole = Layers { rgba: &rgba, depth: &depth, colors: Some(&colors), ao: Some(&ao) };
         for t in 0..grid.count() {
-            let cut = grid.cut(t, &rgba, &depth, Some(&colors));
-            assert!(grid.paste(&cut, &mut r2, &mut d2, Some(&mut c2)));
+            let cut = grid.cut(t, whole);
+            let into = LayersMut { rgba: &mut r2, depth: &mut d2, colors: Some(&mut c2), ao: Some(&mut a2) };
+            assert!(grid.paste(&cut, into));
         }
-        assert!(r2 == rgba && d2 == depth && c2 == colors);
-        let wrong = TilePixels { tile: 0, rgba: vec![0; 4], depth: vec![0.0], colors: vec![] };
-        assert!(!grid.paste(&wrong, &mut r2, &mut d2, None), "a tile of another size is refused");
+        assert!(r2 == rgba && d2 == depth && c2 == colors && a2 == ao);
+        let wrong = TilePixels { tile: 0, rgba: vec![0; 4], depth: vec![0.0], colors: vec![], ao: vec![] };
+        let into = LayersMut { rgba: &mut r2, depth: &mut d2, colors: None, ao: None };
+        assert!(!grid.paste(&wrong, into), "a tile of another size is refused");
+        let no_ao = TilePixels { ao: vec![], ..grid.cut(0, whole) };
+        let into = LayersMut { rgba: &mut r2, depth: &mut d2, colors: Some(&mut c2), ao: Some(&mut a2) };
+        assert!(!grid.paste(&no_ao, into), "a tile without the AO the image keeps is refused");
     }
 }

@@ -20,8 +20,10 @@ use glam::Vec3;
 
 pub use temporal::Motion;
 
-/// One pixel's AO as the tracer leaves it for the denoiser.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// One pixel's AO as the tracer leaves it for the denoiser (plain bytes: tiles traced on other
+/// ranks carry it).
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub struct AoPixel {
     /// Where the surface the pixel's first sample hit is, in eye coordinates.
     pub eye: Vec3,
