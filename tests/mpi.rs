@@ -295,3 +295,72 @@ fn without_its_mpi_part_glray_lets_the_program_run_and_says_why() {
     let out = cmd.output().unwrap();
     assert!(!out.status.success(), "glray run --np 1 -- false");
 }
+
+#[test]
+fn ambient_occlusion_is_denoised_under_a_translucent_overlay_and_lines_show_the_ao_they_lie_in() {
+    // The example host with a grid of unlit lines on its ground and a translucent panel over
+    // the left of the window (ICET_LIKE_OVERLAY), ambient occlusion at 16 rays per pixel.
+    let dir = scratch("overlay-ao");
+    let (w, h) = (384usize, 288usize);
+    let run = |name: &str, settings: &[(&str, &str)]| {
+        let png = dir.join(format!("{name}.png"));
+        let mut cmd = command(Way::Preload, &[], &icet_like(), 300);
+        cmd.arg(&png).arg("1").args([w.to_string(), h.to_string()]).env("ICET_LIKE_OVERLAY", "1");
+        cmd.envs([("GLRAY_PROGRESSIVE", "false"), ("GLRAY_DISTRIBUTE", "local")]);
+        run_ok(cmd.envs(settings.iter().copied()), name);
+        pixels(&png)
+    };
+    let ao = [("GLRAY_PRESET", "ao")];
+    let reference = run("reference", &[ao[0], ("GLRAY_AO_SAMPLES", "1024"), ("GLRAY_DENOISE", "false")]);
+    let raw = run("raw", &[ao[0], ("GLRAY_DENOISE", "false")]);
+    let denoised = run("denoised", &ao);
+    let gl = run("gl", &[("GLRAY_PRESET", "gl")]);
+    let channels = gl.len() / (w * h);
+    // Under the panel (columns 5-40% of the width, rows 10-90%), blended over the scene: the
+    // AO seen through it is denoised as elsewhere.
+    let panel = |x: usize, y: usize| x * 100 > 6 * w && x * 100 < 39 * w && y * 100 > 11 * h && y * 100 < 89 * h;
+    let psnr_in = |a: &[u8], b: &[u8]| {
+        let (mut sum, mut n) = (0f64, 0f64);
+        for y in 0..h {
+            for x in (0..w).filter(|&x| panel(x, y)) {
+                for c in 0..3 {
+                    let d = a[channels * (y * w + x) + c] as f64 - b[channels * (y * w + x) + c] as f64;
+                    (sum, n) = (sum + d * d, n + 1.0);
+                }
+            }
+        }
+        10.0 * (255.0f64 * 255.0 / (sum / n).max(1e-9)).log10()
+    };
+    let (raw_db, denoised_db) = (psnr_in(&reference, &raw), psnr_in(&reference, &denoised));
+    eprintln!("under the panel: raw {raw_db:.1} dB, denoised {denoised_db:.1} dB");
+    assert!(denoised_db >= 35.0 && denoised_db >= raw_db + 6.0, "raw {raw_db:.1} dB, denoised {denoised_db:.1} dB");
+    // The grid's lines (their GL colour, 89 89 77, outside the panel) darken with the ground
+    // they lie on: where the ground beside a line is in a contact shadow, so is the line.
+    let at = |img: &[u8], x: usize, y: usize| img[channels * (y * w + x)] as f64;
+    let is_line = |x: usize, y: usize| {
+        let p = &gl[channels * (y * w + x)..channels * (y * w + x) + 3];
+        p[0].abs_diff(89) <= 2 && p[1].abs_diff(89) <= 2 && p[2].abs_diff(77) <= 2
+    };
+    let (mut lines, mut grounds, mut shaded) = (0f64, 0f64, 0usize);
+    for y in 0..h {
+        for x in 3..w - 3 {
+            if panel(x, y) || !is_line(x, y) {
+                continue;
+            }
+            let beside: Vec<f64> = [x - 3, x + 3]
+                .into_iter()
+                .filter(|&g| !is_line(g, y) && at(&gl, g, y) > 150.0)
+                .map(|g| at(&denoised, g, y) / at(&gl, g, y))
+                .collect();
+            if beside.len() == 2 && beside.iter().sum::<f64>() / 2.0 < 0.85 {
+                lines += at(&denoised, x, y) / at(&gl, x, y);
+                grounds += beside.iter().sum::<f64>() / 2.0;
+                shaded += 1;
+            }
+        }
+    }
+    assert!(shaded >= 20, "line pixels in contact shadows: {shaded}");
+    let (line, ground) = (lines / shaded as f64, grounds / shaded as f64);
+    eprintln!("in contact shadows ({shaded} line pixels): lines keep {line:.2} of their colour, the ground {ground:.2}");
+    assert!((line - ground).abs() < 0.08, "lines keep {line:.2}, the ground beside them {ground:.2}");
+}

@@ -16,6 +16,10 @@
  * a frame, frame f at (FIRST + f) x DEGREES: a moving scene, for glray's quality benchmark
  * (scripts/bench-quality), whose frame FIRST + n a one-frame run with FIRST + n shows alone.
  *
+ * ICET_LIKE_OVERLAY=1 makes rank 0 also draw what visualization programs draw over a 3D scene: a
+ * grid of unlit lines on the ground and a translucent panel over the left of the window (an
+ * orthographic overlay, blended), for glray's tests of AO under lines and overlays.
+ *
  * ICET_LIKE_STALL=RANK:FRAME makes that rank stop itself (SIGSTOP) as that frame begins: a rank
  * that stops answering, for glray's tests of its time limits.
  *
@@ -160,6 +164,7 @@ int main(int argc, char **argv) {
   float orbit = 0.0f;
   int orbit_first = 0;
   if (getenv("ICET_LIKE_ORBIT")) sscanf(getenv("ICET_LIKE_ORBIT"), "%f:%d", &orbit, &orbit_first);
+  int overlay = getenv("ICET_LIKE_OVERLAY") && atoi(getenv("ICET_LIKE_OVERLAY"));
   int stall_rank = -1, stall_frame = -1;
   if (getenv("ICET_LIKE_STALL")) sscanf(getenv("ICET_LIKE_STALL"), "%d:%d", &stall_rank, &stall_frame);
   /* For tests that signal a rank from outside. */
@@ -231,6 +236,22 @@ int main(int argc, char **argv) {
         glVertex3f(8.0f, -1.0f, -8.0f);
         glVertex3f(-8.0f, -1.0f, -8.0f);
         glEnd();
+        if (overlay) {
+          /* A grid on the ground, unlit, as axes and outlines are drawn. */
+          glDisable(GL_LIGHTING);
+          glColor3f(0.35f, 0.35f, 0.3f);
+          glBegin(GL_LINES);
+          for (int g = -8; g <= 6; g++) {
+            glVertex3f(-8.0f, -0.99f, (float)g);
+            glVertex3f(8.0f, -0.99f, (float)g);
+          }
+          for (int g = -8; g <= 8; g++) {
+            glVertex3f((float)g, -0.99f, 6.0f);
+            glVertex3f((float)g, -0.99f, -8.0f);
+          }
+          glEnd();
+          glEnable(GL_LIGHTING);
+        }
       }
       for (int k = first; k < last; k++) {
         float t = objects > 1 ? (float)k / (objects - 1) : 0.5f;
@@ -243,6 +264,34 @@ int main(int argc, char **argv) {
         glCallList(1);
         glPopMatrix();
       }
+    }
+    if (overlay && rank == 0) {
+      /* A translucent panel over the left of the window, drawn last in window coordinates. */
+      glMatrixMode(GL_PROJECTION);
+      glPushMatrix();
+      glLoadIdentity();
+      glOrtho(0, w, 0, h, -1, 1);
+      glMatrixMode(GL_MODELVIEW);
+      glPushMatrix();
+      glLoadIdentity();
+      glDisable(GL_LIGHTING);
+      glDisable(GL_DEPTH_TEST);
+      glEnable(GL_BLEND);
+      glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+      glColor4f(0.1f, 0.15f, 0.3f, 0.4f);
+      glBegin(GL_QUADS);
+      glVertex2f(0.05f * w, 0.1f * h);
+      glVertex2f(0.4f * w, 0.1f * h);
+      glVertex2f(0.4f * w, 0.9f * h);
+      glVertex2f(0.05f * w, 0.9f * h);
+      glEnd();
+      glDisable(GL_BLEND);
+      glEnable(GL_DEPTH_TEST);
+      glEnable(GL_LIGHTING);
+      glPopMatrix();
+      glMatrixMode(GL_PROJECTION);
+      glPopMatrix();
+      glMatrixMode(GL_MODELVIEW);
     }
     /* IceT's draw callback: colour, then depth. */
     glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, color);

@@ -140,6 +140,8 @@ pub struct Scene<'f> {
     /// Lines and points as solids, for secondary rays, and their BVH.
     solids: &'f [Solid],
     solid_bvh: Option<CwBvh>,
+    /// The draws of lines and points (those the solids come from), sorted.
+    line_draws: Vec<u32>,
     /// Some surface is drawn with blending or the alpha test: light may pass through it.
     translucent: bool,
 }
@@ -219,8 +221,14 @@ impl<'f> Scene<'f> {
             bounds: all,
             solids: &frame.solids,
             solid_bvh,
+            line_draws: line_draws(frame),
             translucent,
         }
+    }
+
+    /// Whether draw `sequence` drew lines or points (as quads, with solids).
+    pub fn is_line(&self, sequence: u32) -> bool {
+        self.line_draws.binary_search(&sequence).is_ok()
     }
 
     /// Offers `visit` every instance whose box the ray meets (the top-level BVH's way when
@@ -264,12 +272,21 @@ impl<'f> Scene<'f> {
     }
 
     /// Whether anything lies along the ray in [tmin, tmax] (culled faces too: they are still
-    /// there to cast shadows and occlude; lines and points as solids, but those of draw
-    /// `own`, where the ray starts).
+    /// there to cast shadows and occlude). Lines and points block as their solids, but those
+    /// of draw `own`, where the ray starts; with `own` None (AO rays), not at all: a line is
+    /// drawn on what it lies on and shows its AO (`Tracer::beneath`), it does not shade it.
     #[inline]
     pub fn occluded(&self, ray: Ray, own: Option<u32>) -> bool {
         if self.solid_blocks(ray, own) {
             return true;
+        }
+        if !self.line_draws.is_empty() {
+            // Lines and points occlude as their solids: their quads face the camera, a ribbon
+            // a pixel wide that would shade what they are drawn on.
+            return HITS.with_borrow_mut(|hits| {
+                self.all(ray, hits);
+                hits.iter().any(|h| !self.is_line(h.sequence))
+            });
         }
         if self.bvh.occluded(&ray) {
             return true;
@@ -288,7 +305,7 @@ impl<'f> Scene<'f> {
     /// every shadow and AO ray asks, and most scenes have no solids.
     #[inline]
     fn solid_blocks(&self, ray: Ray, own: Option<u32>) -> bool {
-        self.solid_bvh.as_ref().is_some_and(|bvh| {
+        own.is_some() && self.solid_bvh.as_ref().is_some_and(|bvh| {
             !bvh.ray_traverse_miss(ray, |r, slot| {
                 let s = &self.solids[bvh.primitive_indices[slot] as usize];
                 if Some(s.sequence) == own {
@@ -316,11 +333,11 @@ impl<'f> Scene<'f> {
         eps: f32,
         mut local: impl FnMut() -> Vec3,
     ) -> f32 {
-        if self.translucent || self.solid_bvh.is_some() || self.top.is_some() {
+        if self.translucent || !self.line_draws.is_empty() || self.top.is_some() {
             return (0..count)
                 .map(|_| {
                     let ray = leaving(at.p, at.n, around.at(local()), eps, distance);
-                    1.0 - self.transmittance(ray, Some(at.draw))
+                    1.0 - self.transmittance(ray, None)
                 })
                 .sum();
         }
@@ -367,7 +384,7 @@ impl<'f> Scene<'f> {
     /// How much light gets through along the ray (a unit direction), from 0 to 1: opaque
     /// geometry blocks it; a surface drawn with blending lets 1 - alpha through (its colours'
     /// alpha where the ray crosses it), one with the alpha test all or nothing, as GL would
-    /// draw that fragment. Solids of draw `own` do not count, as for `occluded`.
+    /// draw that fragment. Lines and points count as `occluded` says (`own`).
     #[inline]
     pub fn transmittance(&self, ray: Ray, own: Option<u32>) -> f32 {
         if !self.translucent {
@@ -376,14 +393,10 @@ impl<'f> Scene<'f> {
         if self.solid_blocks(ray, own) {
             return 0.0;
         }
-        // Secondary rays are many: one buffer per thread for their hits.
-        thread_local! {
-            static HITS: std::cell::RefCell<Vec<Hit>> = const { std::cell::RefCell::new(Vec::new()) };
-        }
         HITS.with_borrow_mut(|hits| {
             self.all(ray, hits);
             let mut through = 1.0f32;
-            for &h in hits.iter() {
+            for &h in hits.iter().filter(|h| !self.is_line(h.sequence)) {
                 let Some(t) = self.frame.triangle(h.id) else { continue };
                 let s = &self.frame.surfaces[t.surface as usize];
                 if s.blend.is_none() && s.alpha_test.is_none() {
@@ -514,6 +527,20 @@ fn eye_bounds(mesh: &Mesh, modelview: &DMat4) -> Aabb {
         b.extend(Vec3A::from(modelview.transform_point3(c).as_vec3()));
     }
     b
+}
+
+
+// Secondary rays are many: one buffer per thread for the hits of those that need them all.
+thread_local! {
+    static HITS: std::cell::RefCell<Vec<Hit>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The draws of `frame` that drew lines or points (those its solids come from), sorted.
+fn line_draws(frame: &Frame) -> Vec<u32> {
+    let mut draws: Vec<u32> = frame.solids.iter().map(|s| s.sequence).collect();
+    draws.sort_unstable();
+    draws.dedup();
+    draws
 }
 
 #[cfg(test)]

@@ -45,9 +45,22 @@ pub(crate) struct Tracer<'a> {
     /// The hits shaded the short way, when the frame asks for the GL look alone.
     pub gouraud: Option<Gouraud>,
     /// Ambient occlusion is left out of the colours and kept apart for the denoiser
-    /// (`Scratch::ao`), except at pixels where a draw blends.
+    /// (`Scratch::ao`).
     pub split_ao: bool,
 }
+
+/// `AoPixel::object` as `surface` leaves it: the object of the hit it shaded, which the caller
+/// knows and fills in (`of_hit`).
+const HIT_OBJECT: u32 = u32::MAX - 1;
+
+/// `a`, its object filled in with `instance` where it is the hit's own (`HIT_OBJECT`).
+fn of_hit(a: AoPixel, instance: u32) -> AoPixel {
+    AoPixel { object: if a.object == HIT_OBJECT { instance } else { a.object }, ..a }
+}
+
+/// How close (in pixels' widths at its depth) a line or point lies to a surface to show that
+/// surface's AO: edges drawn on a mesh, a grid a hair above the ground.
+const ON_SURFACE: f64 = 4.0;
 
 /// Per-thread buffers, reused from pixel to pixel, and the rays traced (for the statistics).
 #[derive(Default)]
@@ -58,6 +71,8 @@ pub(crate) struct Scratch {
     /// made, and for each place of `frags` once resolving sorted them, where it was made.
     frag_ao: Vec<Option<AoPixel>>,
     made_at: Vec<usize>,
+    /// `frags`' colours before AO darkens them, for resolving a blended pixel again.
+    colors: Vec<Vec4>,
     pub rays: Cell<u64>,
     /// What recent camera rays' triangles were made into: whole triangles, and the corners'
     /// colours of those shaded the short way (`Gouraud`).
@@ -204,7 +219,7 @@ impl Tracer<'_> {
                     let split = self.split_ao.then_some(&s.ao);
                     let f = self.surface(t, at(&hit), r.direction, sampler, &s.rays, split, 0);
                     if let Some(a) = s.ao.get() {
-                        s.ao.set(Some(AoPixel { object: hit.id.instance, ..a }));
+                        s.ao.set(Some(of_hit(a, hit.id.instance)));
                     }
                     f
                 }
@@ -246,7 +261,7 @@ impl Tracer<'_> {
                 f.depth = offset_depth(self.camera, &t, f.depth, offset);
             }
             s.frags.push((*hit, f));
-            s.frag_ao.push(s.ao.take().map(|a| AoPixel { object: hit.id.instance, ..a }));
+            s.frag_ao.push(s.ao.take().map(|a| of_hit(a, hit.id.instance)));
         }
         if !split {
             return Some(in_drawing_order(self.frame, &mut s.frags, under, depth_under));
@@ -263,17 +278,79 @@ impl Tracer<'_> {
             s.ao.set(resolved.last.and_then(|k| s.frag_ao[s.made_at[k]]));
             return Some((resolved.color, resolved.depth));
         }
-        // Fragments blended (or combined by a logic op): each darkened by its own AO first, as
-        // without denoising, and the pixel resolved again; its AO is not one fragment's.
+        // Fragments blended (a translucent overlay over the scene, an antialiased line's edge):
+        // the pixel's AO is that of the fragment whose AO darkens it most, denoised as any
+        // pixel's, with the share of the pixel's colour it darkens found by resolving the pixel
+        // with that fragment fully hidden (blending is linear in it). The others are darkened by
+        // their own AO, as without denoising.
         let intensity = self.options.effects.ao_intensity;
-        for ((_, f), &k) in s.frags.iter_mut().zip(&s.made_at) {
-            if let Some(a) = s.frag_ao[k] {
-                f.color = a.darken(f.color, a.hidden, intensity);
+        if intensity <= 0.0 {
+            s.ao.set(None);
+            return Some((resolved.color, resolved.depth));
+        }
+        s.colors.clear();
+        s.colors.extend(s.frags.iter().map(|(_, f)| f.color));
+        let darkened = |s: &mut Scratch, hidden: &dyn Fn(usize, &AoPixel) -> f32| {
+            for (k, (_, f)) in s.frags.iter_mut().enumerate() {
+                f.color = s.colors[k];
+                if let Some(a) = s.frag_ao[s.made_at[k]] {
+                    f.color = a.darken(f.color, hidden(k, &a), intensity);
+                }
+            }
+            resolve_in_order(self.frame, &mut s.frags, under, depth_under)
+        };
+        // Which fragment's AO counts most: the one that darkens the pixel most when hidden.
+        let mut most: Option<(usize, f32)> = None;
+        for j in 0..s.frags.len() {
+            if s.frag_ao[s.made_at[j]].is_some() {
+                let c = darkened(s, &|k, _| if k == j { 1.0 } else { 0.0 }).color;
+                let share = (resolved.color - c).truncate().element_sum();
+                if share > most.map_or(1e-6, |(_, m)| m) {
+                    most = Some((j, share));
+                }
             }
         }
-        s.ao.set(None);
-        let again = resolve_in_order(self.frame, &mut s.frags, under, depth_under);
+        let others = |j: Option<usize>| move |k: usize, a: &AoPixel| if Some(k) == j { 0.0 } else { a.hidden };
+        let Some((j, _)) = most else {
+            s.ao.set(None);
+            let again = darkened(s, &others(None));
+            return Some((again.color, again.depth));
+        };
+        let hidden = darkened(s, &|k, a| if k == j { 1.0 } else { a.hidden }).color;
+        let again = darkened(s, &others(Some(j)));
+        let lit = ((again.color - hidden).truncate() / intensity).max(Vec3::ZERO);
+        s.ao.set(s.frag_ao[s.made_at[j]].map(|a| AoPixel { lit, ..a }));
         Some((again.color, again.depth))
+    }
+
+    /// The surface a line or point (of draw `line`) seen at `p` along `dir` lies on: the nearest hit of another
+    /// kind of draw within `ON_SURFACE` pixels' widths before or behind it (a line is drawn on
+    /// a surface or a hair off it), as where AO rays start and its object. None for a line in
+    /// the open.
+    fn beneath(&self, line: u32, p: DVec3, dir: DVec3) -> Option<(Origin, u32)> {
+        let d = dir.normalize_or_zero();
+        let reach = ON_SURFACE * self.camera.pixel_size(p);
+        if reach <= 0.0 || d == DVec3::ZERO {
+            return None;
+        }
+        let start = p - d * reach;
+        let mut hits = Vec::new();
+        let ray = crate::bvh::ray(start.as_vec3a(), d.as_vec3a(), 0.0, (2.0 * reach) as f32);
+        self.scene.all(ray, &mut hits);
+        let hit = hits
+            .iter()
+            .filter(|h| !self.scene.is_line(h.sequence))
+            .min_by(|a, b| (a.t as f64 - reach).abs().total_cmp(&(b.t as f64 - reach).abs()))?;
+        let t = self.frame.triangle(hit.id)?;
+        let [a, b, c] = t.positions;
+        let mut n = (b - a).cross(c - a).normalize_or_zero();
+        if n.dot(d.as_vec3()) > 0.0 {
+            n = -n;
+        }
+        let at = (start + d * hit.t as f64).as_vec3();
+        // The AO rays start as from the line's own draw: its solids (a hair above the surface,
+        // as thick as on the screen) would hide most of the sky otherwise.
+        Some((Origin { p: at, n, draw: line }, hit.id.instance))
     }
 
     /// The fragment of triangle `t` at eye-space point `p`, reached along `dir`, with the
@@ -311,10 +388,17 @@ impl Tracer<'_> {
         let mut f = shade(self.frame, self.camera, t, p, self.options.per_pixel_lighting, visible);
         if e.ao_samples > 0 && bounce == 0 {
             count(rays, e.ao_samples as u64);
-            let hidden = occlusion(self.scene, &from, e.ao_samples, self.ao_distance, self.eps, sampler);
+            // A line or point has no hemisphere of its own: lying on a surface, it shows that
+            // surface's AO, as if drawn onto it.
+            let beneath = if self.scene.is_line(t.sequence) { self.beneath(t.sequence, p, dir) } else { None };
+            let (at, object) = match &beneath {
+                Some((o, object)) => (o, *object),
+                None => (&from, HIT_OBJECT),
+            };
+            let hidden = occlusion(self.scene, at, e.ao_samples, self.ao_distance, self.eps, sampler);
             match split {
                 // What AO darkens: the surface's own colour, not what it reflects (below).
-                Some(ao) => ao.set(Some(AoPixel { eye: from.p, normal: n, object: 0, hidden, lit: f.color.xyz() })),
+                Some(ao) => ao.set(Some(AoPixel { eye: at.p, normal: at.n, object, hidden, lit: f.color.xyz() })),
                 None => {
                     let keep = 1.0 - e.ao_intensity * hidden;
                     f.color = (f.color.xyz() * keep).extend(f.color.w);
