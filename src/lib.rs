@@ -19,6 +19,7 @@ pub mod abi;
 mod calls;
 mod distribute;
 mod feed;
+mod panel;
 mod present;
 mod record;
 mod start;

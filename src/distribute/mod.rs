@@ -84,6 +84,12 @@ pub struct Distribution {
     node: Option<Node<MpiTransport>>,
     /// Image-parallel tracing stopped (a fault, or MPI could not be joined).
     stopped: bool,
+    /// The settings in force, as rank 0's changes (the live control panel) leave them; and
+    /// the last settings rank 0 changed here, for the caller (`take_changed`).
+    config: std::sync::Arc<std::sync::Mutex<Config>>,
+    changed: std::sync::Arc<std::sync::Mutex<Option<Config>>>,
+    /// Rank 0: changes to hand on with the next frame (before the node exists).
+    announced: Option<(u64, Vec<(String, String)>)>,
 }
 
 /// What a shared frame gave this rank: the picture for its framebuffer, and the report.
@@ -103,7 +109,34 @@ impl Distribution {
             roles: if config.dedicated_master() { Roles::Dedicated } else { Roles::Shared },
             node: None,
             stopped: false,
+            config: std::sync::Arc::new(std::sync::Mutex::new(config.clone())),
+            changed: Default::default(),
+            announced: None,
         }
+    }
+
+    /// Rank 0: settings changed from the live control panel (`config` the result, already in
+    /// force here); every other rank makes `changes` before it traces the next frame.
+    pub fn announce(&mut self, config: &Config, changes: Vec<(String, String)>) {
+        *self.config.lock().unwrap_or_else(|e| e.into_inner()) = config.clone();
+        // (`self.settings` stays the agreement to start a node from: the one before the change.)
+        let settings = config.picture_settings();
+        match self.node.as_mut() {
+            Some(node) => node.announce(settings, changes),
+            None => match self.announced.as_mut() {
+                Some((s, c)) => {
+                    *s = settings;
+                    c.extend(changes);
+                }
+                None => self.announced = Some((settings, changes)),
+            },
+        }
+    }
+
+    /// A rank other than 0: the settings rank 0's last change left here, once (the frame's
+    /// trigger is the caller's).
+    pub fn take_changed(&mut self) -> Option<Config> {
+        self.changed.lock().unwrap_or_else(|e| e.into_inner()).take()
     }
 
     /// Whether frames are to be shared (`frame`) rather than traced alone.
@@ -147,8 +180,24 @@ impl Distribution {
                         );
                     }
                     glray_core::info!("rank {} of {}: image-parallel tracing", transport.rank(), transport.size());
+                    // Settings changed before the first frame count from it (rank 0 hands them on).
                     let agreement = Agreement { settings: self.settings };
-                    self.node = Some(Node::with_roles(transport, agreement, self.limits, self.roles));
+                    let mut node = Node::with_roles(transport, agreement, self.limits, self.roles);
+                    if let Some((settings, changes)) = self.announced.take() {
+                        node.announce(settings, changes);
+                    }
+                    let (config, changed) = (self.config.clone(), self.changed.clone());
+                    node.on_settings(Box::new(move |changes, renderer| {
+                        let mut config = config.lock().unwrap_or_else(|e| e.into_inner());
+                        let (made, options) = crate::panel::changes::change(&config, changes)?;
+                        renderer.options = options;
+                        renderer.restart();
+                        *config = made.clone();
+                        let settings = made.picture_settings();
+                        *changed.lock().unwrap_or_else(|e| e.into_inner()) = Some(made);
+                        Ok(settings)
+                    }));
+                    self.node = Some(node);
                 }
                 Err(e) => {
                     self.stop(&e);

@@ -76,6 +76,8 @@ pub struct Live {
     swaps: u64,
     /// Each thread's context's `passed_total` at its last statistics line.
     passed_seen: HashMap<u32, u64>,
+    /// The live control panel (setting `panel`; rank 0's under MPI).
+    panel: Option<crate::panel::Panel>,
 }
 
 /// The tracer's threads (None, logged, if the system gives none: frames are then traced on
@@ -93,13 +95,7 @@ fn tracer_pool(threads: usize) -> Option<&'static rayon::ThreadPool> {
 /// Turns live ray tracing on with the settings in force; the recorder, started next, keeps
 /// what it returns.
 pub fn configure(config: &Config) -> Live {
-    let trigger = match config.trigger() {
-        "swap" => Trigger::Swap,
-        "finish" => Trigger::Finish,
-        "flush" => Trigger::Flush,
-        "readpixels" => Trigger::ReadPixels,
-        _ => Trigger::Auto,
-    };
+    let trigger = trigger_of(config);
     let threads = crate::distribute::tracer_threads(config);
     let live = Live {
         capture: Capture::default(),
@@ -122,9 +118,24 @@ pub fn configure(config: &Config) -> Live {
         batch_passes: config.batch_passes(),
         swaps: 0,
         passed_seen: HashMap::new(),
+        panel: None,
     };
+    // Rank 0 serves the panel; the other ranks take its changes from rank 0 (`Distribution`).
+    let rank0 = !crate::distribute::in_mpi() || crate::distribute::env_rank().is_none_or(|r| r == 0);
+    let live = Live { panel: if rank0 { crate::panel::Panel::start(config, 1) } else { None }, ..live };
     ON.store(true, Ordering::Relaxed);
     live
+}
+
+/// The frame trigger `config` sets.
+fn trigger_of(config: &Config) -> Trigger {
+    match config.trigger() {
+        "swap" => Trigger::Swap,
+        "finish" => Trigger::Finish,
+        "flush" => Trigger::Flush,
+        "readpixels" => Trigger::ReadPixels,
+        _ => Trigger::Auto,
+    }
 }
 
 fn stop(why: &str) {
@@ -177,7 +188,7 @@ fn following(live: &mut Option<Live>, f: impl FnOnce(&mut Capture)) {
 /// stops ray tracing, not the program.
 #[inline]
 fn guarded(live: &mut Live, f: impl FnOnce(&mut Live) -> Result<(), String>) {
-    let started = live.stats.is_some().then(std::time::Instant::now);
+    let started = (live.stats.is_some() || live.panel.is_some()).then(std::time::Instant::now);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(&mut *live)));
     if let Some(t) = started {
         live.capture_time += t.elapsed();
@@ -408,6 +419,18 @@ pub fn take_unseen_error(live: &mut Live, thread: u32) -> u32 {
 }
 
 impl Live {
+    /// The settings the panel changed since the last frame, made from this frame on: here, and
+    /// (in an MPI job) on every rank with it.
+    fn take_panel_changes(&mut self) {
+        let Some((config, changes)) = self.panel.as_ref().and_then(|p| p.take_changes()) else { return };
+        let Some(options) = glray_render::Options::from_config(&config) else { return };
+        glray_core::info!("panel: {}", changes.iter().map(|(k, v)| format!("{k} = {v:?}")).collect::<Vec<_>>().join(", "));
+        self.renderer.options = options;
+        self.renderer.restart();
+        self.trigger = trigger_of(&config);
+        self.distribution.announce(&config, changes);
+    }
+
     /// In a child just forked: the parent's tracer threads do not exist here (waiting on them
     /// hung the child's first new frame); the child gets threads of its own. The old pool is
     /// not dropped (`glray_core::threads` never drops one): that would signal threads that
@@ -417,6 +440,7 @@ impl Live {
     }
 
     fn present(&mut self, thread: u32) {
+        self.take_panel_changes();
         let ctx = self.capture.context(thread);
         let revision = ctx.revision();
         if self.presented.get(&thread) == Some(&revision) {
@@ -475,6 +499,10 @@ impl Live {
         }
         // In an MPI rank, shared with the other ranks (None: traced here alone).
         let shared = self.distribution.frame(frame, last, renderer, self.pool);
+        if let Some(changed) = self.distribution.take_changed() {
+            // Rank 0's panel changed the settings (made on this rank's renderer already).
+            self.trigger = trigger_of(&changed);
+        }
         let (rendered, ranks) = match shared {
             Some(s) => (s.picture, Some(stats::RankStats { rank: s.rank, ranks: s.ranks, report: s.report })),
             None => (traced(self.pool, renderer, frame, last), None),
@@ -508,8 +536,8 @@ impl Live {
             self.fell_back.insert(thread);
             return;
         }
-        if let Some(sink) = self.stats.as_mut() {
-            sink.write(&stats::FrameStats {
+        if self.stats.is_some() || self.panel.is_some() {
+            let line = stats::FrameStats {
                 frame: number,
                 thread,
                 width: w,
@@ -524,7 +552,13 @@ impl Live {
                 present: start.elapsed(),
                 passed_draws: passed_total - self.passed_seen.insert(thread, passed_total).unwrap_or(0),
                 ranks,
-            });
+            };
+            if let Some(sink) = self.stats.as_mut() {
+                sink.write(&line);
+            }
+            if let Some(panel) = &self.panel {
+                panel.publish(number, &rendered, Some(stats::json(&line)));
+            }
         }
         self.shown.insert(thread);
         self.last.insert(thread, rendered);

@@ -135,30 +135,7 @@ impl StatsSink {
                 },
                 s.ranks.as_ref().map_or(String::new(), RankStats::text)
             ),
-            StatsSink::File(_) => writeln!(
-                line,
-                "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
-                 \"trace_ms\":{:.3},\"denoise_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1},\"passed_draws\":{}{}}}",
-                s.frame,
-                s.thread,
-                s.width,
-                s.height,
-                ms(s.capture),
-                ms(r.build),
-                ms(r.trace),
-                ms(r.denoise),
-                ms(s.present),
-                r.rays,
-                mrays,
-                r.triangles,
-                r.samples,
-                r.reused,
-                r.fast_builds,
-                r.refits,
-                mb(r.kept_bytes),
-                s.passed_draws,
-                s.ranks.as_ref().map_or(String::new(), RankStats::json)
-            ),
+            StatsSink::File(_) => writeln!(line, "{}", json(s)),
         };
         let result = match self {
             _ if made.is_err() => return,
@@ -169,4 +146,34 @@ impl StatsSink {
             glray_core::warn!("stats: {e}");
         }
     }
+}
+
+/// One frame's statistics as a JSON object (a `GLRAY_STATS` file's line; the panel's plots).
+pub fn json(s: &FrameStats) -> String {
+    let r = &s.render;
+    let trace = r.trace.as_secs_f64();
+    let mrays = if trace > 0.0 { r.rays as f64 / trace / 1e6 } else { 0.0 };
+    format!(
+        "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
+         \"trace_ms\":{:.3},\"denoise_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1},\"passed_draws\":{}{}}}",
+        s.frame,
+        s.thread,
+        s.width,
+        s.height,
+        ms(s.capture),
+        ms(r.build),
+        ms(r.trace),
+        ms(r.denoise),
+        ms(s.present),
+        r.rays,
+        mrays,
+        r.triangles,
+        r.samples,
+        r.reused,
+        r.fast_builds,
+        r.refits,
+        mb(r.kept_bytes),
+        s.passed_draws,
+        s.ranks.as_ref().map_or(String::new(), RankStats::json)
+    )
 }

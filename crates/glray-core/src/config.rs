@@ -160,6 +160,14 @@ pub const SETTINGS: &[Setting] = &[
               each pass is a frame shared by every rank.",
     },
     Setting {
+        key: "panel",
+        kind: Kind::Int(0, 65535),
+        default: "",
+        doc: "The live control panel: a web page and JSON API on 127.0.0.1 at this port (0: a free one), \
+              to steer the picture settings of the running program and watch its frames and statistics \
+              (docs/panel.md). Its address and access token are printed at start. Empty: off.",
+    },
+    Setting {
         key: "stats",
         kind: Kind::Path,
         default: "",
@@ -295,6 +303,8 @@ pub enum Source {
     File(PathBuf),
     Env(String),
     Flag,
+    /// Changed while the program runs, from the live control panel.
+    Panel,
 }
 
 impl fmt::Display for Source {
@@ -304,6 +314,7 @@ impl fmt::Display for Source {
             Source::File(p) => write!(f, "file {}", p.display()),
             Source::Env(v) => write!(f, "environment {v}"),
             Source::Flag => write!(f, "glray run flag"),
+            Source::Panel => write!(f, "the live control panel"),
         }
     }
 }
@@ -501,6 +512,58 @@ impl Config {
         &self.values[key].0
     }
 
+    /// The value of setting `key` (None: no such setting).
+    pub fn value(&self, key: &str) -> Option<&str> {
+        self.values.get(key).map(|(v, _)| v.as_str())
+    }
+
+    /// These settings with `changes` (key, value) made from the live control panel: each key
+    /// one of `allowed`, each value checked as from any other place; the first bad one is the
+    /// error, and nothing changes.
+    pub fn with_changes(&self, changes: &[(String, String)], allowed: &[&str]) -> Result<Config, ConfigError> {
+        let mut out = self.clone();
+        for (key, value) in changes {
+            let place = "from the live control panel".to_string();
+            let s = setting(key).filter(|s| allowed.contains(&s.key)).ok_or_else(|| {
+                let guess = nearest(key, allowed.iter().copied()).map(|k| format!("did you mean `{k}`? ")).unwrap_or_default();
+                ConfigError(format!(
+                    "setting `{key}` cannot be changed from the panel; {guess}it changes: {}",
+                    allowed.join(", ")
+                ))
+            })?;
+            let v = validate(s, value, &|| place.clone())?;
+            out.values.insert(s.key, (v, Source::Panel));
+        }
+        Ok(out)
+    }
+
+    /// The settings `keys` as a config file (`GLRAY_CONFIG` reads it back): one `key = "value"`
+    /// line each, after a comment saying what made it.
+    pub fn to_toml(&self, keys: &[&str], made_by: &str) -> String {
+        let mut out = format!("# glray settings, {made_by}: GLRAY_CONFIG=this-file reproduces them\n");
+        for key in keys {
+            if let Some(v) = self.value(key) {
+                out.push_str(&format!("{key} = {}\n", toml::Value::String(v.to_string())));
+            }
+        }
+        out
+    }
+
+    /// Where setting `key`'s value came from.
+    pub fn source(&self, key: &str) -> Option<&Source> {
+        self.values.get(key).map(|(_, s)| s)
+    }
+
+    /// What setting `key` accepts, in words (None: no such setting).
+    pub fn allowed(key: &str) -> Option<String> {
+        setting(key).map(|s| allowed(s.kind))
+    }
+
+    /// The live control panel's port (None: off).
+    pub fn panel(&self) -> Option<u16> {
+        self.get("panel").parse().ok()
+    }
+
     pub fn enable(&self) -> bool {
         self.get("enable") == "true"
     }
@@ -604,6 +667,7 @@ impl Config {
         use std::hash::{Hash, Hasher};
         const APART: &[&str] = &[
             "log",
+            "panel",
             "record",
             "stats",
             "dump_scene",

@@ -134,7 +134,15 @@ pub struct Node<T: Transport> {
     last_frame: Option<Duration>,
     bytes_sent: u64,
     bytes_received: u64,
+    /// Rank 0: settings changes to hand on with the next frame (`announce`).
+    announced: Option<(u64, Vec<(String, String)>)>,
+    /// Other ranks: how to make rank 0's changes (`on_settings`).
+    hook: Option<SettingsHook>,
 }
+
+/// Makes rank 0's settings changes (setting, value) on this rank: to its renderer and wherever
+/// else they matter; the new settings' agreement number, or why they cannot be made.
+pub type SettingsHook = Box<dyn FnMut(&[(String, String)], &mut Renderer) -> Result<u64, String> + Send>;
 
 /// How long the message loop sleeps when there is nothing to do.
 const IDLE: Duration = Duration::from_micros(50);
@@ -168,7 +176,27 @@ impl<T: Transport> Node<T> {
             last_frame: None,
             bytes_sent: 0,
             bytes_received: 0,
+            announced: None,
+            hook: None,
         }
+    }
+
+    /// Rank 0: its settings changed (already made here, `settings` their new agreement
+    /// number); every other rank makes `changes` before it traces the next frame.
+    pub fn announce(&mut self, settings: u64, changes: Vec<(String, String)>) {
+        match self.announced.as_mut() {
+            // Two changes before a frame: both go, in order.
+            Some((s, c)) => {
+                *s = settings;
+                c.extend(changes);
+            }
+            None => self.announced = Some((settings, changes)),
+        }
+    }
+
+    /// How this rank makes rank 0's settings changes (`Message::Settings`).
+    pub fn on_settings(&mut self, hook: SettingsHook) {
+        self.hook = Some(hook);
     }
 
     pub fn rank(&self) -> usize {
@@ -225,7 +253,7 @@ impl<T: Transport> Node<T> {
         let started = Instant::now();
         let (sent0, received0) = (self.bytes_sent, self.bytes_received);
         let mut report = FrameReport { frame, ..FrameReport::default() };
-        let (merged, waited) = self.exchange(frame, mine)?;
+        let (merged, waited) = self.exchange(frame, mine, renderer)?;
         report.wait += waited;
         report.exchange = started.elapsed();
         let (w, h) = merged.size();
@@ -275,8 +303,20 @@ impl<T: Transport> Node<T> {
     }
 
     /// Step 1: every rank's frame to every rank, merged in rank order; and the time waited.
-    fn exchange(&mut self, frame: u64, mine: &Frame) -> Result<(Frame, Duration), Fault> {
+    fn exchange(&mut self, frame: u64, mine: &Frame, renderer: &mut Renderer) -> Result<(Frame, Duration), Fault> {
         let (me, size) = (self.rank(), self.size());
+        // Scenes sent before a settings change reached their rank carry the settings before it:
+        // agreed to for this frame.
+        let mut before = None;
+        if let Some((settings, changes)) = self.announced.take() {
+            before = Some(std::mem::replace(&mut self.agreement.settings, settings));
+            if me == 0 {
+                let m = Message::Settings { frame, settings, changes };
+                for r in 1..size {
+                    self.send(r, m.clone())?;
+                }
+            }
+        }
         if size > 1 {
             let scene = encode(mine, &mut self.sent);
             // Encoded once for every rank (the first frame's may be hundreds of megabytes).
@@ -300,8 +340,29 @@ impl<T: Transport> Node<T> {
         let mut last_heard = Instant::now();
         while scenes.iter().enumerate().any(|(r, s)| r != me && s.is_none()) {
             match self.receive(frame)? {
+                Some((0, Message::Settings { settings, changes, .. })) if me != 0 => {
+                    let made = match self.hook.as_mut() {
+                        Some(hook) => hook(&changes, renderer),
+                        None => Err("this rank takes no settings changes".to_string()),
+                    };
+                    match made {
+                        Ok(mine) if mine == settings => {
+                            before = Some(std::mem::replace(&mut self.agreement.settings, settings));
+                        }
+                        Ok(_) => {
+                            return Err(Fault::Refused {
+                                rank: 0,
+                                why: format!("its settings changed ({changes:?}) and this rank's no longer agree"),
+                            })
+                        }
+                        Err(why) => {
+                            return Err(Fault::Refused { rank: 0, why: format!("a settings change {changes:?}: {why}") })
+                        }
+                    }
+                    last_heard = Instant::now();
+                }
                 Some((from, Message::Scene { settings, scene, .. })) => {
-                    if settings != self.agreement.settings {
+                    if settings != self.agreement.settings && Some(settings) != before {
                         return Err(Fault::Refused {
                             rank: from,
                             why: format!(

@@ -24,6 +24,10 @@ pub enum Message {
         #[serde(with = "serde_bytes")]
         scene: Vec<u8>,
     },
+    /// Rank 0's settings changed (from the live control panel): every rank makes the same
+    /// changes (setting, value) before it traces this frame, after which their settings agree
+    /// on `settings` again. Sent before rank 0's scene of the frame.
+    Settings { frame: u64, settings: u64, changes: Vec<(String, String)> },
     /// A render rank asks the master for more tiles.
     Ask { frame: u64 },
     /// The master's answer: tiles to trace, or none (the frame's tiles are all handed out).
@@ -62,6 +66,7 @@ impl Message {
     pub fn frame(&self) -> u64 {
         match self {
             Message::Scene { frame, .. }
+            | Message::Settings { frame, .. }
             | Message::Ask { frame }
             | Message::Grant { frame, .. }
             | Message::Tile { frame, .. }

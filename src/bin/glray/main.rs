@@ -59,6 +59,11 @@ enum Command {
         /// libglray.so to use (default: the one installed beside this command).
         #[arg(long, value_name = "PATH")]
         library: Option<PathBuf>,
+        /// Serve the live control panel on 127.0.0.1 (at PORT; without one, a free port): its
+        /// address and access token are printed at start (docs/panel.md). The same as
+        /// --set panel=PORT.
+        #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "0", require_equals = true)]
+        panel: Option<u16>,
         /// Run N ranks of PROGRAM under Open MPI's mpirun, each with glray and every GLRAY_*
         /// setting (image-parallel: docs/distributed.md).
         #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
@@ -187,7 +192,10 @@ fn main() -> ExitCode {
         Command::Compare { a, b, fuzz, max_differing, min_psnr, diff, json } => {
             return compare(&a, &b, fuzz, max_differing, min_psnr, diff.as_deref(), json);
         }
-        Command::Run { dropin, mut set, record, library, np, hosts, mpirun_args, program } => {
+        Command::Run { dropin, mut set, record, library, panel, np, hosts, mpirun_args, program } => {
+            if let Some(port) = panel {
+                set.push(format!("panel={port}"));
+            }
             if let Some(r) = record {
                 // Absolute, so that a program that changes directory records where it was asked.
                 let r = std::path::absolute(&r).unwrap_or(r);

@@ -1,0 +1,283 @@
+//! The live control panel (docs/panel.md) on real programs: glxgears under `glray run --panel`
+//! steered through the JSON API over real HTTP (the token checked, bad values refused with the
+//! reason, many requests at once, a slow client that stalls no frame, the TOML download read
+//! back by a fresh run), its page in headless Chromium turning AO on, and a change reaching
+//! both ranks of `glray run --np 2`.
+
+mod common;
+
+use common::*;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// A program running under `glray run --panel`, killed by PID when dropped.
+struct Running {
+    child: Child,
+    /// host:port and the access token, as printed.
+    address: String,
+    token: String,
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Starts `cmd` (a `glray run --panel ...`), waiting (bounded) for the panel's line on stderr.
+fn start(mut cmd: Command, log: &Path) -> Running {
+    let file = std::fs::File::create(log).unwrap();
+    let child = cmd.stderr(file).stdout(Stdio::null()).spawn().expect("glray run");
+    let started = Instant::now();
+    loop {
+        let text = std::fs::read_to_string(log).unwrap_or_default();
+        if let Some(line) = text.lines().find(|l| l.starts_with("glray: panel http://")) {
+            let url = line.trim_start_matches("glray: panel http://");
+            let (address, query) = url.split_once("/?token=").expect("the panel's URL carries a token");
+            return Running { child, address: address.to_string(), token: query.trim().to_string() };
+        }
+        assert!(started.elapsed() < Duration::from_secs(60), "no panel line within 60 s:\n{text}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// A response: status, headers (lowercase names) and body.
+struct Reply {
+    status: u16,
+    headers: Vec<(String, String)>,
+    body: Vec<u8>,
+}
+
+impl Reply {
+    fn json(&self) -> serde_json::Value {
+        serde_json::from_slice(&self.body).unwrap_or_else(|e| panic!("not JSON ({e}): {}", self.text()))
+    }
+    fn text(&self) -> String {
+        String::from_utf8_lossy(&self.body).into_owned()
+    }
+}
+
+/// One HTTP/1.1 request over a fresh connection (`Connection: close`), bounded in time.
+fn request(address: &str, method: &str, path: &str, body: &str) -> Reply {
+    let mut s = TcpStream::connect(address).unwrap_or_else(|e| panic!("connect {address}: {e}"));
+    s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+    let head = format!(
+        "{method} {path} HTTP/1.1\r\nHost: {address}\r\nConnection: close\r\nContent-Type: application/json\r\n\
+         Content-Length: {}\r\n\r\n{body}",
+        body.len()
+    );
+    s.write_all(head.as_bytes()).unwrap();
+    let mut all = Vec::new();
+    s.read_to_end(&mut all).unwrap();
+    let end = all.windows(4).position(|w| w == b"\r\n\r\n").expect("a response head");
+    let head = String::from_utf8_lossy(&all[..end]).into_owned();
+    let mut lines = head.lines();
+    let status = lines.next().and_then(|l| l.split(' ').nth(1)).and_then(|c| c.parse().ok()).expect("a status");
+    let headers: Vec<(String, String)> = lines
+        .filter_map(|l| l.split_once(':'))
+        .map(|(k, v)| (k.trim().to_ascii_lowercase(), v.trim().to_string()))
+        .collect();
+    let mut body = all[end + 4..].to_vec();
+    if headers.iter().any(|(k, v)| k == "transfer-encoding" && v.contains("chunked")) {
+        body = unchunk(&body);
+    }
+    Reply { status, headers, body }
+}
+
+fn unchunk(mut b: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    loop {
+        let Some(eol) = b.windows(2).position(|w| w == b"\r\n") else { return out };
+        let size = usize::from_str_radix(String::from_utf8_lossy(&b[..eol]).trim(), 16).unwrap_or(0);
+        if size == 0 {
+            return out;
+        }
+        out.extend_from_slice(&b[eol + 2..eol + 2 + size]);
+        b = &b[eol + 2 + size + 2..];
+    }
+}
+
+impl Running {
+    fn get(&self, path: &str) -> Reply {
+        let sep = if path.contains('?') { '&' } else { '?' };
+        request(&self.address, "GET", &format!("{path}{sep}token={}", self.token), "")
+    }
+    fn put(&self, body: &str) -> Reply {
+        request(&self.address, "PUT", &format!("/api/settings?token={}", self.token), body)
+    }
+    /// The statistics' frames.
+    fn frames(&self) -> Vec<serde_json::Value> {
+        let r = self.get("/api/stats");
+        assert_eq!(r.status, 200, "{}", r.text());
+        r.json()["frames"].as_array().cloned().unwrap_or_default()
+    }
+    fn last_frame(&self) -> u64 {
+        self.frames().last().and_then(|f| f["frame"].as_u64()).unwrap_or(0)
+    }
+    /// Waits (bounded) until frame `n` is in the statistics; the frames since the call.
+    fn wait_for_frame(&self, n: u64) -> Vec<serde_json::Value> {
+        let started = Instant::now();
+        loop {
+            let frames = self.frames();
+            if frames.last().and_then(|f| f["frame"].as_u64()).is_some_and(|f| f >= n) {
+                return frames;
+            }
+            assert!(started.elapsed() < Duration::from_secs(60), "frame {n} did not come within 60 s");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
+/// glxgears at 300x300 under `glray run --panel` on `display`, with `settings`.
+fn glxgears(display: &str, log: &Path, settings: &[&str]) -> Running {
+    let mut cmd = Command::new(glray_bin());
+    cmd.arg("run").arg("--panel");
+    for s in settings {
+        cmd.arg("--set").arg(s);
+    }
+    cmd.arg("--").arg(which("glxgears")).args(["-geometry", "300x300"]).env("DISPLAY", display);
+    without_glray(&mut cmd);
+    start(cmd, log)
+}
+
+/// A frame's AO rays: more rays than pixels (one camera ray each).
+fn traced_ao(frame: &serde_json::Value) -> bool {
+    let pixels = frame["width"].as_u64().unwrap() * frame["height"].as_u64().unwrap();
+    frame["rays"].as_u64().unwrap() > 2 * pixels
+}
+
+fn png_pixels(bytes: &[u8]) -> (u32, u32, Vec<u8>) {
+    let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    (info.width, info.height, buf)
+}
+
+#[test]
+fn the_panel_steers_glxgears_over_http_and_refuses_requests_without_the_token() {
+    let x = Xvfb::start();
+    let dir = scratch("panel-api");
+    let run = glxgears(&x.display, &dir.join("glxgears.log"), &["preset=gl"]);
+
+    // Without the token, with a wrong one, or with the token and a wrong path or method:
+    // refused, and nothing in the body but the reason.
+    let plain = request(&run.address, "GET", "/api/settings", "");
+    assert_eq!(plain.status, 401, "{}", plain.text());
+    let wrong = request(&run.address, "GET", "/api/frame.png?token=0123456789abcdef0123456789abcdef", "");
+    assert_eq!(wrong.status, 403, "{}", wrong.text());
+    assert!(!wrong.text().contains("preset") && wrong.json()["error"].is_string());
+    let change = request(&run.address, "PUT", "/api/settings", r#"{"preset":"ao"}"#);
+    assert_eq!(change.status, 401, "a change without the token");
+    assert_eq!(run.get("/api/nothing").status, 404);
+    assert_eq!(request(&run.address, "DELETE", &format!("/api/settings?token={}", run.token), "").status, 405);
+    // The listener is on 127.0.0.1 alone (the kernel's table of listening sockets says so),
+    // and this machine's other addresses get a refused connection.
+    let port = u16::from_str_radix(run.address.rsplit(':').next().unwrap(), 10).unwrap();
+    let tcp = std::fs::read_to_string("/proc/net/tcp").unwrap();
+    let listening: Vec<&str> = tcp
+        .lines()
+        .filter(|l| l.split_whitespace().nth(1).is_some_and(|a| a.ends_with(&format!(":{port:04X}"))))
+        .filter(|l| l.split_whitespace().nth(3) == Some("0A"))
+        .collect();
+    assert_eq!(listening.len(), 1, "{listening:?}");
+    assert!(listening[0].split_whitespace().nth(1).unwrap().starts_with("0100007F:"), "{listening:?}");
+    let others = Command::new("hostname").arg("-I").output().map(|o| stdout(&o)).unwrap_or_default();
+    for ip in others.split_whitespace().filter(|ip| !ip.starts_with("127.") && !ip.contains(':')) {
+        let refused = TcpStream::connect_timeout(&format!("{ip}:{port}").parse().unwrap(), Duration::from_secs(2));
+        assert!(refused.is_err(), "the panel answered on {ip}");
+    }
+
+    // The settings, then a bad value refused with the reason (and nothing changed).
+    let s = run.get("/api/settings");
+    assert_eq!(s.status, 200);
+    assert_eq!(s.json()["settings"]["preset"], "gl");
+    let bad = run.put(r#"{"ao_samples": "lots", "preset": "ao"}"#);
+    assert_eq!(bad.status, 400);
+    let why = bad.json()["error"].as_str().unwrap().to_string();
+    assert!(why.contains("ao_samples") && why.contains("0 to 1024"), "{why}");
+    assert_eq!(run.get("/api/settings").json()["settings"]["preset"], "gl", "a refused change changes nothing");
+    assert_eq!(run.put(r#"{"threads": 1}"#).status, 400, "a setting fixed at start");
+    assert_eq!(run.put("not json").status, 400);
+
+    // Frames come in the GL look: camera rays alone.
+    let before = run.last_frame();
+    let frames = run.wait_for_frame(before + 3);
+    assert!(!traced_ao(frames.last().unwrap()), "the GL look traces no AO");
+    let gl_png = run.get("/api/frame.png");
+    assert_eq!(gl_png.status, 200);
+    assert!(gl_png.headers.iter().any(|(k, v)| k == "content-type" && v == "image/png"));
+    let (w, h, gl_picture) = png_pixels(&gl_png.body);
+    assert_eq!((w, h), (300, 300));
+
+    // AO on: from the next frame on, at the latest within two.
+    let at = run.last_frame();
+    let on = run.put(r#"{"preset": "ao"}"#);
+    assert_eq!(on.status, 200, "{}", on.text());
+    assert_eq!(on.json()["settings"]["preset"], "ao");
+    let frames = run.wait_for_frame(at + 3);
+    let first_ao = frames.iter().find(|f| traced_ao(f)).expect("a frame with AO");
+    assert!(first_ao["frame"].as_u64().unwrap() <= at + 2, "AO from frame {} (changed after {at})", first_ao["frame"]);
+    let ao_png = run.get("/api/frame.png");
+    let (_, _, ao_picture) = png_pixels(&ao_png.body);
+    // The gears turn between the two pictures: their mean brightness is compared, not pixels.
+    let mean = |p: &[u8]| {
+        let lit: Vec<u32> = p.chunks(4).map(|c| c[..3].iter().map(|&v| v as u32).sum::<u32>()).filter(|&v| v > 30).collect();
+        lit.iter().sum::<u32>() as f64 / lit.len().max(1) as f64
+    };
+    let (gl_mean, ao_mean) = (mean(&gl_picture), mean(&ao_picture));
+    assert!(ao_mean < 0.97 * gl_mean, "AO darkens the gears: mean {ao_mean:.1} against {gl_mean:.1} in the GL look");
+
+    // Many requests at once: all answered.
+    let handles: Vec<_> = (0..12)
+        .map(|k| {
+            let (address, token) = (run.address.clone(), run.token.clone());
+            std::thread::spawn(move || {
+                let path = if k % 2 == 0 { "/api/stats" } else { "/api/frame.png" };
+                request(&address, "GET", &format!("{path}?token={token}"), "").status
+            })
+        })
+        .collect();
+    for h in handles {
+        assert_eq!(h.join().unwrap(), 200);
+    }
+    // A slow client (half a request, then silence) stalls no frame.
+    let mut slow = TcpStream::connect(&run.address).unwrap();
+    slow.write_all(b"GET /api/stats?token=").unwrap();
+    let held = run.last_frame();
+    std::thread::sleep(Duration::from_secs(2));
+    let later = run.last_frame();
+    assert!(later >= held + 5, "frames went on while a client stalled: {held} -> {later}");
+    drop(slow);
+
+    // The settings as a TOML file, which a fresh run reads back (GLRAY_CONFIG).
+    let toml = run.get("/api/config.toml");
+    assert_eq!(toml.status, 200);
+    assert!(toml.headers.iter().any(|(k, v)| k == "content-disposition" && v.contains("attachment")));
+    let file = dir.join("settings.toml");
+    std::fs::write(&file, &toml.body).unwrap();
+    drop(run);
+    let mut info = Command::new(glray_bin());
+    info.arg("info");
+    without_glray(&mut info);
+    info.env("GLRAY_CONFIG", &file);
+    let said = stdout(&run_ok(&mut info, "glray info with the downloaded settings"));
+    let preset = said.lines().find(|l| l.trim_start().starts_with("preset")).unwrap_or("");
+    assert!(preset.contains("ao") && preset.contains("settings.toml"), "{preset}");
+    let fresh_run = {
+        let mut cmd = Command::new(glray_bin());
+        cmd.arg("run").arg("--panel").arg("--").arg(which("glxgears")).args(["-geometry", "300x300"]);
+        cmd.env("DISPLAY", &x.display);
+        without_glray(&mut cmd);
+        cmd.env("GLRAY_CONFIG", &file);
+        start(cmd, &dir.join("fresh.log"))
+    };
+    assert_eq!(fresh_run.get("/api/settings").json()["settings"]["preset"], "ao");
+    let frames = fresh_run.wait_for_frame(3);
+    assert!(traced_ao(frames.last().unwrap()), "the fresh run traces AO from its settings file");
+}
