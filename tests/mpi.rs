@@ -8,35 +8,9 @@ mod common;
 
 use common::*;
 use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-/// The example host, compiled with mpicc (scripts/lib/build.sh does too; a test run alone
-/// compiles it here).
-fn icet_like() -> PathBuf {
-    static BUILT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
-    BUILT.get_or_init(build_icet_like).clone()
-}
-
-fn build_icet_like() -> PathBuf {
-    let out = build_dir().join("examples").join("icet_like");
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/mpi/icet_like.c");
-    let fresh = |p: &Path| p.metadata().and_then(|m| m.modified()).ok();
-    if fresh(&out).is_none() || fresh(&out) < fresh(&source) {
-        let tmp = out.with_extension(format!("{}.tmp", std::process::id()));
-        let status = Command::new("mpicc")
-            .arg(&source)
-            .arg("-o")
-            .arg(&tmp)
-            .args(["-O2", "-lOSMesa", "-lz", "-lm"])
-            .status()
-            .expect("mpicc is not installed: scripts/test installs libopenmpi-dev");
-        assert!(status.success(), "mpicc {}", source.display());
-        std::fs::rename(&tmp, &out).unwrap();
-    }
-    out
-}
 
 /// mpirun for `np` ranks: as root, with more ranks than cores, over TCP (the network path).
 fn mpirun(np: u32) -> Command {

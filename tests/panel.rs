@@ -7,9 +7,9 @@
 mod common;
 
 use common::*;
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::TcpStream;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -144,6 +144,25 @@ fn glxgears(display: &str, log: &Path, settings: &[&str]) -> Running {
     start(cmd, log)
 }
 
+/// The mean brightness of the gears (pixels brighter than the background) over four frames
+/// the panel shows, a few frames apart: the gears turn, so pictures are compared by it.
+fn mean_brightness(run: &Running) -> f64 {
+    let (mut sum, mut n) = (0u64, 0u64);
+    for _ in 0..4 {
+        let png = run.get("/api/frame.png");
+        assert_eq!(png.status, 200, "{}", png.text());
+        let (_, _, p) = png_pixels(&png.body);
+        for c in p.chunks(4) {
+            let v: u64 = c[..3].iter().map(|&v| v as u64).sum();
+            if v > 30 {
+                (sum, n) = (sum + v, n + 1);
+            }
+        }
+        run.wait_for_frame(run.last_frame() + 3);
+    }
+    sum as f64 / n.max(1) as f64
+}
+
 /// A frame's AO rays: more rays than pixels (one camera ray each).
 fn traced_ao(frame: &serde_json::Value) -> bool {
     let pixels = frame["width"].as_u64().unwrap() * frame["height"].as_u64().unwrap();
@@ -209,10 +228,11 @@ fn the_panel_steers_glxgears_over_http_and_refuses_requests_without_the_token() 
     let before = run.last_frame();
     let frames = run.wait_for_frame(before + 3);
     assert!(!traced_ao(frames.last().unwrap()), "the GL look traces no AO");
+    let gl_mean = mean_brightness(&run);
     let gl_png = run.get("/api/frame.png");
     assert_eq!(gl_png.status, 200);
     assert!(gl_png.headers.iter().any(|(k, v)| k == "content-type" && v == "image/png"));
-    let (w, h, gl_picture) = png_pixels(&gl_png.body);
+    let (w, h, _) = png_pixels(&gl_png.body);
     assert_eq!((w, h), (300, 300));
 
     // AO on: from the next frame on, at the latest within two.
@@ -223,15 +243,8 @@ fn the_panel_steers_glxgears_over_http_and_refuses_requests_without_the_token() 
     let frames = run.wait_for_frame(at + 3);
     let first_ao = frames.iter().find(|f| traced_ao(f)).expect("a frame with AO");
     assert!(first_ao["frame"].as_u64().unwrap() <= at + 2, "AO from frame {} (changed after {at})", first_ao["frame"]);
-    let ao_png = run.get("/api/frame.png");
-    let (_, _, ao_picture) = png_pixels(&ao_png.body);
-    // The gears turn between the two pictures: their mean brightness is compared, not pixels.
-    let mean = |p: &[u8]| {
-        let lit: Vec<u32> = p.chunks(4).map(|c| c[..3].iter().map(|&v| v as u32).sum::<u32>()).filter(|&v| v > 30).collect();
-        lit.iter().sum::<u32>() as f64 / lit.len().max(1) as f64
-    };
-    let (gl_mean, ao_mean) = (mean(&gl_picture), mean(&ao_picture));
-    assert!(ao_mean < 0.97 * gl_mean, "AO darkens the gears: mean {ao_mean:.1} against {gl_mean:.1} in the GL look");
+    let ao_mean = mean_brightness(&run);
+    assert!(ao_mean < 0.985 * gl_mean, "AO darkens the gears: mean {ao_mean:.1} against {gl_mean:.1} in the GL look");
 
     // Many requests at once: all answered.
     let handles: Vec<_> = (0..12)
@@ -280,4 +293,50 @@ fn the_panel_steers_glxgears_over_http_and_refuses_requests_without_the_token() 
     assert_eq!(fresh_run.get("/api/settings").json()["settings"]["preset"], "ao");
     let frames = fresh_run.wait_for_frame(3);
     assert!(traced_ao(frames.last().unwrap()), "the fresh run traces AO from its settings file");
+}
+
+#[test]
+fn a_change_on_rank_zeros_panel_reaches_both_ranks_of_glray_run_np_2() {
+    // The MPI example host, 2 ranks image-parallel over TCP, 250 frames 20 ms apart, started
+    // in the GL look; from the panel, mid-run: `full` without denoising or refinement (each
+    // frame a picture of its own). Its last frame must be one process's with those settings
+    // from the start, byte for byte: rank 1's tiles traced with rank 0's new settings.
+    let dir = scratch("panel-mpi");
+    let (frames, size) = ("250", ["96", "72"]);
+    let changed = [("preset", "full"), ("denoise", "false"), ("progressive", "false")];
+    let steered = dir.join("steered.png");
+    let mut cmd = Command::new(glray_bin());
+    cmd.args(["run", "--panel", "--np", "2", "--set", "preset=gl"]);
+    cmd.args(["--mpirun-arg=--mca", "--mpirun-arg=btl", "--mpirun-arg=self,tcp", "--"]);
+    cmd.arg(icet_like()).arg(&steered).arg(frames).args(size).env("ICET_LIKE_FRAME_MS", "20");
+    without_glray(&mut cmd);
+    cmd.env("ICET_LIKE_FRAME_MS", "20");
+    let mut run = start(cmd, &dir.join("np2.log"));
+    let at = run.wait_for_frame(10).last().and_then(|f| f["frame"].as_u64()).unwrap();
+    let body = serde_json::Value::Object(changed.iter().map(|(k, v)| (k.to_string(), (*v).into())).collect());
+    let put = run.put(&body.to_string());
+    assert_eq!(put.status, 200, "{}", put.text());
+    // The change came in time: frames traced with secondary rays before the end.
+    let frames_seen = run.wait_for_frame(at + 20);
+    let after: Vec<_> = frames_seen.iter().filter(|f| f["frame"].as_u64() > Some(at + 2)).collect();
+    assert!(!after.is_empty() && after.iter().all(|f| traced_ao(f)), "frames after the change trace AO");
+    assert!(after.iter().all(|f| f["ranks"] == 2), "the frames are shared by 2 ranks");
+    let started = Instant::now();
+    let status = loop {
+        if let Some(s) = run.child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(started.elapsed() < Duration::from_secs(120), "the job did not end within 120 s");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let log = std::fs::read_to_string(dir.join("np2.log")).unwrap();
+    assert!(status.success() && !log.contains("glray: error"), "{log}");
+
+    // One process, the same settings from the start, the same number of frames.
+    let alone = dir.join("alone.png");
+    let mut cmd = command(Way::Preload, &[], &icet_like(), 120);
+    cmd.arg(&alone).arg(frames).args(size).env("GLRAY_DISTRIBUTE", "local");
+    cmd.envs(changed.iter().map(|(k, v)| (format!("GLRAY_{}", k.to_ascii_uppercase()), *v)));
+    run_ok(&mut cmd, "icet_like alone");
+    assert_same_file(&steered, &alone, "2 ranks steered from the panel against one process");
 }

@@ -20,6 +20,9 @@
  * grid of unlit lines on the ground and a translucent panel over the left of the window (an
  * orthographic overlay, blended), for glray's tests of AO under lines and overlays.
  *
+ * ICET_LIKE_FRAME_MS=MS waits that long before each frame: a program that runs long enough for a
+ * test to steer it from glray's live control panel.
+ *
  * ICET_LIKE_STALL=RANK:FRAME makes that rank stop itself (SIGSTOP) as that frame begins: a rank
  * that stops answering, for glray's tests of its time limits.
  *
@@ -165,6 +168,7 @@ int main(int argc, char **argv) {
   int orbit_first = 0;
   if (getenv("ICET_LIKE_ORBIT")) sscanf(getenv("ICET_LIKE_ORBIT"), "%f:%d", &orbit, &orbit_first);
   int overlay = getenv("ICET_LIKE_OVERLAY") && atoi(getenv("ICET_LIKE_OVERLAY"));
+  int frame_ms = getenv("ICET_LIKE_FRAME_MS") ? atoi(getenv("ICET_LIKE_FRAME_MS")) : 0;
   int stall_rank = -1, stall_frame = -1;
   if (getenv("ICET_LIKE_STALL")) sscanf(getenv("ICET_LIKE_STALL"), "%d:%d", &stall_rank, &stall_frame);
   /* For tests that signal a rank from outside. */
@@ -205,6 +209,7 @@ int main(int argc, char **argv) {
   unsigned char *image = rank == 0 ? malloc(4 * n) : NULL;
 
   for (int frame = 0; frame < frames; frame++) {
+    if (frame_ms > 0) usleep(1000 * frame_ms);
     MPI_Barrier(MPI_COMM_WORLD);
     if (rank == stall_rank && frame == stall_frame) raise(SIGSTOP);
     double start = MPI_Wtime();

@@ -76,8 +76,11 @@ pub struct Live {
     swaps: u64,
     /// Each thread's context's `passed_total` at its last statistics line.
     passed_seen: HashMap<u32, u64>,
-    /// The live control panel (setting `panel`; rank 0's under MPI).
+    /// The live control panel (setting `panel`; rank 0's under MPI), started with the first
+    /// frame (`panel_config` until then): not in processes that load glray and draw nothing
+    /// (`glray run --np`'s mpirun, shells).
     panel: Option<crate::panel::Panel>,
+    panel_config: Option<Config>,
 }
 
 /// The tracer's threads (None, logged, if the system gives none: frames are then traced on
@@ -119,10 +122,11 @@ pub fn configure(config: &Config) -> Live {
         swaps: 0,
         passed_seen: HashMap::new(),
         panel: None,
+        panel_config: None,
     };
     // Rank 0 serves the panel; the other ranks take its changes from rank 0 (`Distribution`).
-    let rank0 = !crate::distribute::in_mpi() || crate::distribute::env_rank().is_none_or(|r| r == 0);
-    let live = Live { panel: if rank0 { crate::panel::Panel::start(config, 1) } else { None }, ..live };
+    let rank0 = crate::distribute::env_rank().is_none_or(|r| r == 0);
+    let live = Live { panel_config: (rank0 && config.panel().is_some()).then(|| config.clone()), ..live };
     ON.store(true, Ordering::Relaxed);
     live
 }
@@ -440,6 +444,9 @@ impl Live {
     }
 
     fn present(&mut self, thread: u32) {
+        if let Some(config) = self.panel_config.take() {
+            self.panel = crate::panel::Panel::start(&config);
+        }
         self.take_panel_changes();
         let ctx = self.capture.context(thread);
         let revision = ctx.revision();

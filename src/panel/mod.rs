@@ -42,8 +42,6 @@ struct State {
     frame: Option<(u64, u32, u32, Vec<u8>)>,
     /// The last frames' statistics, as JSON objects (`GLRAY_STATS`'s lines).
     stats: VecDeque<String>,
-    /// The MPI job this process is rank 0 of (ranks), if any.
-    ranks: usize,
 }
 
 impl Shared {
@@ -55,7 +53,7 @@ impl Shared {
 impl Panel {
     /// Starts the panel when `config` asks for one (None otherwise, or when it cannot listen:
     /// said, and the program runs on without it).
-    pub fn start(config: &Config, ranks: usize) -> Option<Panel> {
+    pub fn start(config: &Config) -> Option<Panel> {
         let port = config.panel()?;
         let token = match token() {
             Ok(t) => t,
@@ -75,7 +73,7 @@ impl Panel {
             glray_core::error!("panel: not listening on an IP address; the panel is off");
             return None;
         };
-        let state = State { config: config.clone(), pending: Vec::new(), frame: None, stats: VecDeque::new(), ranks };
+        let state = State { config: config.clone(), pending: Vec::new(), frame: None, stats: VecDeque::new() };
         let shared = Arc::new(Shared { token, state: Mutex::new(state) });
         let serving = shared.clone();
         let started = std::thread::Builder::new().name("glray-panel".into()).spawn(move || server::serve(server, serving));

@@ -158,12 +158,12 @@ fn put_settings(request: &mut Request, shared: &Shared) -> Reply {
     settings(shared)
 }
 
-/// The last frames' statistics (oldest first) and the job's size.
+/// The last frames' statistics (oldest first; in an MPI job each says the ranks sharing it).
 fn stats(shared: &Shared) -> Reply {
     let s = shared.state();
     let frames: Vec<&str> = s.stats.iter().map(String::as_str).collect();
     let last = s.frame.as_ref().map_or("null".to_string(), |f| f.0.to_string());
-    let body = format!("{{\"ranks\":{},\"last_frame\":{last},\"frames\":[{}]}}", s.ranks.max(1), frames.join(","));
+    let body = format!("{{\"last_frame\":{last},\"frames\":[{}]}}", frames.join(","));
     reply(200, "application/json", body.into_bytes())
 }
 

@@ -1,5 +1,6 @@
 //! What the integration tests share: where the built library, command and examples are; running a
-//! program plainly, preloaded or dropped in; an Xvfb of the test's own; the frameshot helper.
+//! program plainly, preloaded or dropped in; an Xvfb of the test's own; the frameshot helper; the
+//! MPI example host.
 #![allow(dead_code)]
 
 use std::io::{BufRead, BufReader};
@@ -196,4 +197,30 @@ pub fn frameshot_command(way: Way, program: &Path, args: &[&str], display: &str,
     let mut cmd = command(way, &[&shot], program, 120);
     cmd.args(args).env("DISPLAY", display).env("FRAMESHOT_OUT", ppm).env("FRAMESHOT_FRAME", frame.to_string());
     cmd
+}
+
+/// The example host, compiled with mpicc (scripts/lib/build.sh does too; a test run alone
+/// compiles it here).
+pub fn icet_like() -> PathBuf {
+    static BUILT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    BUILT.get_or_init(build_icet_like).clone()
+}
+
+fn build_icet_like() -> PathBuf {
+    let out = build_dir().join("examples").join("icet_like");
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/mpi/icet_like.c");
+    let fresh = |p: &Path| p.metadata().and_then(|m| m.modified()).ok();
+    if fresh(&out).is_none() || fresh(&out) < fresh(&source) {
+        let tmp = out.with_extension(format!("{}.tmp", std::process::id()));
+        let status = Command::new("mpicc")
+            .arg(&source)
+            .arg("-o")
+            .arg(&tmp)
+            .args(["-O2", "-lOSMesa", "-lz", "-lm"])
+            .status()
+            .expect("mpicc is not installed: scripts/test installs libopenmpi-dev");
+        assert!(status.success(), "mpicc {}", source.display());
+        std::fs::rename(&tmp, &out).unwrap();
+    }
+    out
 }
