@@ -7,7 +7,7 @@
 mod common;
 
 use common::*;
-use std::io::{Read, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
@@ -339,4 +339,186 @@ fn a_change_on_rank_zeros_panel_reaches_both_ranks_of_glray_run_np_2() {
     cmd.envs(changed.iter().map(|(k, v)| (format!("GLRAY_{}", k.to_ascii_uppercase()), *v)));
     run_ok(&mut cmd, "icet_like alone");
     assert_same_file(&steered, &alone, "2 ranks steered from the panel against one process");
+}
+
+/// Headless Chromium driven over the DevTools protocol through a pipe
+/// (`--remote-debugging-pipe`: commands in on its fd 3, answers out on fd 4, each a JSON text
+/// ended by a NUL byte); killed by PID when dropped.
+struct Chromium {
+    child: Child,
+    to: std::fs::File,
+    from: std::sync::mpsc::Receiver<serde_json::Value>,
+    next: u64,
+    session: String,
+}
+
+impl Drop for Chromium {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Chromium {
+    fn open(url: &str, profile: &Path) -> Chromium {
+        use std::os::fd::{FromRawFd, IntoRawFd, OwnedFd};
+        use std::os::unix::process::CommandExt;
+        let pipe = || {
+            let mut fds = [0; 2];
+            // SAFETY: a fresh pair of descriptors, owned below.
+            assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
+            // SAFETY: just made, owned by nothing else.
+            unsafe { (OwnedFd::from_raw_fd(fds[0]), OwnedFd::from_raw_fd(fds[1])) }
+        };
+        let ((commands_r, commands_w), (answers_r, answers_w)) = (pipe(), pipe());
+        let (cr, aw) = (commands_r.into_raw_fd(), answers_w.into_raw_fd());
+        let mut cmd = Command::new(which("chromium"));
+        cmd.args(["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking"]);
+        cmd.args(["--no-first-run", "--remote-debugging-pipe", "--window-size=1100,800"]);
+        cmd.arg(format!("--user-data-dir={}", profile.display())).arg(url);
+        cmd.stdout(Stdio::null()).stderr(Stdio::null());
+        // SAFETY: only dup2 between fork and exec.
+        unsafe {
+            cmd.pre_exec(move || {
+                if libc::dup2(cr, 3) < 0 || libc::dup2(aw, 4) < 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+        let child = cmd.spawn().expect("chromium: scripts/test installs it");
+        // SAFETY: the child has its copies; these ends are the parent's to close.
+        unsafe {
+            drop(OwnedFd::from_raw_fd(cr));
+            drop(OwnedFd::from_raw_fd(aw));
+        }
+        let (tx, from) = std::sync::mpsc::channel();
+        let mut reader = BufReader::new(std::fs::File::from(answers_r));
+        std::thread::spawn(move || loop {
+            let mut message = Vec::new();
+            match reader.read_until(0, &mut message) {
+                Ok(0) | Err(_) => return,
+                Ok(_) => {
+                    message.pop();
+                    if let Ok(v) = serde_json::from_slice(&message) {
+                        if tx.send(v).is_err() {
+                            return;
+                        }
+                    }
+                }
+            }
+        });
+        let mut c = Chromium { child, to: std::fs::File::from(commands_w), from, next: 1, session: String::new() };
+        let started = Instant::now();
+        let target = loop {
+            let targets = c.call("Target.getTargets", serde_json::json!({}), false);
+            let page = targets["targetInfos"]
+                .as_array()
+                .and_then(|t| t.iter().find(|t| t["type"] == "page" && t["url"].as_str().is_some_and(|u| u.contains("token="))))
+                .map(|t| t["targetId"].as_str().unwrap().to_string());
+            if let Some(p) = page {
+                break p;
+            }
+            assert!(started.elapsed() < Duration::from_secs(30), "no page in Chromium: {targets}");
+            std::thread::sleep(Duration::from_millis(200));
+        };
+        let attached = c.call("Target.attachToTarget", serde_json::json!({ "targetId": target, "flatten": true }), false);
+        c.session = attached["sessionId"].as_str().expect("a session").to_string();
+        c
+    }
+
+    /// A DevTools command's result (in the page's session with `in_page`), bounded in time.
+    fn call(&mut self, method: &str, params: serde_json::Value, in_page: bool) -> serde_json::Value {
+        let id = self.next;
+        self.next += 1;
+        let mut m = serde_json::json!({ "id": id, "method": method, "params": params });
+        if in_page {
+            m["sessionId"] = self.session.clone().into();
+        }
+        let mut bytes = m.to_string().into_bytes();
+        bytes.push(0);
+        self.to.write_all(&bytes).unwrap();
+        let deadline = Instant::now() + Duration::from_secs(30);
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let v = self.from.recv_timeout(left).unwrap_or_else(|_| panic!("Chromium did not answer {method}"));
+            if v["id"] == id {
+                assert!(v["error"].is_null(), "{method}: {v}");
+                return v["result"].clone();
+            }
+        }
+    }
+
+    /// A JavaScript expression's value in the page (promises awaited).
+    fn eval(&mut self, expression: &str) -> serde_json::Value {
+        let params = serde_json::json!({ "expression": expression, "awaitPromise": true, "returnByValue": true });
+        let r = self.call("Runtime.evaluate", params, true);
+        assert!(r["exceptionDetails"].is_null(), "{expression}: {r}");
+        r["result"]["value"].clone()
+    }
+
+    /// Waits (bounded) until `expression` is true in the page.
+    fn wait_until(&mut self, expression: &str, what: &str) {
+        let started = Instant::now();
+        while self.eval(expression) != serde_json::Value::Bool(true) {
+            assert!(started.elapsed() < Duration::from_secs(30), "{what}: not within 30 s");
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+
+    /// The mean brightness of the gears in the frame the page shows, over four frames it shows.
+    fn shown_brightness(&mut self) -> f64 {
+        const MEAN: &str = "(async () => { const img = document.getElementById('frame'); await img.decode(); \
+            const c = document.createElement('canvas'); c.width = img.naturalWidth; c.height = img.naturalHeight; \
+            const g = c.getContext('2d'); g.drawImage(img, 0, 0); const d = g.getImageData(0, 0, c.width, c.height).data; \
+            let s = 0, n = 0; for (let i = 0; i < d.length; i += 4) { const v = d[i] + d[i + 1] + d[i + 2]; \
+            if (v > 30) { s += v; n++; } } return [s, n, img.src]; })()";
+        let (mut sum, mut n, mut last) = (0.0, 0.0, String::new());
+        for _ in 0..4 {
+            let started = Instant::now();
+            let v = loop {
+                let v = self.eval(MEAN);
+                if v[2].as_str() != Some(&last) {
+                    break v;
+                }
+                assert!(started.elapsed() < Duration::from_secs(30), "the page shows no new frame");
+                std::thread::sleep(Duration::from_millis(100));
+            };
+            last = v[2].as_str().unwrap().to_string();
+            (sum, n) = (sum + v[0].as_f64().unwrap(), n + v[1].as_f64().unwrap());
+        }
+        sum / n.max(1.0)
+    }
+}
+
+#[test]
+fn the_panels_page_in_headless_chromium_shows_frames_and_turns_ao_on() {
+    let x = Xvfb::start();
+    let dir = scratch("panel-page");
+    let run = glxgears(&x.display, &dir.join("glxgears.log"), &["preset=gl"]);
+    let url = format!("http://{}/?token={}", run.address, run.token);
+    let profile = dir.join("chromium-profile");
+    let _ = std::fs::remove_dir_all(&profile);
+    let mut page = Chromium::open(&url, &profile);
+    // It loads: a control for every setting the panel changes, and a frame.
+    page.wait_until("document.querySelectorAll('[data-key]').length === 12", "the controls");
+    assert_eq!(page.eval("document.getElementById('setting-preset').value"), "gl");
+    page.wait_until("document.getElementById('frame').naturalWidth === 300", "a frame");
+    page.wait_until("document.querySelectorAll('canvas').length >= 5", "the plots");
+    let gl = page.shown_brightness();
+    // A bad value: refused, the reason on the page.
+    page.eval("document.getElementById('setting-ao_samples').value = 'lots'; document.getElementById('apply').click(); 0");
+    page.wait_until("document.getElementById('error').textContent.includes('ao_samples')", "the refusal");
+    // AO on, from the page: the frames after it trace AO and the picture darkens.
+    let at = run.last_frame();
+    page.eval(
+        "document.getElementById('setting-ao_samples').value = ''; document.getElementById('setting-preset').value = 'ao'; \
+         document.getElementById('apply').click(); 0",
+    );
+    page.wait_until("document.getElementById('ok').textContent.includes('preset = ao')", "the change");
+    let frames = run.wait_for_frame(at + 4);
+    let first_ao = frames.iter().find(|f| traced_ao(f)).expect("a frame with AO");
+    assert!(first_ao["frame"].as_u64().unwrap() <= at + 3, "AO from frame {}, clicked after {at}", first_ao["frame"]);
+    let ao = page.shown_brightness();
+    assert!(ao < 0.985 * gl, "the page's frame darkens with AO: {ao:.1} against {gl:.1}");
 }

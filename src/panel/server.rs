@@ -119,7 +119,7 @@ fn settings(shared: &Shared) -> Reply {
         sources.insert(key.to_string(), s.config.source(key).map_or(String::new(), |x| x.to_string()).into());
         allowed.insert(key.to_string(), glray_core::config::Config::allowed(key).unwrap_or_default().into());
     }
-    let body = serde_json::json!({ "settings": values, "sources": sources, "allowed": allowed });
+    let body = serde_json::json!({ "settings": values, "sources": sources, "allowed": allowed, "order": CONTROLS });
     reply(200, "application/json", body.to_string().into_bytes())
 }
 
