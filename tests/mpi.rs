@@ -335,6 +335,8 @@ fn ambient_occlusion_is_denoised_under_a_translucent_overlay_and_lines_show_the_
     }
     assert!(shaded >= 20, "line pixels in contact shadows: {shaded}");
     let (line, ground) = (lines / shaded as f64, grounds / shaded as f64);
-    eprintln!("in contact shadows ({shaded} line pixels): lines keep {line:.2} of their colour, the ground {ground:.2}");
+    eprintln!(
+        "in contact shadows ({shaded} line pixels): lines keep {line:.2} of their colour, the ground {ground:.2}"
+    );
     assert!((line - ground).abs() < 0.08, "lines keep {line:.2}, the ground beside them {ground:.2}");
 }

@@ -32,13 +32,16 @@ impl Drop for Running {
 fn start(mut cmd: Command, log: &Path) -> Running {
     let file = std::fs::File::create(log).unwrap();
     let child = cmd.stderr(file).stdout(Stdio::null()).spawn().expect("glray run");
+    // Killed when dropped, on a failure below too.
+    let mut running = Running { child, address: String::new(), token: String::new() };
     let started = Instant::now();
     loop {
         let text = std::fs::read_to_string(log).unwrap_or_default();
         if let Some(line) = text.lines().find(|l| l.starts_with("glray: panel http://")) {
             let url = line.trim_start_matches("glray: panel http://");
             let (address, query) = url.split_once("/?token=").expect("the panel's URL carries a token");
-            return Running { child, address: address.to_string(), token: query.trim().to_string() };
+            (running.address, running.token) = (address.to_string(), query.trim().to_string());
+            return running;
         }
         assert!(started.elapsed() < Duration::from_secs(60), "no panel line within 60 s:\n{text}");
         std::thread::sleep(Duration::from_millis(50));
@@ -197,7 +200,7 @@ fn the_panel_steers_glxgears_over_http_and_refuses_requests_without_the_token() 
     assert_eq!(request(&run.address, "DELETE", &format!("/api/settings?token={}", run.token), "").status, 405);
     // The listener is on 127.0.0.1 alone (the kernel's table of listening sockets says so),
     // and this machine's other addresses get a refused connection.
-    let port = u16::from_str_radix(run.address.rsplit(':').next().unwrap(), 10).unwrap();
+    let port = run.address.rsplit(':').next().unwrap().parse::<u16>().unwrap();
     let tcp = std::fs::read_to_string("/proc/net/tcp").unwrap();
     let listening: Vec<&str> = tcp
         .lines()
@@ -414,7 +417,9 @@ impl Chromium {
             let targets = c.call("Target.getTargets", serde_json::json!({}), false);
             let page = targets["targetInfos"]
                 .as_array()
-                .and_then(|t| t.iter().find(|t| t["type"] == "page" && t["url"].as_str().is_some_and(|u| u.contains("token="))))
+                .and_then(|t| {
+                    t.iter().find(|t| t["type"] == "page" && t["url"].as_str().is_some_and(|u| u.contains("token=")))
+                })
                 .map(|t| t["targetId"].as_str().unwrap().to_string());
             if let Some(p) = page {
                 break p;
@@ -422,7 +427,8 @@ impl Chromium {
             assert!(started.elapsed() < Duration::from_secs(30), "no page in Chromium: {targets}");
             std::thread::sleep(Duration::from_millis(200));
         };
-        let attached = c.call("Target.attachToTarget", serde_json::json!({ "targetId": target, "flatten": true }), false);
+        let attached =
+            c.call("Target.attachToTarget", serde_json::json!({ "targetId": target, "flatten": true }), false);
         c.session = attached["sessionId"].as_str().expect("a session").to_string();
         c
     }
@@ -507,7 +513,9 @@ fn the_panels_page_in_headless_chromium_shows_frames_and_turns_ao_on() {
     page.wait_until("document.querySelectorAll('canvas').length >= 5", "the plots");
     let gl = page.shown_brightness();
     // A bad value: refused, the reason on the page.
-    page.eval("document.getElementById('setting-ao_samples').value = 'lots'; document.getElementById('apply').click(); 0");
+    page.eval(
+        "document.getElementById('setting-ao_samples').value = 'lots'; document.getElementById('apply').click(); 0",
+    );
     page.wait_until("document.getElementById('error').textContent.includes('ao_samples')", "the refusal");
     // AO on, from the page: the frames after it trace AO and the picture darkens.
     let at = run.last_frame();

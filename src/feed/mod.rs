@@ -428,7 +428,10 @@ impl Live {
     fn take_panel_changes(&mut self) {
         let Some((config, changes)) = self.panel.as_ref().and_then(|p| p.take_changes()) else { return };
         let Some(options) = glray_render::Options::from_config(&config) else { return };
-        glray_core::info!("panel: {}", changes.iter().map(|(k, v)| format!("{k} = {v:?}")).collect::<Vec<_>>().join(", "));
+        glray_core::info!(
+            "panel: {}",
+            changes.iter().map(|(k, v)| format!("{k} = {v:?}")).collect::<Vec<_>>().join(", ")
+        );
         self.renderer.options = options;
         self.renderer.restart();
         self.trigger = trigger_of(&config);

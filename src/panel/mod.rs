@@ -76,7 +76,8 @@ impl Panel {
         let state = State { config: config.clone(), pending: Vec::new(), frame: None, stats: VecDeque::new() };
         let shared = Arc::new(Shared { token, state: Mutex::new(state) });
         let serving = shared.clone();
-        let started = std::thread::Builder::new().name("glray-panel".into()).spawn(move || server::serve(server, serving));
+        let started =
+            std::thread::Builder::new().name("glray-panel".into()).spawn(move || server::serve(server, serving));
         if let Err(e) = started {
             glray_core::error!("panel: no thread to serve it ({e}); the panel is off");
             return None;

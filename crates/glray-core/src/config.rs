@@ -525,7 +525,8 @@ impl Config {
         for (key, value) in changes {
             let place = "from the live control panel".to_string();
             let s = setting(key).filter(|s| allowed.contains(&s.key)).ok_or_else(|| {
-                let guess = nearest(key, allowed.iter().copied()).map(|k| format!("did you mean `{k}`? ")).unwrap_or_default();
+                let guess =
+                    nearest(key, allowed.iter().copied()).map(|k| format!("did you mean `{k}`? ")).unwrap_or_default();
                 ConfigError(format!(
                     "setting `{key}` cannot be changed from the panel; {guess}it changes: {}",
                     allowed.join(", ")

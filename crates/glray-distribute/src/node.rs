@@ -356,7 +356,10 @@ impl<T: Transport> Node<T> {
                             })
                         }
                         Err(why) => {
-                            return Err(Fault::Refused { rank: 0, why: format!("a settings change {changes:?}: {why}") })
+                            return Err(Fault::Refused {
+                                rank: 0,
+                                why: format!("a settings change {changes:?}: {why}"),
+                            })
                         }
                     }
                     last_heard = Instant::now();

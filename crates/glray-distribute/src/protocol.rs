@@ -3,8 +3,8 @@
 //! one run of bytes (serde_bytes), not as a sequence of numbers. Pixels travel as their bytes (little-endian floats: every rank of a job is the same kind of machine; the
 //! scene encoding checks the byte order of the first message).
 
-use serde::{Deserialize, Serialize};
 use glray_render::denoise::AoPixel;
+use serde::{Deserialize, Serialize};
 
 /// What a rank says of its frame to rank 0 when its share is traced.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]

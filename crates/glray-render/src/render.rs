@@ -212,7 +212,11 @@ impl Renderer {
     /// The next frame's seed for its AO rays (0: not denoised, none).
     fn next_seed(&mut self) -> u32 {
         self.frames = self.frames.wrapping_add(1).max(1);
-        if self.denoises() { self.frames } else { 0 }
+        if self.denoises() {
+            self.frames
+        } else {
+            0
+        }
     }
 
     /// A frame this renderer takes no part in (another rank traces and shows it): counted all
@@ -276,7 +280,8 @@ impl Renderer {
         ao: Option<Vec<AoPixel>>,
     ) -> Rendered {
         let start = Instant::now();
-        let denoised = ao.zip(camera_of(frame)).map(|(layer, camera)| Denoised { layer, camera, motion: Motion::of(frame) });
+        let denoised =
+            ao.zip(camera_of(frame)).map(|(layer, camera)| Denoised { layer, camera, motion: Motion::of(frame) });
         let picture = self.add_pass_with(key, rendered, linear, denoised);
         self.stats.denoise = start.elapsed();
         picture
@@ -1014,9 +1019,11 @@ mod tests {
                     assert!(grid.paste(t, into));
                 }
                 let gathered = Rendered { width: 150, height: 100, rgba, depth };
-                let gathered =
-                    shared.add_pass(&frame, key, gathered, linear.then_some(colors), ao.then_some(layer));
-                assert!(gathered == expected, "{preset}, pass {pass}: the tiles gathered are the whole frame's picture");
+                let gathered = shared.add_pass(&frame, key, gathered, linear.then_some(colors), ao.then_some(layer));
+                assert!(
+                    gathered == expected,
+                    "{preset}, pass {pass}: the tiles gathered are the whole frame's picture"
+                );
             }
         }
     }

@@ -305,16 +305,17 @@ impl<'f> Scene<'f> {
     /// every shadow and AO ray asks, and most scenes have no solids.
     #[inline]
     fn solid_blocks(&self, ray: Ray, own: Option<u32>) -> bool {
-        own.is_some() && self.solid_bvh.as_ref().is_some_and(|bvh| {
-            !bvh.ray_traverse_miss(ray, |r, slot| {
-                let s = &self.solids[bvh.primitive_indices[slot] as usize];
-                if Some(s.sequence) == own {
-                    f32::INFINITY
-                } else {
-                    capsule(s, r)
-                }
+        own.is_some()
+            && self.solid_bvh.as_ref().is_some_and(|bvh| {
+                !bvh.ray_traverse_miss(ray, |r, slot| {
+                    let s = &self.solids[bvh.primitive_indices[slot] as usize];
+                    if Some(s.sequence) == own {
+                        f32::INFINITY
+                    } else {
+                        capsule(s, r)
+                    }
+                })
             })
-        })
     }
 
     /// How much of `count` rays from `at` the scene hides (the sum of 1 - `transmittance` over
@@ -528,7 +529,6 @@ fn eye_bounds(mesh: &Mesh, modelview: &DMat4) -> Aabb {
     }
     b
 }
-
 
 // Secondary rays are many: one buffer per thread for the hits of those that need them all.
 thread_local! {
