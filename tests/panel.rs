@@ -510,7 +510,7 @@ fn the_panels_page_in_headless_chromium_shows_frames_and_turns_ao_on() {
     page.wait_until("document.querySelectorAll('[data-key]').length === 12", "the controls");
     assert_eq!(page.eval("document.getElementById('setting-preset').value"), "gl");
     page.wait_until("document.getElementById('frame').naturalWidth === 300", "a frame");
-    page.wait_until("document.querySelectorAll('canvas').length >= 5", "the plots");
+    page.wait_until("document.querySelectorAll('canvas').length >= 8", "the plots");
     let gl = page.shown_brightness();
     // A bad value: refused, the reason on the page.
     page.eval(
