@@ -763,6 +763,7 @@ fn effective_settings(config: &Config) -> Vec<(&'static str, String, String)> {
             let (value, source) = match (value, &effects) {
                 // Decided when it applies (docs/settings.md says how).
                 ("", _) if s.key == "mpi_timeout" || s.key == "mpi_library" => ("(auto)".into(), source.to_string()),
+                ("", _) if s.key == "panel" => ("(off)".into(), source.to_string()),
                 ("", Some(e)) if s.kind != Kind::Path => match s.key {
                     "ao_samples" => from_preset(e.ao_samples.to_string()),
                     "ao_distance" => from_preset(e.ao_distance.to_string()),
