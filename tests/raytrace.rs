@@ -153,6 +153,22 @@ fn glplanet_day_and_night_are_ray_traced_like_mesa_at_several_times_of_day() {
 }
 
 #[test]
+fn polygons_drawn_as_lines_take_their_own_faces_colours_under_two_sided_lighting() {
+    // moebius's strip: quad strips drawn with glPolygonMode(GL_LINE), a glMaterial diffuse
+    // colour per vertex, two-sided lighting. Where the strip shows its back, GL colours the
+    // edges with the back face's lighting; glray took the front's (a uniform dark grey: 2.5% of
+    // the pixels off at this time of day, found by the sweep's real clocks).
+    ray_traced_like_mesa_with(
+        "moebius-08h",
+        &hack("moebius"),
+        &["-window"],
+        4,
+        0.005,
+        &[("FRAMESHOT_TIME", "1699949600")],
+    );
+}
+
+#[test]
 fn examples_are_ray_traced_like_mesa() {
     // The OSMesa example: frames end at glFinish; its PNG is what glReadPixels returned.
     let dir = scratch("rt-examples");

@@ -279,8 +279,12 @@ impl Context {
         };
         let eye3 = |v: &EyeVertex| (v.eye.truncate() / if v.eye.w != 0.0 { v.eye.w } else { 1.0 }).as_vec3();
         let mut tris = Vec::new();
-        let mut lines: Vec<([u32; 2], u32)> = asm.lines.clone();
-        let mut points: Vec<u32> = asm.points.clone();
+        // Lines and points with the face whose colours they take: a polygon drawn as lines or
+        // points takes its own face's (two-sided lighting's back colours on a back face, as
+        // GL's polygon rasterization does; moebius's wireframe strip); lines and points drawn
+        // as such, the front's.
+        let mut lines: Vec<([u32; 2], u32, usize)> = asm.lines.iter().map(|&(l, p)| (l, p, 0)).collect();
+        let mut points: Vec<(u32, usize)> = asm.points.iter().map(|&i| (i, 0)).collect();
         let polygon_of = |mode: u32, triangle: usize| match mode {
             GL_QUADS | GL_QUAD_STRIP => triangle / 2,
             GL_POLYGON => 0,
@@ -313,13 +317,13 @@ impl Context {
                     let polygon = polygon_of(mode, index);
                     for (x, y) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
                         if !diagonals.contains(&(polygon, x.min(y), x.max(y))) {
-                            lines.push(([x, y], provoking));
+                            lines.push(([x, y], provoking, face));
                         }
                     }
                     continue;
                 }
                 GL_POINT => {
-                    points.extend(t);
+                    points.extend(t.map(|i| (i, face)));
                     continue;
                 }
                 _ => {}
@@ -372,7 +376,7 @@ impl Context {
             surface
         };
         let line_half = self.raster.line_width / 2.0 + if line_smooth { 0.5 } else { 0.0 };
-        for &([i, j], provoking) in &lines {
+        for &([i, j], provoking, face) in &lines {
             let (ca, cb) = (clip[i as usize], clip[j as usize]);
             // The part in front of the near plane, as GL clips it: a floor grid's lines that
             // run past the viewer (winduprobot's, handsy's) keep what is in view.
@@ -405,9 +409,9 @@ impl Context {
             let (ea, eb) = (eye3(va), eye3(vb));
             solids.push(Solid { a: ea.lerp(eb, sa), b: toward!(ea, eb, sb), radius, sequence, camera });
             let (c0, c1) = if flat {
-                (color(pv, 0), color(pv, 0))
+                (color(pv, face), color(pv, face))
             } else {
-                let (ca, cb) = (color(va, 0), color(vb, 0));
+                let (ca, cb) = (color(va, face), color(vb, face));
                 (ca.lerp(cb, sa), toward!(ca, cb, sb))
             };
             let (ta, tb) = (tex(va), tex(vb));
@@ -448,7 +452,7 @@ impl Context {
                 (at + 0.5).floor() - at
             }
         };
-        for &i in &points {
+        for &(i, face) in &points {
             let c = clip[i as usize];
             let h = point_half;
             // Window position within the viewport (its origin is a whole pixel).
@@ -462,7 +466,7 @@ impl Context {
             for tri in [[0, 1, 2], [2, 3, 0]] {
                 tris.push(Triangle {
                     positions: tri.map(|k| q[k]),
-                    colors: [color(v, 0); 3],
+                    colors: [color(v, face); 3],
                     secondary: [Vec3::ZERO; 3],
                     texcoords: [tex(v); 3],
                     surface: point_surface,
