@@ -435,7 +435,9 @@ impl Live {
         self.renderer.options = options;
         self.renderer.restart();
         self.trigger = trigger_of(&config);
-        self.distribution.announce(&config, changes);
+        if self.distribution.active() {
+            self.distribution.announce(&config, changes);
+        }
     }
 
     /// In a child just forked: the parent's tracer threads do not exist here (waiting on them
