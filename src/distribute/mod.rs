@@ -19,7 +19,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use glray_core::config::Config;
-use glray_distribute::node::Roles;
+use glray_distribute::node::{Announced, Roles};
 use glray_distribute::{Agreement, FrameReport, Limits, Node, Transport};
 use glray_render::{Rendered, Renderer};
 use glray_scene::frame::Frame;
@@ -84,12 +84,13 @@ pub struct Distribution {
     node: Option<Node<MpiTransport>>,
     /// Image-parallel tracing stopped (a fault, or MPI could not be joined).
     stopped: bool,
-    /// The settings in force, as rank 0's changes (the live control panel) leave them; and
-    /// the last settings rank 0 changed here, for the caller (`take_changed`).
-    config: std::sync::Arc<std::sync::Mutex<Config>>,
+    /// The settings at start, which rank 0's changes (the live control panel) are made to on
+    /// the other ranks; and the last settings such a change left here, for the caller
+    /// (`take_changed`).
+    config: Config,
     changed: std::sync::Arc<std::sync::Mutex<Option<Config>>>,
     /// Rank 0: changes to hand on with the next frame (before the node exists).
-    announced: Option<(u64, Vec<(String, String)>)>,
+    announced: Announced,
 }
 
 /// What a shared frame gave this rank: the picture for its framebuffer, and the report.
@@ -109,27 +110,20 @@ impl Distribution {
             roles: if config.dedicated_master() { Roles::Dedicated } else { Roles::Shared },
             node: None,
             stopped: false,
-            config: std::sync::Arc::new(std::sync::Mutex::new(config.clone())),
+            config: config.clone(),
             changed: Default::default(),
-            announced: None,
+            announced: Announced::default(),
         }
     }
 
     /// Rank 0: settings changed from the live control panel (`config` the result, already in
     /// force here); every other rank makes `changes` before it traces the next frame.
     pub fn announce(&mut self, config: &Config, changes: Vec<(String, String)>) {
-        *self.config.lock().unwrap_or_else(|e| e.into_inner()) = config.clone();
         // (`self.settings` stays the agreement to start a node from: the one before the change.)
         let settings = config.picture_settings();
         match self.node.as_mut() {
             Some(node) => node.announce(settings, changes),
-            None => match self.announced.as_mut() {
-                Some((s, c)) => {
-                    *s = settings;
-                    c.extend(changes);
-                }
-                None => self.announced = Some((settings, changes)),
-            },
+            None => self.announced.add(settings, changes),
         }
     }
 
@@ -186,13 +180,12 @@ impl Distribution {
                     if let Some((settings, changes)) = self.announced.take() {
                         node.announce(settings, changes);
                     }
-                    let (config, changed) = (self.config.clone(), self.changed.clone());
+                    // This rank's settings, as the changes so far made them (the hook's own).
+                    let (mut config, changed) = (self.config.clone(), self.changed.clone());
                     node.on_settings(Box::new(move |changes, renderer| {
-                        let mut config = config.lock().unwrap_or_else(|e| e.into_inner());
                         let (made, options) = crate::panel::changes::change(&config, changes)?;
-                        renderer.options = options;
-                        renderer.restart();
-                        *config = made.clone();
+                        renderer.set_options(options);
+                        config = made.clone();
                         let settings = made.picture_settings();
                         *changed.lock().unwrap_or_else(|e| e.into_inner()) = Some(made);
                         Ok(settings)

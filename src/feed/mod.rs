@@ -100,6 +100,8 @@ fn tracer_pool(threads: usize) -> Option<&'static rayon::ThreadPool> {
 pub fn configure(config: &Config) -> Live {
     let trigger = trigger_of(config);
     let threads = crate::distribute::tracer_threads(config);
+    // Rank 0 serves the panel; the other ranks take its changes from rank 0 (`Distribution`).
+    let rank0 = crate::distribute::env_rank().is_none_or(|r| r == 0);
     let live = Live {
         capture: Capture::default(),
         names: Vec::new(),
@@ -122,11 +124,8 @@ pub fn configure(config: &Config) -> Live {
         swaps: 0,
         passed_seen: HashMap::new(),
         panel: None,
-        panel_config: None,
+        panel_config: (rank0 && config.panel().is_some()).then(|| config.clone()),
     };
-    // Rank 0 serves the panel; the other ranks take its changes from rank 0 (`Distribution`).
-    let rank0 = crate::distribute::env_rank().is_none_or(|r| r == 0);
-    let live = Live { panel_config: (rank0 && config.panel().is_some()).then(|| config.clone()), ..live };
     ON.store(true, Ordering::Relaxed);
     live
 }
@@ -432,8 +431,7 @@ impl Live {
             "panel: {}",
             changes.iter().map(|(k, v)| format!("{k} = {v:?}")).collect::<Vec<_>>().join(", ")
         );
-        self.renderer.options = options;
-        self.renderer.restart();
+        self.renderer.set_options(options);
         self.trigger = trigger_of(&config);
         if self.distribution.active() {
             self.distribution.announce(&config, changes);

@@ -135,9 +135,30 @@ pub struct Node<T: Transport> {
     bytes_sent: u64,
     bytes_received: u64,
     /// Rank 0: settings changes to hand on with the next frame (`announce`).
-    announced: Option<(u64, Vec<(String, String)>)>,
+    announced: Announced,
     /// Other ranks: how to make rank 0's changes (`on_settings`).
     hook: Option<SettingsHook>,
+}
+
+/// Settings changes waiting to go with the next frame: the agreement number after the last of
+/// them, and all of them in order (two changes before a frame both go).
+#[derive(Debug, Default)]
+pub struct Announced(Option<(u64, Vec<(String, String)>)>);
+
+impl Announced {
+    pub fn add(&mut self, settings: u64, changes: Vec<(String, String)>) {
+        match self.0.as_mut() {
+            Some((s, c)) => {
+                *s = settings;
+                c.extend(changes);
+            }
+            None => self.0 = Some((settings, changes)),
+        }
+    }
+
+    pub fn take(&mut self) -> Option<(u64, Vec<(String, String)>)> {
+        self.0.take()
+    }
 }
 
 /// Makes rank 0's settings changes (setting, value) on this rank: to its renderer and wherever
@@ -176,7 +197,7 @@ impl<T: Transport> Node<T> {
             last_frame: None,
             bytes_sent: 0,
             bytes_received: 0,
-            announced: None,
+            announced: Announced::default(),
             hook: None,
         }
     }
@@ -184,14 +205,7 @@ impl<T: Transport> Node<T> {
     /// Rank 0: its settings changed (already made here, `settings` their new agreement
     /// number); every other rank makes `changes` before it traces the next frame.
     pub fn announce(&mut self, settings: u64, changes: Vec<(String, String)>) {
-        match self.announced.as_mut() {
-            // Two changes before a frame: both go, in order.
-            Some((s, c)) => {
-                *s = settings;
-                c.extend(changes);
-            }
-            None => self.announced = Some((settings, changes)),
-        }
+        self.announced.add(settings, changes);
     }
 
     /// How this rank makes rank 0's settings changes (`Message::Settings`).

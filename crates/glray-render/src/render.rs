@@ -185,16 +185,12 @@ impl Renderer {
             seed,
         };
         let linear = self.linear(key);
-        let (rendered, linear, stats, split) = job.run(&mut self.meshes, linear);
+        let (rendered, linear, stats, ao) = job.run(&mut self.meshes, linear);
         // A frame that built its scene took what it could refit; one that did not (no camera)
         // has no use for the trees either.
         self.meshes.forget_gone();
         self.stats = Stats { kept_bytes: glray_core::reuse::kept_bytes() as u64, ..stats };
-        let start = Instant::now();
-        let denoised = split.map(|(layer, camera)| Denoised { layer, camera, motion: Motion::of(frame) });
-        let picture = self.add_pass_with(key, rendered, linear, denoised);
-        self.stats.denoise = start.elapsed();
-        picture
+        self.add_pass(frame, key, rendered, linear, ao)
     }
 
     /// Whether frames under accumulation key `key` keep their colours before rounding: to add
@@ -268,9 +264,11 @@ impl Renderer {
         frame.cleared && frame.by_viewport().is_none()
     }
 
-    /// Adds one pass of `frame` gathered from tiles (`rendered`, its colours before rounding
-    /// when kept, and its AO apart when denoised) to the passes added up under `key`, and
-    /// returns the picture of them all: what `render` does after tracing a whole frame.
+    /// Adds one pass of `frame` (`rendered`, its colours before rounding when kept, and its AO
+    /// apart when denoised) to the passes added up under `key`, and returns the picture of them
+    /// all: `render` after tracing a whole frame, the rank that gathers a frame's tiles after
+    /// gathering them. The AO is denoised as seen from the frame's camera (`camera_of`, the one
+    /// it was traced from).
     pub fn add_pass(
         &mut self,
         frame: &Frame,
@@ -375,6 +373,13 @@ impl Renderer {
         } else {
             1
         }
+    }
+
+    /// New options while the program runs (the live control panel): the samples and AO history
+    /// so far were traced with the old ones and go.
+    pub fn set_options(&mut self, options: Options) {
+        self.options = options;
+        self.restart();
     }
 
     /// Forgets the samples added up: the next render starts a picture afresh (a replay that
@@ -528,8 +533,8 @@ struct Job<'a> {
 }
 
 /// What `Job::run` gives: the image, its colours before rounding (when asked), what it took,
-/// and the AO kept apart for the denoiser with the camera it was seen from (when it was).
-type Traced = (Rendered, Option<Vec<Vec4>>, Stats, Option<(Vec<AoPixel>, Camera)>);
+/// and the AO kept apart for the denoiser (when it was).
+type Traced = (Rendered, Option<Vec<Vec4>>, Stats, Option<Vec<AoPixel>>);
 
 impl Job<'_> {
     /// The image, its colours before rounding (when asked), what it took, and its AO kept apart
@@ -718,8 +723,7 @@ impl Job<'_> {
         progress.finish();
         stats.trace = start.elapsed();
         stats.rays = rays.load(Ordering::Relaxed);
-        let split = ao.map(|layer| (layer, camera));
-        (Rendered { width, height, rgba, depth }, colors, stats, split)
+        (Rendered { width, height, rgba, depth }, colors, stats, ao)
     }
 
     /// A frame drawn in several viewports (`Frame::by_viewport`): each view traced in turn, over

@@ -323,10 +323,10 @@ impl Tracer<'_> {
         Some((again.color, again.depth))
     }
 
-    /// The surface a line or point (of draw `line`) seen at `p` along `dir` lies on: the nearest hit of another
-    /// kind of draw within `ON_SURFACE` pixels' widths before or behind it (a line is drawn on
-    /// a surface or a hair off it), as where AO rays start and its object. None for a line in
-    /// the open.
+    /// The surface a line or point (of draw `line`) seen at `p` along `dir` lies on: the
+    /// nearest hit of another kind of draw within `ON_SURFACE` pixels' widths before or behind
+    /// it (a line is drawn on a surface or a hair off it), as where AO rays start and its
+    /// object. None for a line in the open.
     fn beneath(&self, line: u32, p: DVec3, dir: DVec3) -> Option<(Origin, u32)> {
         let d = dir.normalize_or_zero();
         let reach = ON_SURFACE * self.camera.pixel_size(p);
@@ -342,11 +342,7 @@ impl Tracer<'_> {
             .filter(|h| !self.scene.is_line(h.sequence))
             .min_by(|a, b| (a.t as f64 - reach).abs().total_cmp(&(b.t as f64 - reach).abs()))?;
         let t = self.frame.triangle(hit.id)?;
-        let [a, b, c] = t.positions;
-        let mut n = (b - a).cross(c - a).normalize_or_zero();
-        if n.dot(d.as_vec3()) > 0.0 {
-            n = -n;
-        }
+        let n = facet_facing(&t, d.as_vec3());
         let at = (start + d * hit.t as f64).as_vec3();
         // The AO rays start as from the line's own draw: its solids (a hair above the surface,
         // as thick as on the screen) would hide most of the sky otherwise.
@@ -368,11 +364,7 @@ impl Tracer<'_> {
         bounce: u32,
     ) -> Fragment {
         let e = &self.options.effects;
-        let [a, b, c] = t.positions;
-        let mut n = (b - a).cross(c - a).normalize_or_zero();
-        if n.dot(dir.as_vec3()) > 0.0 {
-            n = -n;
-        }
+        let n = facet_facing(t, dir.as_vec3());
         let from = Origin { p: p.as_vec3(), n, draw: t.sequence };
         // Shadow and mirror rays follow the smooth surface a lit mesh's normals describe, not
         // its flat facets (`smooth`): they leave from the point lifted onto it.
@@ -424,6 +416,17 @@ impl Tracer<'_> {
             }
         }
         f
+    }
+}
+
+/// Triangle `t`'s facet normal, turned to face a ray along `dir`: the side secondary rays leave.
+fn facet_facing(t: &Triangle, dir: Vec3) -> Vec3 {
+    let [a, b, c] = t.positions;
+    let n = (b - a).cross(c - a).normalize_or_zero();
+    if n.dot(dir) > 0.0 {
+        -n
+    } else {
+        n
     }
 }
 
