@@ -10,7 +10,7 @@ use common::*;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 /// The tests here one at a time: each runs a program tracing frames (the MPI one two ranks),
@@ -23,17 +23,10 @@ fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
 
 /// A program running under `glray run --panel`, killed by PID when dropped.
 struct Running {
-    child: Child,
+    child: Stopped,
     /// host:port and the access token, as printed.
     address: String,
     token: String,
-}
-
-impl Drop for Running {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
 }
 
 /// Starts `cmd` (a `glray run --panel ...`), waiting (bounded) for the panel's line on stderr.
@@ -41,7 +34,7 @@ fn start(mut cmd: Command, log: &Path) -> Running {
     let file = std::fs::File::create(log).unwrap();
     let child = cmd.stderr(file).stdout(Stdio::null()).spawn().expect("glray run");
     // Killed when dropped, on a failure below too.
-    let mut running = Running { child, address: String::new(), token: String::new() };
+    let mut running = Running { child: Stopped(child), address: String::new(), token: String::new() };
     let started = Instant::now();
     loop {
         let text = std::fs::read_to_string(log).unwrap_or_default();
@@ -344,7 +337,7 @@ fn a_change_on_rank_zeros_panel_reaches_both_ranks_of_glray_run_np_2() {
     assert!(frames_seen.iter().all(|f| f["ranks"] == 2), "the frames are shared by 2 ranks");
     let started = Instant::now();
     let status = loop {
-        if let Some(s) = run.child.try_wait().unwrap() {
+        if let Some(s) = run.child.0.try_wait().unwrap() {
             break s;
         }
         assert!(started.elapsed() < Duration::from_secs(120), "the job did not end within 120 s");
@@ -366,18 +359,11 @@ fn a_change_on_rank_zeros_panel_reaches_both_ranks_of_glray_run_np_2() {
 /// (`--remote-debugging-pipe`: commands in on its fd 3, answers out on fd 4, each a JSON text
 /// ended by a NUL byte); killed by PID when dropped.
 struct Chromium {
-    child: Child,
+    _browser: Stopped,
     to: std::fs::File,
     from: std::sync::mpsc::Receiver<serde_json::Value>,
     next: u64,
     session: String,
-}
-
-impl Drop for Chromium {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
 }
 
 impl Chromium {
@@ -429,7 +415,13 @@ impl Chromium {
                 }
             }
         });
-        let mut c = Chromium { child, to: std::fs::File::from(commands_w), from, next: 1, session: String::new() };
+        let mut c = Chromium {
+            _browser: Stopped(child),
+            to: std::fs::File::from(commands_w),
+            from,
+            next: 1,
+            session: String::new(),
+        };
         let started = Instant::now();
         let target = loop {
             let targets = c.call("Target.getTargets", serde_json::json!({}), false);

@@ -130,9 +130,19 @@ pub fn assert_same_file(a: &Path, b: &Path, what: &str) {
     assert!(x == y, "{what}: {} and {} differ", a.display(), b.display());
 }
 
+/// A process a test started, killed by its PID (and waited for) when dropped: on a failure too.
+pub struct Stopped(pub Child);
+
+impl Drop for Stopped {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// An X server of the test's own (Xvfb -noreset), stopped by PID when dropped.
 pub struct Xvfb {
-    child: Child,
+    _server: Stopped,
     pub display: String,
 }
 
@@ -148,14 +158,7 @@ impl Xvfb {
         let mut line = String::new();
         BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
         let n: u32 = line.trim().parse().unwrap_or_else(|_| panic!("Xvfb did not report a display: {line:?}"));
-        Xvfb { child, display: format!(":{n}") }
-    }
-}
-
-impl Drop for Xvfb {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        Xvfb { _server: Stopped(child), display: format!(":{n}") }
     }
 }
 
