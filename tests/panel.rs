@@ -149,12 +149,20 @@ fn glxgears(display: &str, log: &Path, settings: &[&str]) -> Running {
 }
 
 /// The mean brightness of the gears (pixels brighter than the background) over four frames
-/// the panel shows, a few frames apart: the gears turn, so pictures are compared by it.
-fn mean_brightness(run: &Running) -> f64 {
+/// the panel shows, a few frames apart, each numbered after `after` (its X-Glray-Frame): the
+/// gears turn, so pictures are compared by it.
+fn mean_brightness(run: &Running, after: u64) -> f64 {
     let (mut sum, mut n) = (0u64, 0u64);
     for _ in 0..4 {
         let png = run.get("/api/frame.png");
         assert_eq!(png.status, 200, "{}", png.text());
+        let number: u64 = png
+            .headers
+            .iter()
+            .find(|(k, _)| k == "x-glray-frame")
+            .and_then(|(_, v)| v.parse().ok())
+            .expect("a frame's number in X-Glray-Frame");
+        assert!(number > after, "frame {number} is from before frame {after}");
         let (_, _, p) = png_pixels(&png.body);
         for c in p.chunks(4) {
             let v: u64 = c[..3].iter().map(|&v| v as u64).sum();
@@ -162,9 +170,49 @@ fn mean_brightness(run: &Running) -> f64 {
                 (sum, n) = (sum + v, n + 1);
             }
         }
-        run.wait_for_frame(run.last_frame() + 3);
+        run.wait_for_frame(number + 3);
     }
     sum as f64 / n.max(1) as f64
+}
+
+/// Every address of this machine's interfaces (IPv4 and IPv6, link-local ones with their
+/// interface), as getifaddrs(3) lists them, and 127.0.0.2 and ::1: loopback addresses that are
+/// not the one the panel listens on.
+fn addresses_of_this_machine() -> Vec<std::net::SocketAddr> {
+    use std::net::{IpAddr, Ipv4Addr, Ipv6Addr, SocketAddr, SocketAddrV6};
+    let mut all: Vec<SocketAddr> = vec![
+        SocketAddr::new(IpAddr::V4(Ipv4Addr::new(127, 0, 0, 2)), 0),
+        SocketAddr::new(IpAddr::V6(Ipv6Addr::LOCALHOST), 0),
+    ];
+    let mut list: *mut libc::ifaddrs = std::ptr::null_mut();
+    // SAFETY: getifaddrs fills `list`, freed below; each entry is read while the list lives.
+    unsafe {
+        assert_eq!(libc::getifaddrs(&mut list), 0, "getifaddrs: {}", std::io::Error::last_os_error());
+        let mut at = list;
+        while !at.is_null() {
+            let a = (*at).ifa_addr;
+            if !a.is_null() {
+                match i32::from((*a).sa_family) {
+                    libc::AF_INET => {
+                        let v4 = &*(a as *const libc::sockaddr_in);
+                        all.push(SocketAddr::new(IpAddr::V4(Ipv4Addr::from(u32::from_be(v4.sin_addr.s_addr))), 0));
+                    }
+                    libc::AF_INET6 => {
+                        let v6 = &*(a as *const libc::sockaddr_in6);
+                        let ip = Ipv6Addr::from(v6.sin6_addr.s6_addr);
+                        all.push(SocketAddr::V6(SocketAddrV6::new(ip, 0, 0, v6.sin6_scope_id)));
+                    }
+                    _ => {}
+                }
+            }
+            at = (*at).ifa_next;
+        }
+        libc::freeifaddrs(list);
+    }
+    all.retain(|a| a.ip() != IpAddr::V4(Ipv4Addr::LOCALHOST));
+    all.sort();
+    all.dedup();
+    all
 }
 
 /// After a change to AO the panel took while frame `taken` was the last (or before): every
@@ -222,10 +270,14 @@ fn the_panel_steers_glxgears_over_http_and_refuses_requests_without_the_token() 
         .collect();
     assert_eq!(listening.len(), 1, "{listening:?}");
     assert!(listening[0].split_whitespace().nth(1).unwrap().starts_with("0100007F:"), "{listening:?}");
-    let others = Command::new("hostname").arg("-I").output().map(|o| stdout(&o)).unwrap_or_default();
-    for ip in others.split_whitespace().filter(|ip| !ip.starts_with("127.") && !ip.contains(':')) {
-        let refused = TcpStream::connect_timeout(&format!("{ip}:{port}").parse().unwrap(), Duration::from_secs(2));
-        assert!(refused.is_err(), "the panel answered on {ip}");
+    // Every other address this machine has, IPv6 ones too: refused (nothing else listens on
+    // the port, so a refusal says the panel is not there).
+    let others = addresses_of_this_machine();
+    assert!(others.len() >= 2, "{others:?}");
+    for mut other in others {
+        other.set_port(port);
+        let answered = TcpStream::connect_timeout(&other, Duration::from_secs(2));
+        assert!(answered.is_err(), "the panel answered on {other}");
     }
 
     // The settings, then a bad value refused with the reason (and nothing changed).
@@ -244,7 +296,7 @@ fn the_panel_steers_glxgears_over_http_and_refuses_requests_without_the_token() 
     let before = run.last_frame();
     let frames = run.wait_for_frame(before + 3);
     assert!(!traced_ao(frames.last().unwrap()), "the GL look traces no AO");
-    let gl_mean = mean_brightness(&run);
+    let gl_mean = mean_brightness(&run, 0);
     let gl_png = run.get("/api/frame.png");
     assert_eq!(gl_png.status, 200);
     assert!(gl_png.headers.iter().any(|(k, v)| k == "content-type" && v == "image/png"));
@@ -255,8 +307,9 @@ fn the_panel_steers_glxgears_over_http_and_refuses_requests_without_the_token() 
     let on = run.put(r#"{"preset": "ao"}"#);
     assert_eq!(on.status, 200, "{}", on.text());
     assert_eq!(on.json()["settings"]["preset"], "ao");
-    ao_within_two_frames(&run, run.last_frame());
-    let ao_mean = mean_brightness(&run);
+    let taken = run.last_frame();
+    ao_within_two_frames(&run, taken);
+    let ao_mean = mean_brightness(&run, taken + 2);
     assert!(ao_mean < 0.985 * gl_mean, "AO darkens the gears: mean {ao_mean:.1} against {gl_mean:.1} in the GL look");
 
     // Many requests at once: all answered.
@@ -276,9 +329,13 @@ fn the_panel_steers_glxgears_over_http_and_refuses_requests_without_the_token() 
     let mut slow = TcpStream::connect(&run.address).unwrap();
     slow.write_all(b"GET /api/stats?token=").unwrap();
     let held = run.last_frame();
-    std::thread::sleep(Duration::from_secs(2));
-    let later = run.last_frame();
-    assert!(later >= held + 5, "frames went on while a client stalled: {held} -> {later}");
+    run.wait_for_frame(held + 5);
+    // Still held open by the server (it has not given up on the client): the frames went on
+    // beside it, not after it.
+    slow.set_nonblocking(true).unwrap();
+    let mut byte = [0u8; 1];
+    let open = matches!(slow.read(&mut byte), Err(e) if e.kind() == std::io::ErrorKind::WouldBlock);
+    assert!(open, "the stalled request was still open while frames {held} to {} came", held + 5);
     drop(slow);
 
     // The settings as a TOML file, which a fresh run reads back (GLRAY_CONFIG).
@@ -482,25 +539,31 @@ impl Chromium {
         }
     }
 
-    /// The mean brightness of the gears in the frame the page shows, over four frames it shows.
-    fn shown_brightness(&mut self) -> f64 {
-        const MEAN: &str = "(async () => { const img = document.getElementById('frame'); await img.decode(); \
+    /// The mean brightness of the gears in the frames the page shows, over four frames it shows
+    /// numbered after `after`. The page puts a frame in place only once it is decoded whole
+    /// (src/panel/page.html), so the shown element is read in one synchronous step: no script
+    /// of the page's can swap it between the check and the drawing. (A `decode()` awaited on
+    /// the shown element was rejected whenever the page changed its `src` meanwhile: the
+    /// "EncodingError: The source image cannot be decoded" this test failed with.)
+    fn shown_brightness(&mut self, after: u64) -> f64 {
+        const MEAN: &str = "(() => { const img = document.getElementById('frame'); \
+            if (!img.complete || !img.naturalWidth || img.dataset.frame === undefined) return null; \
             const c = document.createElement('canvas'); c.width = img.naturalWidth; c.height = img.naturalHeight; \
             const g = c.getContext('2d'); g.drawImage(img, 0, 0); const d = g.getImageData(0, 0, c.width, c.height).data; \
             let s = 0, n = 0; for (let i = 0; i < d.length; i += 4) { const v = d[i] + d[i + 1] + d[i + 2]; \
-            if (v > 30) { s += v; n++; } } return [s, n, img.src]; })()";
-        let (mut sum, mut n, mut last) = (0.0, 0.0, String::new());
+            if (v > 30) { s += v; n++; } } return [s, n, Number(img.dataset.frame)]; })()";
+        let (mut sum, mut n, mut last) = (0.0, 0.0, after);
         for _ in 0..4 {
             let started = Instant::now();
             let v = loop {
                 let v = self.eval(MEAN);
-                if v[2].as_str() != Some(&last) {
+                if v[2].as_u64().is_some_and(|shown| shown > last) {
                     break v;
                 }
-                assert!(started.elapsed() < Duration::from_secs(90), "the page shows no new frame");
+                assert!(started.elapsed() < Duration::from_secs(90), "the page shows no frame after {last}: {v}");
                 std::thread::sleep(Duration::from_millis(100));
             };
-            last = v[2].as_str().unwrap().to_string();
+            last = v[2].as_u64().unwrap();
             (sum, n) = (sum + v[0].as_f64().unwrap(), n + v[1].as_f64().unwrap());
         }
         sum / n.max(1.0)
@@ -522,7 +585,7 @@ fn the_panels_page_in_headless_chromium_shows_frames_and_turns_ao_on() {
     assert_eq!(page.eval("document.getElementById('setting-preset').value"), "gl");
     page.wait_until("document.getElementById('frame').naturalWidth === 300", "a frame");
     page.wait_until("document.querySelectorAll('canvas').length >= 8", "the plots");
-    let gl = page.shown_brightness();
+    let gl = page.shown_brightness(0);
     // A bad value: refused, the reason on the page.
     page.eval(
         "document.getElementById('setting-ao_samples').value = 'lots'; document.getElementById('apply').click(); 0",
@@ -534,7 +597,9 @@ fn the_panels_page_in_headless_chromium_shows_frames_and_turns_ao_on() {
          document.getElementById('apply').click(); 0",
     );
     page.wait_until("document.getElementById('ok').textContent.includes('preset = ao')", "the change");
-    ao_within_two_frames(&run, run.last_frame());
-    let ao = page.shown_brightness();
+    let taken = run.last_frame();
+    ao_within_two_frames(&run, taken);
+    // Frames from two after the change on trace AO: the page's, from then on, show it.
+    let ao = page.shown_brightness(taken + 2);
     assert!(ao < 0.985 * gl, "the page's frame darkens with AO: {ao:.1} against {gl:.1}");
 }
