@@ -83,8 +83,22 @@ pub const GLRAY_WAYS: [Way; 2] = [Way::Preload, Way::Dropin];
 pub fn command(way: Way, preload: &[&Path], program: &Path, seconds: u32) -> Command {
     let mut cmd = Command::new("timeout");
     cmd.arg("-k").arg("5").arg(seconds.to_string()).arg(program);
+    set_way(&mut cmd, way, preload);
+    cmd
+}
+
+/// `command` without the `timeout` wrapper: the process started is the program itself, so what
+/// is loaded into it, its pid and its exit are the program's alone. Bound it with
+/// `run_until_said`.
+pub fn bare_command(way: Way, preload: &[&Path], program: &Path) -> Command {
+    let mut cmd = Command::new(program);
+    set_way(&mut cmd, way, preload);
+    cmd
+}
+
+fn set_way(cmd: &mut Command, way: Way, preload: &[&Path]) {
     let mut preloads: Vec<String> = preload.iter().map(|p| p.display().to_string()).collect();
-    without_glray(&mut cmd);
+    without_glray(cmd);
     cmd.env_remove("LD_LIBRARY_PATH").env("GLRAY_PRESET", "off");
     match way {
         Way::Plain => {}
@@ -96,7 +110,46 @@ pub fn command(way: Way, preload: &[&Path], program: &Path, seconds: u32) -> Com
     if !preloads.is_empty() {
         cmd.env("LD_PRELOAD", preloads.join(":"));
     }
-    cmd
+}
+
+/// What a run said on standard error, and how it ended: `None` where the test stopped it.
+pub struct Said {
+    pub stderr: String,
+    pub status: Option<std::process::ExitStatus>,
+}
+
+/// Starts `cmd` with its standard error into `log` and waits until what it said there makes
+/// `done` true (then stops it by its pid, if it still runs) or it exits. Panics if neither
+/// happened within `limit`, or if it exited without `done` becoming true.
+pub fn run_until_said(cmd: &mut Command, log: &Path, limit: std::time::Duration, done: impl Fn(&str) -> bool) -> Said {
+    run_bounded(cmd, log, limit, Some(&done))
+}
+
+/// Starts `cmd` with its standard error into `log` and waits for it to exit; stops it by its pid
+/// and panics if it runs past `limit`.
+pub fn run_to_end(cmd: &mut Command, log: &Path, limit: std::time::Duration) -> Said {
+    run_bounded(cmd, log, limit, None)
+}
+
+fn run_bounded(cmd: &mut Command, log: &Path, limit: std::time::Duration, done: Option<&dyn Fn(&str) -> bool>) -> Said {
+    let file = std::fs::File::create(log).unwrap();
+    let child = cmd.stdout(Stdio::null()).stderr(file).spawn().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
+    let mut child = Stopped(child);
+    let started = std::time::Instant::now();
+    loop {
+        let exited = child.0.try_wait().unwrap();
+        let text = std::fs::read_to_string(log).unwrap_or_default();
+        if done.is_some_and(|done| done(&text)) || (done.is_none() && exited.is_some()) {
+            let status = exited.or_else(|| child.0.try_wait().unwrap());
+            drop(child);
+            // All it said (a process stopped here says nothing more).
+            let stderr = std::fs::read_to_string(log).unwrap_or_default();
+            return Said { stderr, status };
+        }
+        assert!(exited.is_none(), "{cmd:?} ended ({exited:?}) before it said what was waited for:\n{text}");
+        assert!(started.elapsed() < limit, "{cmd:?}: still running after {limit:?}:\n{text}");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
 }
 
 /// No GLRAY_* setting and no LD_PRELOAD of the test's own environment reach `cmd`.
