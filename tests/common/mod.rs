@@ -280,3 +280,100 @@ fn build_icet_like() -> PathBuf {
     }
     out
 }
+
+/// What a picture comparison measured when its bound was set (named in each test, beside the
+/// comparison): the share of pixels with a channel off by more than 5% (`glray compare`'s
+/// default fuzz, as apitrace's diff-images), and the PSNR in dB over what is drawn (the pixels
+/// where either picture is not the background, its first pixel's colour: a sparse picture's
+/// figure is not lifted by its empty space; infinite for equal pictures).
+#[derive(Debug, Clone, Copy)]
+pub struct Measured {
+    pub share: f64,
+    pub psnr: f64,
+}
+
+impl Measured {
+    /// The most pixels off a test allows: three times what was measured, and at least 0.005%
+    /// more (a few edge pixels, where none or one was off).
+    pub fn share_bound(&self) -> f64 {
+        (3.0 * self.share).max(self.share + 0.00005)
+    }
+    /// The least PSNR a test allows: 3 dB below what was measured (a shift of the whole
+    /// picture too small for the share to see: a lighting term 5% off costs 10-20 dB), and no
+    /// more than 60 dB (a few pixels off in a picture that had none).
+    pub fn psnr_bound(&self) -> f64 {
+        (self.psnr - 3.0).min(60.0)
+    }
+}
+
+/// The share of pixels off by more than 5% and the PSNR of `picture` against `reference`.
+pub fn measure(reference: &Path, picture: &Path) -> Measured {
+    use glray_core::image::{compare, Image};
+    let read = |p: &Path| Image::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    let c = compare(&read(reference), &read(picture), 0.05).unwrap_or_else(|e| panic!("{}: {e}", picture.display()));
+    Measured { share: c.differing_share(), psnr: c.psnr_objects }
+}
+
+/// Asserts `picture` is as close to `reference` as `measured` says it was, within its bounds
+/// (`Measured::share_bound`, `Measured::psnr_bound`); prints what it measures now.
+pub fn assert_close(reference: &Path, picture: &Path, measured: Measured, what: &str) {
+    let now = measure(reference, picture);
+    eprintln!(
+        "{what}: {:.4}% of pixels off by more than 5%, PSNR {:.1} dB (measured {:.4}%, {:.1} dB; bounds {:.4}%, {:.1} dB)",
+        now.share * 100.0,
+        now.psnr,
+        measured.share * 100.0,
+        measured.psnr,
+        measured.share_bound() * 100.0,
+        measured.psnr_bound()
+    );
+    assert!(
+        now.share <= measured.share_bound() && now.psnr >= measured.psnr_bound(),
+        "{what}: {:.4}% of pixels off by more than 5% and PSNR {:.1} dB against {}; measured when the bound was \
+         set: {:.4}%, {:.1} dB",
+        now.share * 100.0,
+        now.psnr,
+        reference.display(),
+        measured.share * 100.0,
+        measured.psnr
+    );
+}
+
+/// A trace of the checked-in suite (tests/traces, made by scripts/record-test-traces): the
+/// example program and arguments that recorded it. The program's own picture of its last frame
+/// (Mesa's, read back by the program while it was recorded) is `NAME.png` beside it.
+pub struct SuiteTrace {
+    pub name: &'static str,
+    pub program: &'static str,
+    /// After the picture's path and the number of frames.
+    pub parts: Option<&'static str>,
+}
+
+/// Every trace of the suite, as scripts/record-test-traces records them (3 frames each).
+pub const TRACE_SUITE: [SuiteTrace; 8] = [
+    SuiteTrace { name: "osmesa-lists", program: "osmesa_scene", parts: Some("lists") },
+    SuiteTrace { name: "osmesa-immediate", program: "osmesa_scene", parts: Some("immediate") },
+    SuiteTrace { name: "osmesa-arrays", program: "osmesa_scene", parts: Some("arrays") },
+    SuiteTrace { name: "osmesa-buffers", program: "osmesa_scene", parts: Some("buffers") },
+    SuiteTrace { name: "osmesa-textures", program: "osmesa_scene", parts: Some("textures") },
+    SuiteTrace { name: "osmesa-all", program: "osmesa_scene", parts: Some("all") },
+    SuiteTrace { name: "glx-all", program: "glx_scene", parts: None },
+    SuiteTrace { name: "egl-all", program: "egl_scene", parts: None },
+];
+
+impl SuiteTrace {
+    pub fn trace(&self) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/traces").join(format!("{}.trace", self.name))
+    }
+    /// The program's own picture of its last frame, kept with the trace.
+    pub fn picture(&self) -> PathBuf {
+        self.trace().with_extension("png")
+    }
+    /// Runs the program as it was recorded, without glray (Mesa draws), for `frames` frames on
+    /// `display`, writing its picture of the last one into `png`.
+    pub fn run_plainly(&self, frames: u32, display: &str, png: &Path) {
+        let mut cmd = command(Way::Plain, &[], &example(self.program), 60);
+        cmd.arg(png).arg(frames.to_string()).args(self.parts).env("DISPLAY", display);
+        run_ok(&mut cmd, &format!("{} plainly, {frames} frames", self.program));
+    }
+}

@@ -18,6 +18,9 @@ use glray_core::trace::{array_kind, ArrayData, Event, Reader, Value};
 
 use crate::commands::{cmd, lookup, Lib, COMMANDS, COUNT};
 
+mod element;
+use element::Immediate;
+
 mod generated {
     #![allow(non_snake_case, clippy::all)]
     use super::{arity, FromValue, Replayer, Value};
@@ -142,6 +145,9 @@ pub struct Replayer {
     scratch: Vec<u8>,
     /// Client arrays set from ARRAYS events, kept alive until replaced.
     arrays: HashMap<(u8, u32), Vec<u8>>,
+    /// Per recorded thread inside glBegin/glEnd: the arrays of its next glArrayElement, which
+    /// is given as immediate-mode calls (`element`).
+    in_begin: HashMap<u32, Vec<element::Array>>,
     out: PathBuf,
     frames: FrameSet,
     readpixels: bool,
@@ -172,6 +178,7 @@ impl Replayer {
             outputs: Vec::new(),
             scratch: vec![0; 1 << 20],
             arrays: HashMap::new(),
+            in_begin: HashMap::new(),
             out: out.to_path_buf(),
             frames,
             readpixels,
@@ -345,6 +352,23 @@ impl Replayer {
             // No context on this thread when the program called: GL ignored it then too.
             return Ok(());
         }
+        match c {
+            cmd::glBegin => {
+                self.in_begin.insert(self.thread, Vec::new());
+            }
+            cmd::glEnd => {
+                self.in_begin.remove(&self.thread);
+            }
+            cmd::glArrayElement => {
+                if let Some(arrays) = self.in_begin.get_mut(&self.thread).map(std::mem::take) {
+                    if !arrays.is_empty() {
+                        let k = args.first().map_or(0, |v| v.as_int().max(0) as u64);
+                        return self.immediate(&element::calls(&arrays, k));
+                    }
+                }
+            }
+            _ => {}
+        }
         if matches!(c, cmd::glReadPixels | cmd::glReadnPixels | cmd::glReadnPixelsARB) && args.len() >= 4 {
             self.pending_read = Some((args[2].as_int(), args[3].as_int()));
         }
@@ -472,6 +496,11 @@ impl Replayer {
         if !self.make_thread_current()? {
             return Ok(());
         }
+        if let Some(next) = self.in_begin.get_mut(&self.thread) {
+            // A glArrayElement's: no gl*Pointer between glBegin and glEnd.
+            *next = arrays.iter().map(element::Array::of).collect();
+            return Ok(());
+        }
         type Ptr = unsafe extern "C" fn(i32, u32, i32, *const c_void);
         type Ptr3 = unsafe extern "C" fn(u32, i32, *const c_void);
         type Ptr2 = unsafe extern "C" fn(i32, *const c_void);
@@ -542,6 +571,47 @@ impl Replayer {
             }
             if array_buffer != 0 {
                 bind(0x8892, array_buffer as u32);
+            }
+        }
+        Ok(())
+    }
+
+    /// Makes `calls` (a glArrayElement's, `element`) in OSMesa's current context.
+    fn immediate(&mut self, calls: &[Immediate]) -> Result<(), String> {
+        type V4 = unsafe extern "C" fn(f64, f64, f64, f64);
+        type V3 = unsafe extern "C" fn(f64, f64, f64);
+        type V1 = unsafe extern "C" fn(f64);
+        type Flag = unsafe extern "C" fn(u8);
+        type U4 = unsafe extern "C" fn(u32, f64, f64, f64, f64);
+        for call in calls {
+            // SAFETY: OSMesa's own functions with their GL signatures.
+            unsafe {
+                match *call {
+                    Immediate::Color4d([r, g, b, a]) => {
+                        std::mem::transmute::<*mut c_void, V4>(self.gl(cmd::glColor4d)?)(r, g, b, a)
+                    }
+                    Immediate::SecondaryColor3d([r, g, b]) => {
+                        std::mem::transmute::<*mut c_void, V3>(self.gl(cmd::glSecondaryColor3d)?)(r, g, b)
+                    }
+                    Immediate::Normal3d([x, y, z]) => {
+                        std::mem::transmute::<*mut c_void, V3>(self.gl(cmd::glNormal3d)?)(x, y, z)
+                    }
+                    Immediate::FogCoordd(f) => std::mem::transmute::<*mut c_void, V1>(self.gl(cmd::glFogCoordd)?)(f),
+                    Immediate::EdgeFlag(e) => {
+                        std::mem::transmute::<*mut c_void, Flag>(self.gl(cmd::glEdgeFlag)?)(u8::from(e))
+                    }
+                    Immediate::MultiTexCoord4d(unit, [s, t, r, q]) => std::mem::transmute::<*mut c_void, U4>(
+                        self.gl(cmd::glMultiTexCoord4d)?,
+                    )(
+                        GL_TEXTURE0 + unit, s, t, r, q
+                    ),
+                    Immediate::VertexAttrib4d(i, [x, y, z, w]) => {
+                        std::mem::transmute::<*mut c_void, U4>(self.gl(cmd::glVertexAttrib4d)?)(i, x, y, z, w)
+                    }
+                    Immediate::Vertex4d([x, y, z, w]) => {
+                        std::mem::transmute::<*mut c_void, V4>(self.gl(cmd::glVertex4d)?)(x, y, z, w)
+                    }
+                }
             }
         }
         Ok(())
