@@ -155,7 +155,7 @@ pub fn json(s: &FrameStats) -> String {
     let mrays = if trace > 0.0 { r.rays as f64 / trace / 1e6 } else { 0.0 };
     format!(
         "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
-         \"trace_ms\":{:.3},\"denoise_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1},\"passed_draws\":{}{}}}",
+         \"trace_ms\":{:.3},\"denoise_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"builds\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1},\"passed_draws\":{}{}}}",
         s.frame,
         s.thread,
         s.width,
@@ -170,6 +170,7 @@ pub fn json(s: &FrameStats) -> String {
         r.triangles,
         r.samples,
         r.reused,
+        r.builds,
         r.fast_builds,
         r.refits,
         mb(r.kept_bytes),

@@ -43,10 +43,11 @@ struct Tree {
     refitted: bool,
 }
 
-/// What `Meshes::prepare` made: how many trees it built fast (`bvh_choice`), how many it
-/// refitted.
+/// What `Meshes::prepare` made: how many trees it built (for new meshes, or again by SAH for
+/// kept ones), how many of those fast (`bvh_choice`), how many it refitted.
 #[derive(Clone, Copy, Default)]
 pub struct TreesMade {
+    pub builds: u32,
     pub fast_builds: u32,
     pub refits: u32,
 }
@@ -154,7 +155,8 @@ impl Meshes {
                 (*m, Tree { bvh: MeshBvh::build(m, quality), quality, built_cost: None, shape: None, refitted: false })
             })
             .collect();
-        let made = TreesMade {
+        let mut made = TreesMade {
+            builds: bvhs.iter().filter(|(_, t)| !t.refitted).count() as u32,
             fast_builds: bvhs.iter().filter(|(_, t)| t.quality == Quality::Fast && !t.refitted).count() as u32,
             refits: bvhs.iter().filter(|(_, t)| t.refitted).count() as u32,
         };
@@ -182,6 +184,7 @@ impl Meshes {
         }
         let rebuilt: Vec<(u64, Arc<MeshBvh>)> =
             kept_now.par_iter().map(|m| (m.id, Arc::new(MeshBvh::build(m, Quality::Sah)))).collect();
+        made.builds += rebuilt.len() as u32;
         for (id, bvh) in rebuilt {
             let kept = self.built.get_mut(&id).expect("drawn above");
             (kept.bvh, kept.quality, kept.built_cost) = (bvh, Quality::Sah, None);

@@ -63,6 +63,9 @@ pub struct Stats {
     /// The picture is the last one's, shown again: nothing changed since, and it had all its
     /// samples (DESIGN rule 5: render only if something changed).
     pub reused: bool,
+    /// Meshes' BVHs built for the frame (`Scene::builds`): none where every mesh was drawn
+    /// before and kept its tree.
+    pub builds: u32,
     /// BVHs built fast (`bvh_choice`) for the frame.
     pub fast_builds: u32,
     /// Meshes whose tree was refitted from the last frame's (a time step of the same mesh)
@@ -589,6 +592,7 @@ impl Job<'_> {
         let start = Instant::now();
         let pixels = u64::from(width) * u64::from(height);
         let scene = Scene::build(frame, meshes, self.options.bvh, ray_work(pixels, &self.options.effects));
+        stats.builds = scene.builds;
         stats.fast_builds = scene.fast_builds;
         stats.refits = scene.refits;
         stats.build = start.elapsed();
@@ -740,6 +744,7 @@ impl Job<'_> {
             let (rendered, colors, s, _) = job.run(meshes, linear);
             (stats.build, stats.trace) = (stats.build + s.build, stats.trace + s.trace);
             (stats.rays, stats.triangles) = (stats.rays + s.rays, stats.triangles + s.triangles);
+            stats.builds += s.builds;
             stats.fast_builds += s.fast_builds;
             stats.refits += s.refits;
             last = Some((rendered, colors));

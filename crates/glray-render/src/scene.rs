@@ -124,8 +124,11 @@ impl Placed<'_> {
 pub struct Scene<'f> {
     frame: &'f Frame,
     bvh: TriBvh,
-    /// How many of the scene's BVHs were built fast for it (`bvh_choice`), and how many
-    /// meshes' trees were refitted rather than built (`Meshes`).
+    /// How many meshes' BVHs were built for it (new meshes', and kept ones' built again by SAH;
+    /// not the frame's own triangles', built every frame), how many of the scene's BVHs were
+    /// built fast (`bvh_choice`), and how many meshes' trees were refitted rather than built
+    /// (`Meshes`).
+    pub builds: u32,
     pub fast_builds: u32,
     pub refits: u32,
     /// Whether the frame's own triangles' packets test a node once for all their rays (as
@@ -212,6 +215,7 @@ impl<'f> Scene<'f> {
         Scene {
             frame,
             bvh,
+            builds: made.builds,
             fast_builds,
             refits: made.refits,
             frustum,
