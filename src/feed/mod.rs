@@ -499,12 +499,16 @@ impl Live {
                 let s = renderer.stats();
                 extra_work = (extra_work.0 + s.trace, extra_work.1 + s.rays, extra_work.2 + s.build);
             }
-        } else if extra > 0 {
-            // In an MPI rank: each pass a frame shared with the others (a fault ends them).
+        }
+        // In an MPI rank: each pass a frame shared with the others (a fault ends them), its
+        // share reported with the last pass's.
+        let mut extra_report: Option<glray_distribute::FrameReport> = None;
+        if extra > 0 && self.distribution.active() {
             for _ in 0..extra {
-                if self.distribution.frame(frame, last, renderer, self.pool).is_none() {
-                    break;
-                }
+                let Some(pass) = self.distribution.frame(frame, last, renderer, self.pool) else { break };
+                let s = renderer.stats();
+                extra_work = (extra_work.0 + s.trace, extra_work.1 + s.rays, extra_work.2 + s.build);
+                extra_report = Some(extra_report.map_or(pass.report, |r| r.and(pass.report)));
             }
         }
         // In an MPI rank, shared with the other ranks (None: traced here alone).
@@ -514,7 +518,10 @@ impl Live {
             self.trigger = trigger_of(&changed);
         }
         let (rendered, ranks) = match shared {
-            Some(s) => (s.picture, Some(stats::RankStats { rank: s.rank, ranks: s.ranks, report: s.report })),
+            Some(s) => {
+                let report = extra_report.map_or(s.report, |r| r.and(s.report));
+                (s.picture, Some(stats::RankStats { rank: s.rank, ranks: s.ranks, report }))
+            }
             None => (traced(self.pool, renderer, frame, last), None),
         };
         if let Some(dir) = &self.dump {

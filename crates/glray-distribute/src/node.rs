@@ -93,6 +93,26 @@ pub struct FrameReport {
     pub untraced: bool,
 }
 
+impl FrameReport {
+    /// This frame's report and a `later` one's, as one frame's: the passes of a batch
+    /// program's frame (each a frame shared by the ranks) reported on one line. Counts and
+    /// times add up; the rest is the later frame's.
+    pub fn and(self, later: FrameReport) -> FrameReport {
+        FrameReport {
+            tiles: self.tiles + later.tiles,
+            tiles_total: self.tiles_total + later.tiles_total,
+            rays: self.rays + later.rays,
+            bytes_sent: self.bytes_sent + later.bytes_sent,
+            bytes_received: self.bytes_received + later.bytes_received,
+            wait: self.wait + later.wait,
+            exchange: self.exchange + later.exchange,
+            trace: self.trace + later.trace,
+            untraced: self.untraced && later.untraced,
+            ..later
+        }
+    }
+}
+
 /// What every rank must agree on: the version of glray and every setting that shapes the
 /// picture, as one number (`settings`), and a description to name them when they differ.
 #[derive(Debug, Clone)]
@@ -285,7 +305,7 @@ impl<T: Transport> Node<T> {
             report.untraced = true;
             if me != 0 {
                 // Counted all the same: every rank's AO rays stay rank 0's.
-                renderer.pass_frame();
+                renderer.pass_frame(merged.triangle_count() as u64);
             }
             (me == 0).then(|| renderer.render(&merged, w, h, previous))
         } else {
@@ -459,7 +479,7 @@ impl<T: Transport> Node<T> {
         let traces = self.master.traces(self.rank());
         if !traces {
             // A dedicated master: nothing to trace here (the frame counted all the same).
-            tracer.pass_frame();
+            tracer.pass_frame(shared.merged.triangle_count() as u64);
             traced.store(true, Ordering::Release);
         }
         let served = pool.in_place_scope(|s| {

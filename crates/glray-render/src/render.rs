@@ -218,10 +218,15 @@ impl Renderer {
         }
     }
 
-    /// A frame this renderer takes no part in (another rank traces and shows it): counted all
-    /// the same, so that the next frame's AO rays are every rank's (see `frames`).
-    pub fn pass_frame(&mut self) {
+    /// A frame of `triangles` this renderer takes no part in (another rank traces and shows
+    /// it): counted all the same, so that the next frame's AO rays are every rank's (see
+    /// `frames`); its statistics are of a frame that built and traced nothing here (they kept the
+    /// last traced frame's, and a rank's statistics lines repeated them).
+    pub fn pass_frame(&mut self, triangles: u64) {
         self.next_seed();
+        let samples = self.options.effects.samples.max(1);
+        self.stats =
+            Stats { triangles, samples, kept_bytes: glray_core::reuse::kept_bytes() as u64, ..Stats::default() };
     }
 
     /// Traces this rank's share of `frame` (pass `pass` of its progressive refinement): the
