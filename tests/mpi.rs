@@ -74,8 +74,10 @@ fn denoised_ambient_occlusion_is_close_to_the_converged_picture_still_and_moving
     let first = psnr(&reference, &run("first", "1", "2:4", &[]));
     let moving = psnr(&reference, &run("moving", "5", "2", &[]));
     eprintln!("PSNR: raw {raw:.1} dB, denoised first frame {first:.1} dB, after motion {moving:.1} dB");
-    assert!(first >= 35.0 && first >= raw + 6.0, "first frame: {first:.1} dB denoised, {raw:.1} dB raw");
-    assert!(moving >= 35.0 && moving >= raw + 4.0, "after motion: {moving:.1} dB denoised, {raw:.1} dB raw");
+    // Measured: raw 28.3 dB, denoised 41.1 dB first and 41.0 dB after motion. A denoiser 2 dB
+    // worse (60% more squared error) fails.
+    assert!(first >= 39.1 && first >= raw + 10.0, "first frame: {first:.1} dB denoised, {raw:.1} dB raw");
+    assert!(moving >= 39.0 && moving >= raw + 10.0, "after motion: {moving:.1} dB denoised, {raw:.1} dB raw");
 }
 
 #[test]
@@ -120,14 +122,15 @@ fn image_parallel_pictures_are_one_process_picture_for_any_rank_count() {
     // cast no shadow on rank 0's ground, so with effects the picture is not the whole scene's...
     let data = dir.join("data-parallel.png");
     ranks(2, &[full[0], ("GLRAY_DISTRIBUTE", "data-parallel")], &data, "2");
-    let differing = compare(&data, &alone, &["--max-differing", "0.5%"]);
-    assert_eq!(differing.status.code(), Some(1), "secondary rays cross ranks only image-parallel");
-    // ... while camera rays alone (the GL look) composite to the image-parallel picture.
+    let apart = measure(&alone, &data);
+    // Measured: 20.4% of the pixels (the shadows and AO of the other rank's boxes missing).
+    assert!(apart.share > 0.05, "secondary rays cross ranks only image-parallel: {apart:?}");
+    // ... while camera rays alone (the GL look) composite to the image-parallel picture, byte
+    // for byte.
     let (gl_data, gl_image) = (dir.join("gl-data-parallel.png"), dir.join("gl-replicated.png"));
     ranks(2, &[("GLRAY_PRESET", "gl"), ("GLRAY_DISTRIBUTE", "data-parallel")], &gl_data, "1");
     ranks(3, &[("GLRAY_PRESET", "gl")], &gl_image, "1");
-    let same = compare(&gl_data, &gl_image, &["--max-differing", "0.1%"]);
-    assert!(same.status.success(), "{}", String::from_utf8_lossy(&same.stdout));
+    assert!(pixels(&gl_data) == pixels(&gl_image), "the GL look: data-parallel and image-parallel alike");
 
     // Without glray (Mesa) the example's picture is the same for any rank count; glray's is
     // not Mesa's (the test would pass on pass-through otherwise).
@@ -316,7 +319,8 @@ fn ambient_occlusion_is_denoised_under_a_translucent_overlay_and_lines_show_the_
     };
     let (raw_db, denoised_db) = (psnr_in(&reference, &raw), psnr_in(&reference, &denoised));
     eprintln!("under the panel: raw {raw_db:.1} dB, denoised {denoised_db:.1} dB");
-    assert!(denoised_db >= 35.0 && denoised_db >= raw_db + 6.0, "raw {raw_db:.1} dB, denoised {denoised_db:.1} dB");
+    // Measured: raw 31.6 dB, denoised 44.3 dB.
+    assert!(denoised_db >= 42.3 && denoised_db >= raw_db + 10.0, "raw {raw_db:.1} dB, denoised {denoised_db:.1} dB");
     // The grid's lines (their GL colour, 89 89 77, outside the panel) darken with the ground
     // they lie on: where the ground beside a line is in a contact shadow, so is the line.
     let at = |img: &[u8], x: usize, y: usize| img[channels * (y * w + x)] as f64;
@@ -347,5 +351,6 @@ fn ambient_occlusion_is_denoised_under_a_translucent_overlay_and_lines_show_the_
     eprintln!(
         "in contact shadows ({shaded} line pixels): lines keep {line:.2} of their colour, the ground {ground:.2}"
     );
-    assert!((line - ground).abs() < 0.08, "lines keep {line:.2}, the ground beside them {ground:.2}");
+    // Measured: 0.68 and 0.68 (a line that kept its own colour would keep about 1).
+    assert!((line - ground).abs() < 0.03, "lines keep {line:.2}, the ground beside them {ground:.2}");
 }

@@ -1,6 +1,6 @@
 //! ParaView 5.11 (VTK 9's shader pipeline) under glray: pvbatch's contour coloured by a scalar
 //! (tests/paraview/contour.py) under Xvfb. In the GL look the screenshot is ParaView's own
-//! within the rule the GL look is held to (2% of pixels off by more than 5%), in one process and
+//! within the bounds of what each comparison measured (`common::Measured`), in one process and
 //! under `glray run --np 2` (IceT compositing), image-parallel and data-parallel; with ambient
 //! occlusion the surface is ray traced while the orientation axes and the scalar bar, which VTK
 //! draws after its 3D pass, are still drawn on top, as ParaView draws them.
@@ -10,7 +10,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::{glray_bin, libglray, run_ok, scratch, which, without_glray, Xvfb};
+use common::{assert_close, glray_bin, libglray, run_ok, scratch, which, without_glray, Measured, Xvfb};
 
 const W: u32 = 640;
 const H: u32 = 360;
@@ -53,9 +53,10 @@ fn pvbatch_script(
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
-fn compare_ok(reference: &Path, picture: &Path, what: &str) {
-    let cmp = Command::new(glray_bin()).arg("compare").arg(reference).arg(picture).output().unwrap();
-    assert!(cmp.status.success(), "{what} against ParaView's own: {}", String::from_utf8_lossy(&cmp.stdout));
+/// What a comparison measured when its bound was set: `percent` of the pixels off by more than
+/// 5%, PSNR `db` over what is drawn (`common::Measured`).
+const fn measured(percent: f64, db: f64) -> Measured {
+    Measured { share: percent / 100.0, psnr: db }
 }
 
 fn rgb(path: &Path) -> Vec<u8> {
@@ -66,6 +67,12 @@ fn rgb(path: &Path) -> Vec<u8> {
     assert_eq!((info.width, info.height), (W, H), "{}", path.display());
     let channels = buf.len() / (W * H) as usize;
     buf.chunks(channels).flat_map(|p| p[..3].to_vec()).collect()
+}
+
+/// The whole number `key` of a `GLRAY_STATS` JSON line.
+fn field(line: &str, key: &str) -> u64 {
+    let rest = line.split(&format!("\"{key}\":")).nth(1).unwrap_or_else(|| panic!("no {key} in {line}"));
+    rest.split([',', '}']).next().unwrap().parse().unwrap_or_else(|e| panic!("{key} in {line}: {e}"))
 }
 
 /// Pixels differing by more than 5% of 255 in a channel, within the box `(x0, y0)..(x1, y1)` of
@@ -100,7 +107,7 @@ fn paraview_contour_is_ray_traced_with_its_overlays_on_top() {
             .any(|l| l.contains(&format!("\"width\":{W},\"height\":{H}")) && l.contains("\"triangles\":10364")),
         "frames traced at the render target's size with the whole contour:\n{lines}"
     );
-    compare_ok(&mesa, &gl, "GL look");
+    assert_close(&mesa, &gl, measured(0.0035, 58.1), "the GL look against ParaView's own");
     // The overlays drawn over the last frame's picture are counted (FXAA, axes, scalar bar).
     assert!(
         lines.lines().skip(1).all(|l| {
@@ -140,15 +147,26 @@ fn paraview_under_two_ranks_composites_the_ray_traced_picture_whole() {
         let s = stats.display().to_string();
         let env = [("GLRAY_PRESET", "gl"), ("GLRAY_DISTRIBUTE", distribute), ("GLRAY_STATS", &s)];
         pvbatch(&x.display, &out, Some(&env), true);
-        compare_ok(&mesa, &out, &format!("GL look, 2 ranks, {distribute}"));
-        // Image-parallel: both ranks traced tiles of frames of the whole contour (10,364
-        // triangles, where each rank draws half).
+        // Image-parallel: 1.26% off (facets along the folds, not found yet: docs/compatibility.md).
+        let was = if distribute == "replicated" { measured(1.2574, 34.9) } else { measured(0.0087, 52.9) };
+        assert_close(&mesa, &out, was, &format!("the GL look, 2 ranks, {distribute}, against ParaView's own"));
         let lines = std::fs::read_to_string(&stats).unwrap();
-        let shared = lines.lines().filter(|l| l.contains("\"ranks\":2") && l.contains("\"triangles\":10364"));
+        let first: Vec<&str> = lines.lines().filter(|l| l.starts_with("{\"frame\":0,")).collect();
+        assert_eq!(first.len(), 2, "a first frame on each rank:\n{lines}");
         if distribute == "replicated" {
-            assert!(shared.count() >= 2, "frames traced across both ranks:\n{lines}");
+            // Both ranks traced tiles of the whole contour (10,364 triangles, where each rank
+            // draws half), together all the frame's tiles.
+            let tiles: Vec<u64> = first.iter().map(|l| field(l, "tiles")).collect();
+            assert!(first.iter().all(|l| field(l, "ranks") == 2 && field(l, "triangles") == 10364), "{lines}");
+            assert!(
+                tiles.iter().all(|&t| t > 0) && tiles.iter().sum::<u64>() == field(first[0], "tiles_total"),
+                "{lines}"
+            );
         } else {
-            assert_eq!(shared.count(), 0, "each rank traces its own half:\n{lines}");
+            // Each rank traced its own half, alone: the halves make the contour.
+            assert!(first.iter().all(|l| !l.contains("\"ranks\":") && field(l, "rays") > 0), "{lines}");
+            let halves: Vec<u64> = first.iter().map(|l| field(l, "triangles")).collect();
+            assert!(halves.iter().all(|&t| t > 0 && t < 10364) && halves.iter().sum::<u64>() == 10364, "{lines}");
         }
     }
     // With ambient occlusion, the screenshot's frame is traced with 16 passes there too, each a
@@ -157,8 +175,23 @@ fn paraview_under_two_ranks_composites_the_ray_traced_picture_whole() {
     let stats = dir.join("ao.jsonl");
     let s = stats.display().to_string();
     pvbatch(&x.display, &ao, Some(&[("GLRAY_PRESET", "ao"), ("GLRAY_STATS", &s)]), true);
+    // Each of the 16 passes of every frame is a frame of both ranks: every tile of 16 passes
+    // handed out (tiles_total: 16 times the 60 tiles of 640x360), rank 1 tracing some of them,
+    // the two ranks' tiles adding up to all of them.
     let lines = std::fs::read_to_string(&stats).unwrap();
-    assert!(lines.lines().any(|l| l.contains("\"samples\":16") && l.contains("\"rank\":0")), "{lines}");
+    let frames: Vec<u64> = lines.lines().map(|l| field(l, "frame")).collect();
+    assert!(frames.iter().filter(|&&f| f == 0).count() == 2, "{lines}");
+    for frame in 0..=*frames.iter().max().unwrap() {
+        let both: Vec<&str> = lines.lines().filter(|l| field(l, "frame") == frame).collect();
+        let rank0 = both.iter().find(|l| field(l, "rank") == 0).unwrap_or_else(|| panic!("frame {frame}: {lines}"));
+        let rank1 = both.iter().find(|l| field(l, "rank") == 1).unwrap_or_else(|| panic!("frame {frame}: {lines}"));
+        assert_eq!(field(rank0, "samples"), 16 * (frame + 1), "frame {frame}: {rank0}");
+        let total = field(rank0, "tiles_total");
+        assert_eq!(total, 16 * 60, "frame {frame}: 16 passes of 60 tiles each: {rank0}");
+        assert_eq!(field(rank1, "tiles_total"), total, "{rank1}");
+        assert!(field(rank1, "tiles") > 0, "frame {frame}: rank 1 traced: {rank1}");
+        assert_eq!(field(rank0, "tiles") + field(rank1, "tiles"), total, "frame {frame}:\n{rank0}\n{rank1}");
+    }
 }
 
 #[test]
@@ -183,7 +216,13 @@ fn paraview_clips_lines_and_points_are_ray_traced_and_glyphs_and_translucency_le
         let told: Vec<&str> = said.lines().filter(|l| l.contains("left to the real GL")).collect();
         if matches!(case, "clip" | "specular" | "wireframe" | "points") {
             // A surface with a cut, highlights, lines, points: ray traced, as the contour is.
-            compare_ok(&mesa, &gl, &format!("{case} in the GL look"));
+            let was = match case {
+                "clip" => measured(0.0026, 55.3),
+                "specular" => measured(0.0035, 57.4),
+                "wireframe" => measured(0.1276, 39.3),
+                _ => measured(0.0833, 33.6),
+            };
+            assert_close(&mesa, &gl, was, &format!("{case} in the GL look against ParaView's own"));
             assert!(!traced.is_empty() && told.is_empty(), "{traced}\n{said}");
         } else {
             // Not followed yet: ParaView's own picture, and glray says so once.

@@ -98,7 +98,8 @@ fn openscad_png_is_unchanged() {
 }
 
 /// apitrace's glretrace loads GL with dlopen("libGL.so.1"): it must end up in glray (the point of
-/// the SONAME and the drop-in directory) and replay identically.
+/// the SONAME and the drop-in directory) and replay identically: preloaded, dropped in by hand,
+/// and through `glray run --dropin`.
 #[test]
 fn glretrace_replays_identically_through_glray() {
     let x = Xvfb::start();
@@ -116,24 +117,25 @@ fn glretrace_replays_identically_through_glray() {
         "apitrace trace",
     );
     let glretrace = which("glretrace");
-    let replay = |name: &str, way: Way| -> Vec<(String, Vec<u8>)> {
+    // glretrace run `way`, or (None) as the README says to: `glray run --dropin -- glretrace`.
+    let replay = |name: &str, way: Option<Way>| -> Vec<(String, Vec<u8>)> {
         let snaps = dir.join(name);
         std::fs::create_dir_all(&snaps).unwrap();
         let mut prefix = snaps.into_os_string();
         prefix.push("/");
-        let out = run_ok(
-            command(way, &[], &glretrace, 120)
-                .arg("-s")
-                .arg(&prefix)
-                .arg(&trace)
-                .env("DISPLAY", &x.display)
-                .env("GLRAY_ENABLE", "0")
-                .env("GLRAY_LOG", "debug"),
-            &format!("glretrace {name}"),
-        );
+        let mut cmd = match way {
+            Some(way) => command(way, &[], &glretrace, 120),
+            None => {
+                let mut c = command(Way::Plain, &[], &glray_bin(), 120);
+                c.args(["run", "--dropin", "--"]).arg(&glretrace);
+                c
+            }
+        };
+        cmd.arg("-s").arg(&prefix).arg(&trace).env("DISPLAY", &x.display);
+        let out = run_ok(cmd.env("GLRAY_ENABLE", "0").env("GLRAY_LOG", "debug"), &format!("glretrace {name}"));
         assert_eq!(
             stderr(&out).contains("glray: debug: glXSwapBuffers -> "),
-            way != Way::Plain,
+            way != Some(Way::Plain),
             "{name}: {}",
             stderr(&out)
         );
@@ -144,16 +146,16 @@ fn glretrace_replays_identically_through_glray() {
             .map(|f| (f.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read(f).unwrap()))
             .collect()
     };
-    let a = replay("plain-a", Way::Plain);
-    let b = replay("plain-b", Way::Plain);
+    let a = replay("plain-a", Some(Way::Plain));
+    let b = replay("plain-b", Some(Way::Plain));
     assert_eq!(a.len(), 4, "expected 4 snapshots");
     // glretrace snapshots the back buffer after each swap; after the first swap that buffer is
     // uninitialised memory, so Mesa itself differs run to run there (docs/compatibility.md).
     // Only the snapshots on which two plain replays agree are references.
     let stable: Vec<&(String, Vec<u8>)> = a.iter().zip(&b).filter(|(x, y)| x == y).map(|(x, _)| x).collect();
     assert!(stable.len() >= 3, "only {} of 4 plain snapshots are repeatable", stable.len());
-    for way in GLRAY_WAYS {
-        let g = replay(&format!("{way:?}"), way);
+    for way in [Some(Way::Preload), Some(Way::Dropin), None] {
+        let g = replay(&way.map_or("launched".into(), |w| format!("{w:?}")), way);
         assert_eq!(g.len(), a.len());
         for (name, bytes) in &stable {
             let other = &g.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("{way:?}: no {name}")).1;

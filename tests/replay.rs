@@ -403,29 +403,38 @@ fn apitrace_traces_replay_to_the_programs_pictures() {
     assert!(stderr(&o).contains("is an apitrace trace"), "{}", stderr(&o));
     assert_same_file(&png, &out.join("frame-0002.png"), "apitrace glx_scene");
 
-    // An EGL hack with client arrays (apitrace records them as blobs in fake pointer calls),
-    // stopped by frameshot, preloaded before apitrace's wrapper inside the traced shell.
-    let ppm = dir.join("sproingies.ppm");
-    let trace = dir.join("sproingies.trace");
-    let script =
-        format!("LD_PRELOAD={}:$LD_PRELOAD exec /usr/libexec/xscreensaver/sproingies -window", frameshot().display());
-    let _ = command(Way::Plain, &[], &apitrace, 120)
-        .args(["trace", "--api", "egl", "-o"])
-        .arg(&trace)
-        .args(["sh", "-c", &script])
-        .env("DISPLAY", &x.display)
-        .env("FRAMESHOT_OUT", &ppm)
-        .env("FRAMESHOT_FRAME", "4")
-        .output()
-        .unwrap();
-    assert!(ppm.exists(), "sproingies did not reach frame 4 under apitrace");
-    let out = dir.join("sproingies-replay");
-    replay(&trace, &out, &["--frames", "3"]);
-    let c = run_ok(
-        Command::new(glray_bin()).arg("compare").arg(&ppm).arg(out.join("frame-0003.png")).args(["--fuzz", "0"]),
-        "compare sproingies",
-    );
-    assert!(stdout(&c).starts_with("0 of "), "{}", stdout(&c));
+    // glxgears (GLX, display lists) and an EGL hack with client arrays (apitrace records them
+    // as blobs in fake pointer calls), stopped by frameshot, preloaded before apitrace's wrapper
+    // inside the traced shell: frame 4 replayed byte for byte.
+    let mut last_trace = PathBuf::new();
+    for (name, api, program) in [
+        ("glxgears", "gl", which("glxgears").display().to_string()),
+        ("sproingies", "egl", "/usr/libexec/xscreensaver/sproingies -window".to_string()),
+    ] {
+        let ppm = dir.join(format!("{name}.ppm"));
+        let trace = dir.join(format!("{name}.trace"));
+        let script = format!("LD_PRELOAD={}:$LD_PRELOAD exec {program}", frameshot().display());
+        let _ = command(Way::Plain, &[], &apitrace, 120)
+            .args(["trace", "--api", api, "-o"])
+            .arg(&trace)
+            .args(["sh", "-c", &script])
+            .env("DISPLAY", &x.display)
+            .env("FRAMESHOT_OUT", &ppm)
+            .env("FRAMESHOT_FRAME", "4")
+            .output()
+            .unwrap();
+        assert!(ppm.exists(), "{name} did not reach frame 4 under apitrace");
+        let out = dir.join(format!("{name}-replay"));
+        let o = replay(&trace, &out, &["--frames", "3"]);
+        assert!(stderr(&o).contains("is an apitrace trace"), "{}", stderr(&o));
+        let c = run_ok(
+            Command::new(glray_bin()).arg("compare").arg(&ppm).arg(out.join("frame-0003.png")).args(["--fuzz", "0"]),
+            &format!("compare {name}"),
+        );
+        assert!(stdout(&c).starts_with("0 of "), "{name}: {}", stdout(&c));
+        last_trace = trace;
+    }
+    let trace = last_trace;
 
     // A damaged apitrace file is refused with its offset.
     let bytes = std::fs::read(&trace).unwrap();

@@ -309,6 +309,25 @@ mod tests {
     }
 
     #[test]
+    fn instanced_and_base_vertex_draws_leave_the_frame_to_the_real_gl() {
+        // Not made into meshes yet (docs/compatibility.md): each such draw marks the frame, so
+        // the real GL draws it whole.
+        let draws: [(&str, Vec<Value>); 4] = [
+            ("glDrawElementsBaseVertex", vec![i(GL_TRIANGLES as i64), i(3), i(0x1405), i(0), i(7)]),
+            ("glDrawRangeElementsBaseVertex", vec![i(GL_TRIANGLES as i64), i(0), i(2), i(3), i(0x1405), i(0), i(7)]),
+            ("glDrawElementsInstanced", vec![i(GL_TRIANGLES as i64), i(3), i(0x1405), i(0), i(5)]),
+            ("glDrawArraysInstancedARB", vec![i(GL_TRIANGLES as i64), i(0), i(3), i(5)]),
+        ];
+        for (name, args) in draws {
+            let (mut c, _) = vtk_context();
+            call(&mut c, "glDrawArrays", &[i(GL_TRIANGLES as i64), i(0), i(3)]);
+            assert_eq!(c.frame().unsupported_draws, 0, "{name}: a plain draw first");
+            call(&mut c, name, &args);
+            assert_eq!(c.frame().unsupported_draws, 1, "{name}");
+        }
+    }
+
+    #[test]
     fn the_programs_own_normal_matrix_is_used() {
         // VTK scales positions per axis into its buffers, not normals: its normal matrix is
         // the rotation alone, where the modelview's inverse transpose would skew the normals.
