@@ -125,11 +125,17 @@ fn paraview_contour_is_ray_traced_with_its_overlays_on_top() {
     let lines = std::fs::read_to_string(&stats).unwrap();
     assert!(lines.lines().next().is_some_and(|l| l.contains("\"samples\":16")), "{lines}");
     let (m, a) = (rgb(&mesa), rgb(&ao));
+    // Measured: 74.7% of the contour's box changed; 166,365 channels darker than ParaView's
+    // own, 1,366 brighter (at the contour's edges); the scalar bar and the axes not a pixel
+    // apart.
     let surface = differing(&m, &a, (200, 60, 440, 300));
-    assert!(surface > 0.2, "AO darkens the contour's folds: {:.1}% of its box changed", 100.0 * surface);
+    assert!(surface > 0.5, "AO darkens the contour's folds: {:.1}% of its box changed", 100.0 * surface);
+    let brighter = m.iter().zip(&a).filter(|(m, a)| **a > m.saturating_add(2)).count();
+    let darker = m.iter().zip(&a).filter(|(m, a)| a.saturating_add(2) < **m).count();
+    assert!(darker > 55_000 && brighter < 4_100, "AO darkens: {darker} channels darker, {brighter} brighter");
     let scalar_bar = differing(&m, &a, (515, 220, 640, 360));
     let axes = differing(&m, &a, (30, 280, 80, 340));
-    assert!(scalar_bar < 0.01 && axes < 0.01, "overlays on top: scalar bar {scalar_bar:.3}, axes {axes:.3}");
+    assert!(scalar_bar < 0.0005 && axes < 0.0005, "overlays on top: scalar bar {scalar_bar:.4}, axes {axes:.4}");
 }
 
 #[test]

@@ -300,7 +300,17 @@ fn openscad_replayed_by_glretrace_is_traced_at_its_framebuffers_size() {
     let stats = std::fs::read_to_string(dir.join("ao.jsonl")).unwrap();
     assert!(stats.contains("\"width\":512,\"height\":512"), "traced at the framebuffer's size: {stats}");
     let share = differing(&plain, &ao);
-    assert!(share > 0.005, "ambient occlusion reaches the snapshot: {:.3}% differ", share * 100.0);
+    let (p, a) = (Image::read(&plain).unwrap(), Image::read(&ao).unwrap());
+    let brighter = p.rgb.iter().zip(&a.rgb).filter(|(p, a)| **a > p.saturating_add(2)).count();
+    let darker = p.rgb.iter().zip(&a.rgb).filter(|(p, a)| a.saturating_add(2) < **p).count();
+    // Measured: 10.3% of the pixels off Mesa's, 81,309 channels darker, 8 brighter (edge
+    // pixels, where the GL look and Mesa's fill rule part): AO darkens, and only darkens.
+    assert!(
+        share > 0.034 && darker > 27_000,
+        "ambient occlusion reaches the snapshot: {:.3}% differ, {darker} channels darker",
+        share * 100.0
+    );
+    assert!(brighter <= 24, "ambient occlusion only darkens: {brighter} channels brighter than Mesa's");
 }
 
 #[test]
@@ -332,9 +342,10 @@ fn effect_presets_change_the_picture_and_report_their_statistics() {
     let (gl, ao) = (Image::read(&pngs[0]).unwrap(), Image::read(&pngs[1]).unwrap());
     let brighter = gl.rgb.iter().zip(&ao.rgb).filter(|(g, a)| **a > g.saturating_add(1)).count();
     let darker = gl.rgb.iter().zip(&ao.rgb).filter(|(g, a)| a.saturating_add(2) < **g).count();
+    // Measured: 3,363 channels darker, none brighter; full 4.7% of the pixels off ao.
     assert_eq!(brighter, 0, "ambient occlusion brightened {brighter} channels");
-    assert!(darker > 100, "ambient occlusion darkened only {darker} channels");
-    assert!(differing(&pngs[1], &pngs[2]) > 0.01, "full vs ao: {}", differing(&pngs[1], &pngs[2]));
+    assert!(darker > 1_100, "ambient occlusion darkened only {darker} channels");
+    assert!(differing(&pngs[1], &pngs[2]) > 0.016, "full vs ao: {}", differing(&pngs[1], &pngs[2]));
     // Statistics on standard error, one line per frame.
     let mut cmd = command(Way::Preload, &[], &program, 60);
     cmd.arg(dir.join("stderr.png")).arg("1").env("GLRAY_PRESET", "gl").env("GLRAY_STATS", "stderr");
