@@ -12,7 +12,7 @@ use glam::{Vec3, Vec4};
 use glray_scene::camera::Camera;
 use rayon::prelude::*;
 
-use super::temporal::Averaged;
+use super::temporal::{Averaged, Motion};
 use super::AoPixel;
 
 /// The passes of the kernel, each twice as wide as the one before.
@@ -29,8 +29,8 @@ pub struct Guides {
     normal: [Vec<f32>; 3],
     /// n . eye: the pixel's plane.
     plane: Vec<f32>,
-    /// The pixel's object (an instance's index, exact as a float up to 2^24; -1 for the
-    /// frame's own triangles): compared four at a time as floats.
+    /// The pixel's object (`Motion::object`: an instance's index, exact as a float up to 2^24;
+    /// -1 for the frame's own triangles): compared four at a time as floats.
     object: Vec<f32>,
     /// 1 / the pixel's width at its point (eye units).
     per_size: Vec<f32>,
@@ -39,8 +39,8 @@ pub struct Guides {
 }
 
 impl Guides {
-    /// The guides of the pixels of `layer`, seen by `camera`.
-    pub fn new(layer: &[AoPixel], camera: &Camera) -> Guides {
+    /// The guides of the pixels of `layer`, seen by `camera`, its objects those of `motion`.
+    pub fn new(layer: &[AoPixel], camera: &Camera, motion: &Motion) -> Guides {
         let valid: Vec<f32> = layer.iter().map(|a| if a.is_surface() { 1.0 } else { 0.0 }).collect();
         let plane_of = |f: fn(&Vec3) -> f32, of_normal: bool| -> Vec<f32> {
             layer.iter().map(|a| f(if of_normal { &a.normal } else { &a.eye })).collect()
@@ -51,7 +51,10 @@ impl Guides {
             plane: layer.iter().map(|a| a.normal.dot(a.eye)).collect(),
             object: layer
                 .iter()
-                .map(|a| if a.object == glray_scene::frame::TriangleId::FLAT { -1.0 } else { a.object as f32 })
+                .map(|a| match motion.object(a.object) {
+                    glray_scene::frame::TriangleId::FLAT => -1.0,
+                    o => o as f32,
+                })
                 .collect(),
             per_size: layer
                 .par_iter()

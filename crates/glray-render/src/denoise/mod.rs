@@ -82,7 +82,7 @@ impl Denoiser {
         rays: u32,
         still: bool,
     ) -> Vec<f32> {
-        let guides = atrous::Guides::new(layer, camera);
+        let guides = atrous::Guides::new(layer, camera, motion);
         let raw: Vec<f32> = layer.iter().map(|a| if a.is_surface() { a.hidden } else { 0.0 }).collect();
         let raw_near = atrous::neighbourhood(&guides, &raw, width);
         let span = if still { crate::options::MAX_PASSES as f32 } else { MOVING_HISTORY };

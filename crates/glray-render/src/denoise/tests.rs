@@ -120,7 +120,7 @@ fn a_still_scene_averages_its_passes_and_converges_to_the_unfiltered_mean() {
     // The filter hardly moves a converged average (the checker's edges stay).
     let averaged: Vec<Averaged> = last.clone();
     let layer = noisy(truth, |_, _| TriangleIdFlat::ID, 16, 1);
-    let guides = super::atrous::Guides::new(&layer, &camera());
+    let guides = super::atrous::Guides::new(&layer, &camera(), &Motion::default());
     let out = super::atrous::filter(&guides, &averaged, &near(&layer), W, 16);
     let means: Vec<f32> = last.iter().map(|a| a.mean).collect();
     assert!(rms(&out, truth) <= rms(&means, truth) * 1.1 + 0.003, "{} {}", rms(&out, truth), rms(&means, truth));
@@ -188,4 +188,25 @@ fn denoise_time() {
         let t1 = t.elapsed();
         eprintln!("follow {:?}, filter {:?} ({})", t1, t.elapsed() - t1, out[5]);
     }
+}
+
+#[test]
+fn instances_drawn_under_one_transform_are_one_object() {
+    use glray_scene::frame::{Frame, TriangleId};
+    use glray_scene::instance::Instance;
+    use glray_scene::mesh::Mesh;
+    use std::sync::Arc;
+    let mesh =
+        || Arc::new(Mesh::indexed(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![Vec3::Z; 3], vec![[0, 1, 2]]).unwrap());
+    let (here, there) = (DMat4::from_translation(DVec3::NEG_Z), DMat4::from_translation(DVec3::new(1.0, 0.0, -1.0)));
+    // Two pieces of a dataset under one transform, another object, the pieces' transform again.
+    let frame = Frame {
+        instances: [here, there, here].map(|m| Instance::new(mesh(), m, DMat4::IDENTITY)).to_vec(),
+        ..Frame::default()
+    };
+    let motion = Motion::of(&frame);
+    assert_eq!([0, 1, 2].map(|k| motion.object(k)), [0, 1, 0]);
+    assert_eq!(motion.id(0), motion.id(2), "one object, one id to follow it by");
+    assert_ne!(motion.id(0), motion.id(1));
+    assert_eq!(motion.object(TriangleId::FLAT), TriangleId::FLAT);
 }
