@@ -36,6 +36,20 @@ pub struct View {
     pub viewport: Viewport,
 }
 
+impl View {
+    /// Whether `other` is this view but for rounding: the same viewport, and every entry of the
+    /// projection within a millionth of itself. The ranks of a parallel program each work out
+    /// the camera they draw with, and the last bits differ (ParaView's clipping range from each
+    /// rank's own sum over the data: -201.69076835 against -201.69078374); the rays they stand
+    /// for are the same to a millionth of a pixel's width.
+    pub fn same_but_for_rounding(&self, other: &View) -> bool {
+        let (a, b) = (self.projection.to_cols_array(), other.projection.to_cols_array());
+        let scale = a.iter().chain(&b).fold(0.0f64, |m, v| m.max(v.abs()));
+        self.viewport == other.viewport
+            && a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= 1e-6 * x.abs().max(y.abs()) + 1e-12 * scale)
+    }
+}
+
 /// A glClear within a scissor box: the colour it fills the box with (None when the colour buffer
 /// was not cleared), and the depth (glClearDepth; None when the depth buffer was not cleared).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

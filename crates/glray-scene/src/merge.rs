@@ -67,9 +67,12 @@ fn append(out: &mut Frame, frame: Frame) {
         }
         map.lightings.push(out.lightings.len() as u32 - 1);
     }
-    // Capture shares a camera with any earlier draw's.
+    // Capture shares a camera with any earlier draw's; ranks' cameras that differ by rounding
+    // alone are one camera (each rank works its camera out itself): made two, the later rank's
+    // draws would be carried into the first's view as flat triangles (`Frame::unified`), their
+    // BVH built anew every frame and their lighting fixed as drawn.
     for c in frame.cameras {
-        let at = out.cameras.iter().rposition(|o| *o == c).unwrap_or_else(|| {
+        let at = out.cameras.iter().rposition(|o| o.same_but_for_rounding(&c)).unwrap_or_else(|| {
             out.cameras.push(c);
             out.cameras.len() - 1
         });
@@ -171,5 +174,35 @@ mod tests {
         let c = frame(&[(0, 2.0)], vec![unmasked.clone()]);
         assert_eq!(merge(vec![a, empty, c]), whole);
         assert_eq!(merge(vec![]), Frame::default());
+    }
+
+    #[test]
+    fn ranks_cameras_that_differ_by_rounding_are_one_camera() {
+        let plain = Surface::depth_tested();
+        let a = frame(&[(0, 0.0)], vec![plain.clone()]);
+        let mut b = frame(&[(0, 1.0)], vec![plain.clone()]);
+        // ParaView's two ranks: the clipping range's term in the last bits.
+        let projection = |far_term: f64| {
+            DMat4::from_cols(
+                glam::DVec4::new(2.099278572745318, 8.4e-9, -3.9e-8, 1.7e-17),
+                glam::DVec4::new(-9.4e-9, 3.732050827450177, -8.4e-9, 5.6e-17),
+                glam::DVec4::new(1.96e-8, -6.6e-8, -1.648657181718899, -1.0),
+                glam::DVec4::new(3.5e-6, -1.2e-5, far_term, 0.0),
+            )
+        };
+        let (mine, theirs) = (projection(-201.69076835056603), projection(-201.6907837383195));
+        b.cameras[0].projection = theirs;
+        let mut a0 = a.clone();
+        a0.cameras[0].projection = mine;
+        let merged = merge(vec![a0.clone(), b.clone()]);
+        assert_eq!(merged.cameras.len(), 1, "one camera");
+        assert!(merged.triangles.iter().all(|t| t.camera == 0));
+        assert_eq!(merged.cameras[0].projection, mine, "the first rank's");
+        // A camera that really differs stays a camera of its own.
+        b.cameras[0].projection = projection(-210.0);
+        assert_eq!(merge(vec![a0, b.clone()]).cameras.len(), 2);
+        b.cameras[0].projection = mine;
+        b.cameras[0].viewport.width = 4;
+        assert_eq!(merge(vec![a, b]).cameras.len(), 2, "another viewport");
     }
 }
