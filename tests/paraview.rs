@@ -197,6 +197,14 @@ fn paraview_under_two_ranks_composites_the_ray_traced_picture_whole() {
         assert_eq!(field(rank1, "tiles_total"), total, "{rank1}");
         assert!(field(rank1, "tiles") > 0, "frame {frame}: rank 1 traced: {rank1}");
         assert_eq!(field(rank0, "tiles") + field(rank1, "tiles"), total, "frame {frame}:\n{rank0}\n{rank1}");
+        // The contour's halves are kept meshes on both ranks, their trees built in the first
+        // frame and kept (each rank's camera differs from the other's in the last bits: taken
+        // for two cameras, rank 1's half was made loose triangles, built anew every pass).
+        for line in [rank0, rank1] {
+            assert_eq!(field(line, "loose_triangles"), 0, "frame {frame}: {line}");
+            let builds = field(line, "builds");
+            assert!(if frame == 0 { builds >= 2 } else { builds == 0 }, "frame {frame}: {line}");
+        }
     }
 }
 

@@ -19,12 +19,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use glray_core::config::Config;
-use glray_distribute::node::{Announced, Roles};
+use glray_distribute::node::{Announced, PictureParts, Roles, Setup};
+use glray_distribute::pack::Compression;
 use glray_distribute::{Agreement, FrameReport, Limits, Node, Transport};
 use glray_render::{Rendered, Renderer};
 use glray_scene::frame::Frame;
-
-use edge::MpiTransport;
 
 /// The host's MPI_Finalize came: no more MPI.
 static ENDED: AtomicBool = AtomicBool::new(false);
@@ -59,9 +58,11 @@ pub fn at_load() {
     }
 }
 
-/// The host's MPI_Finalize: glray's MPI work stops.
+/// The host's MPI_Finalize: glray's MPI work stops (its thread's last sends made, within
+/// two seconds).
 fn end() {
     ENDED.store(true, Ordering::Relaxed);
+    glray_distribute::link::stop_all(Duration::from_secs(3));
 }
 
 /// At the exit of a program that does not use MPI, where glray started it: MPI ends (mpirun
@@ -79,9 +80,8 @@ extern "C" fn end_at_exit() {
 pub struct Distribution {
     replicated: bool,
     settings: u64,
-    limits: Limits,
-    roles: Roles,
-    node: Option<Node<MpiTransport>>,
+    setup: Setup,
+    node: Option<Node>,
     /// Image-parallel tracing stopped (a fault, or MPI could not be joined).
     stopped: bool,
     /// The settings at start, which rank 0's changes (the live control panel) are made to on
@@ -93,9 +93,10 @@ pub struct Distribution {
     announced: Announced,
 }
 
-/// What a shared frame gave this rank: the picture for its framebuffer, and the report.
+/// What a shared frame gave this rank: the picture for its framebuffer (None for a pass that is
+/// not shown), and the report.
 pub struct Shared {
-    pub picture: Rendered,
+    pub picture: Option<Rendered>,
     pub report: FrameReport,
     pub rank: usize,
     pub ranks: usize,
@@ -106,8 +107,18 @@ impl Distribution {
         Distribution {
             replicated: config.distribute(in_mpi()) == "replicated",
             settings: config.picture_settings(),
-            limits: Limits { fixed: config.mpi_timeout().map(Duration::from_secs_f64) },
-            roles: if config.dedicated_master() { Roles::Dedicated } else { Roles::Shared },
+            setup: Setup {
+                limits: Limits { fixed: config.mpi_timeout().map(Duration::from_secs_f64) },
+                roles: match config.mpi_roles() {
+                    "dedicated" => Roles::Dedicated,
+                    "paper" => Roles::Paper,
+                    _ => Roles::Shared,
+                },
+                threaded: true,
+                poll: Duration::from_micros(config.mpi_poll()),
+                compression: Compression::from_setting(config.mpi_compression()).unwrap_or_default(),
+                parts: if config.mpi_whole_picture() { PictureParts::Whole } else { PictureParts::Own },
+            },
             node: None,
             stopped: false,
             config: config.clone(),
@@ -145,19 +156,21 @@ impl Distribution {
     }
 
     /// Shares `mine` with the other ranks (see the module); None when this rank is to trace it
-    /// alone (not shared, or just stopped).
+    /// alone (not shared, or just stopped). `present`: the picture is shown (false for the
+    /// passes of a batch frame before its last, whose pictures are not sent).
     pub fn frame(
         &mut self,
         mine: &Frame,
         previous: Option<&Rendered>,
         renderer: &mut Renderer,
         pool: Option<&rayon::ThreadPool>,
+        present: bool,
     ) -> Option<Shared> {
         if !self.active() {
             return None;
         }
         if self.node.is_none() {
-            let limit = self.limits.fixed.unwrap_or(glray_distribute::node::FIRST_FRAME_LIMIT);
+            let limit = self.setup.limits.fixed.unwrap_or(glray_distribute::node::FIRST_FRAME_LIMIT);
             let joined = edge::get().map_err(str::to_string).and_then(|e| e.join(limit).map(|t| (e, t)));
             match joined {
                 Ok((edge, transport)) => {
@@ -176,7 +189,8 @@ impl Distribution {
                     glray_core::info!("rank {} of {}: image-parallel tracing", transport.rank(), transport.size());
                     // Settings changed before the first frame count from it (rank 0 hands them on).
                     let agreement = Agreement { settings: self.settings };
-                    let mut node = Node::with_roles(transport, agreement, self.limits, self.roles);
+                    let setup = Setup { threaded: threading >= THREAD_MULTIPLE, ..self.setup };
+                    let mut node = Node::new(transport, agreement, setup);
                     if let Some((settings, changes)) = self.announced.take() {
                         node.announce(settings, changes);
                     }
@@ -200,32 +214,14 @@ impl Distribution {
         }
         let node = self.node.as_mut()?;
         let (rank, ranks) = (node.rank(), node.size());
-        match node.frame(mine, previous, renderer, pool) {
-            Ok((picture, report)) => {
-                let picture = picture.unwrap_or_else(|| background(mine, &renderer.options));
-                Some(Shared { picture, report, rank, ranks })
-            }
+        match node.frame(mine, previous, renderer, pool, present) {
+            Ok((picture, report)) => Some(Shared { picture, report, rank, ranks }),
             Err(fault) => {
                 self.stop(&fault.to_string());
                 None
             }
         }
     }
-}
-
-/// What a rank other than 0 puts in its framebuffer: what its frame cleared to, at the depth it
-/// cleared to (far), which a sort-last compositor passes over.
-fn background(mine: &Frame, options: &glray_render::Options) -> Rendered {
-    let (w, h) = mine.size();
-    let clear = Frame {
-        clear_color: mine.clear_color,
-        cleared: true,
-        depth_cleared: mine.depth_cleared,
-        width: w,
-        height: h,
-        ..Frame::default()
-    };
-    glray_render::render(&clear, w, h, None, options)
 }
 
 /// Tracer threads for this process: the setting `threads`, else the cores shared among the

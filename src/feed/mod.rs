@@ -491,13 +491,12 @@ impl Live {
         let batch =
             offscreen && renderer.options.effects.beyond_gl() && renderer.options.effects.progressive && frame.cleared;
         let extra = if batch { self.batch_passes - 1 } else { 0 };
-        // What the extra passes traced, for the statistics (the last pass's are the renderer's).
-        let mut extra_work = (std::time::Duration::ZERO, 0u64, std::time::Duration::ZERO);
+        // What the extra passes did, for the statistics (the last pass's are the renderer's).
+        let mut extra_work = glray_render::Stats::default();
         if extra > 0 && !self.distribution.active() {
             for _ in 0..extra {
                 traced(self.pool, renderer, frame, last);
-                let s = renderer.stats();
-                extra_work = (extra_work.0 + s.trace, extra_work.1 + s.rays, extra_work.2 + s.build);
+                extra_work = renderer.stats().and_before(&extra_work);
             }
         }
         // In an MPI rank: each pass a frame shared with the others (a fault ends them), its
@@ -505,24 +504,23 @@ impl Live {
         let mut extra_report: Option<glray_distribute::FrameReport> = None;
         if extra > 0 && self.distribution.active() {
             for _ in 0..extra {
-                let Some(pass) = self.distribution.frame(frame, last, renderer, self.pool) else { break };
-                let s = renderer.stats();
-                extra_work = (extra_work.0 + s.trace, extra_work.1 + s.rays, extra_work.2 + s.build);
+                let Some(pass) = self.distribution.frame(frame, last, renderer, self.pool, false) else { break };
+                extra_work = renderer.stats().and_before(&extra_work);
                 extra_report = Some(extra_report.map_or(pass.report, |r| r.and(pass.report)));
             }
         }
         // In an MPI rank, shared with the other ranks (None: traced here alone).
-        let shared = self.distribution.frame(frame, last, renderer, self.pool);
+        let shared = self.distribution.frame(frame, last, renderer, self.pool, true);
         if let Some(changed) = self.distribution.take_changed() {
             // Rank 0's panel changed the settings (made on this rank's renderer already).
             self.trigger = trigger_of(&changed);
         }
         let (rendered, ranks) = match shared {
-            Some(s) => {
-                let report = extra_report.map_or(s.report, |r| r.and(s.report));
-                (s.picture, Some(stats::RankStats { rank: s.rank, ranks: s.ranks, report }))
+            Some(crate::distribute::Shared { picture: Some(picture), report, rank, ranks }) => {
+                let report = extra_report.map_or(report, |r| r.and(report));
+                (picture, Some(stats::RankStats { rank, ranks, report }))
             }
-            None => (traced(self.pool, renderer, frame, last), None),
+            _ => (traced(self.pool, renderer, frame, last), None),
         };
         if let Some(dir) = &self.dump {
             match self.dump_frames {
@@ -560,12 +558,7 @@ impl Live {
                 width: w,
                 height: h,
                 capture: std::mem::take(&mut self.capture_time),
-                render: {
-                    let mut r = self.renderer.stats();
-                    (r.trace, r.rays, r.build) =
-                        (r.trace + extra_work.0, r.rays + extra_work.1, r.build + extra_work.2);
-                    r
-                },
+                render: self.renderer.stats().and_before(&extra_work),
                 present: start.elapsed(),
                 passed_draws: passed_total - self.passed_seen.insert(thread, passed_total).unwrap_or(0),
                 ranks,

@@ -36,17 +36,31 @@ pub struct RankStats {
 }
 
 impl RankStats {
+    /// Bytes received per pixel other ranks traced (what the frame cost this rank's link).
+    fn per_pixel(&self) -> f64 {
+        let r = &self.report;
+        if r.pixels_elsewhere == 0 {
+            0.0
+        } else {
+            r.bytes_received as f64 / r.pixels_elsewhere as f64
+        }
+    }
+
     fn text(&self) -> String {
         let r = &self.report;
         format!(
-            "; rank {} of {}: {} of {} tiles, {:.2} MB sent, {:.2} MB received, waited {:.2} ms{}",
+            "; rank {} of {}: {} of {} tiles, {:.2} MB sent, {:.2} MB received ({:.2} MB before compression, {:.1} \
+             bytes a pixel traced elsewhere), waited {:.2} ms, band {:.2} ms{}",
             self.rank,
             self.ranks,
             r.tiles,
             r.tiles_total,
             mb(r.bytes_sent),
             mb(r.bytes_received),
+            mb(r.raw_received),
+            self.per_pixel(),
             ms(r.wait),
+            ms(r.band),
             r.imbalance.map_or(String::new(), |i| format!(", imbalance {i:.2} (slowest / mean)"))
         )
     }
@@ -54,16 +68,25 @@ impl RankStats {
     fn json(&self) -> String {
         let r = &self.report;
         format!(
-            ",\"rank\":{},\"ranks\":{},\"tiles\":{},\"tiles_total\":{},\"bytes_sent\":{},\"bytes_received\":{},\"wait_ms\":{:.3},\"exchange_ms\":{:.3},\"rank_trace_ms\":{:.3},\"imbalance\":{}",
+            ",\"rank\":{},\"ranks\":{},\"tiles\":{},\"tiles_total\":{},\"bytes_sent\":{},\"bytes_received\":{},\
+             \"raw_sent\":{},\"raw_received\":{},\"pixels_elsewhere\":{},\"received_per_pixel\":{:.3},\
+             \"wait_ms\":{:.3},\"exchange_ms\":{:.3},\"rank_trace_ms\":{:.3},\"band_wait_ms\":{:.3},\"band_ms\":{:.3},\
+             \"imbalance\":{}",
             self.rank,
             self.ranks,
             r.tiles,
             r.tiles_total,
             r.bytes_sent,
             r.bytes_received,
+            r.raw_sent,
+            r.raw_received,
+            r.pixels_elsewhere,
+            self.per_pixel(),
             ms(r.wait),
             ms(r.exchange),
             ms(r.trace),
+            ms(r.band_wait),
+            ms(r.band),
             r.imbalance.map_or("null".to_string(), |i| format!("{i:.3}"))
         )
     }
@@ -155,7 +178,7 @@ pub fn json(s: &FrameStats) -> String {
     let mrays = if trace > 0.0 { r.rays as f64 / trace / 1e6 } else { 0.0 };
     format!(
         "{{\"frame\":{},\"thread\":{},\"width\":{},\"height\":{},\"capture_ms\":{:.3},\"build_ms\":{:.3},\
-         \"trace_ms\":{:.3},\"denoise_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"builds\":{},\"fast_builds\":{},\"refits\":{},\"kept_mb\":{:.1},\"passed_draws\":{}{}}}",
+         \"trace_ms\":{:.3},\"denoise_ms\":{:.3},\"present_ms\":{:.3},\"rays\":{},\"mrays_per_s\":{:.3},\"triangles\":{},\"samples\":{},\"reused\":{},\"builds\":{},\"fast_builds\":{},\"refits\":{},\"loose_triangles\":{},\"kept_mb\":{:.1},\"passed_draws\":{}{}}}",
         s.frame,
         s.thread,
         s.width,
@@ -173,6 +196,7 @@ pub fn json(s: &FrameStats) -> String {
         r.builds,
         r.fast_builds,
         r.refits,
+        r.loose,
         mb(r.kept_bytes),
         s.passed_draws,
         s.ranks.as_ref().map_or(String::new(), RankStats::json)

@@ -41,7 +41,9 @@ pub const TRIGGERS: &[&str] = &["auto", "swap", "finish", "flush", "readpixels"]
 pub const LIGHTING: &[&str] = &["vertex", "pixel"];
 pub const PRESENTS: &[&str] = &["auto", "pixels", "shader"];
 pub const DISTRIBUTIONS: &[&str] = &["auto", "local", "replicated", "data-parallel"];
-pub const MPI_ROLES: &[&str] = &["shared", "dedicated"];
+pub const MPI_ROLES: &[&str] = &["shared", "dedicated", "paper"];
+pub const MPI_COMPRESSIONS: &[&str] = &["lz4", "zstd", "none"];
+pub const MPI_PICTURES: &[&str] = &["own", "whole"];
 /// The values of `bvh` (glray-render's `bvh_choice::BvhBuild`).
 pub const BVH_BUILDS: &[&str] = &["auto", "sah", "fast"];
 
@@ -237,9 +239,35 @@ pub const SETTINGS: &[Setting] = &[
         key: "mpi_roles",
         kind: Kind::Choice(MPI_ROLES),
         default: "shared",
-        doc: "With `distribute = replicated`: `shared`, rank 0 hands out tiles and gathers them beside tracing \
-              its share; `dedicated`, rank 0 only hands out and gathers (the paper's master and display on a \
-              rank of their own), the other ranks trace.",
+        doc: "With `distribute = replicated`: `shared`, every rank traces, rank 0 hands out the tiles beside \
+              its share; `dedicated`, rank 0 only hands out tiles and shows the picture, the other ranks \
+              trace; `paper`, as the paper ran it: rank 0 the display, rank 1 the master (with three ranks or \
+              more), the other ranks trace.",
+    },
+    Setting {
+        key: "mpi_compression",
+        kind: Kind::Choice(MPI_COMPRESSIONS),
+        default: "lz4",
+        doc: "How glray's messages between ranks are compressed (losslessly: the pictures are the same): \
+              `lz4` (fast, about half the bytes of a frame's pixels), `zstd` (fewer bytes for a few times the \
+              time: slow links), `none`.",
+    },
+    Setting {
+        key: "mpi_poll",
+        kind: Kind::Int(0, 100_000),
+        default: "100",
+        doc: "Microseconds glray's MPI thread waits between looks at MPI when it has nothing to do: an ask \
+              from another rank waits at most this long. 0: it never waits (a core kept busy, as a blocking \
+              MPI_Probe keeps one with Open MPI over TCP).",
+    },
+    Setting {
+        key: "mpi_picture",
+        kind: Kind::Choice(MPI_PICTURES),
+        default: "own",
+        doc: "Which part of the ray-traced picture each rank other than 0 gets back for its framebuffer: \
+              `own`, the part its own data covers (what a sort-last compositor such as IceT takes from it; \
+              the rest is its background); `whole`, all of it (a host that reads the whole frame on every \
+              rank). Rank 0 always gets all of it.",
     },
     Setting {
         key: "threads",
@@ -646,9 +674,24 @@ impl Config {
         }
     }
 
-    /// Whether rank 0 is a dedicated master and display (`mpi_roles`).
-    pub fn dedicated_master(&self) -> bool {
-        self.get("mpi_roles") == "dedicated"
+    /// `mpi_roles`: "shared", "dedicated" or "paper".
+    pub fn mpi_roles(&self) -> &str {
+        self.get("mpi_roles")
+    }
+
+    /// `mpi_compression`: "lz4", "zstd" or "none".
+    pub fn mpi_compression(&self) -> &str {
+        self.get("mpi_compression")
+    }
+
+    /// `mpi_poll` in microseconds.
+    pub fn mpi_poll(&self) -> u64 {
+        self.get("mpi_poll").parse().unwrap_or(100)
+    }
+
+    /// Whether ranks other than 0 get the whole picture back (`mpi_picture = whole`).
+    pub fn mpi_whole_picture(&self) -> bool {
+        self.get("mpi_picture") == "whole"
     }
 
     /// Tracer threads asked for (None: decide from the cores and ranks).
@@ -676,6 +719,9 @@ impl Config {
             "threads",
             "mpi_timeout",
             "mpi_library",
+            "mpi_compression",
+            "mpi_poll",
+            "mpi_picture",
             "real_opengl",
             "real_glx",
             "real_egl",

@@ -7,8 +7,12 @@
 //! - `node`: one rank's part in a frame: scenes exchanged and merged, tiles traced and
 //!   gathered, every wait bounded.
 
+pub mod assembly;
+pub mod bands;
+pub mod link;
 pub mod master;
 pub mod node;
+pub mod pack;
 pub mod protocol;
 pub mod transport;
 

@@ -1,33 +1,42 @@
 //! One rank's part in a frame (`Node::frame`), image-parallel over a replicated scene:
 //!
 //! 1. every rank sends the frame it captured to every other (meshes and textures the others
-//!    lack go with it, once: `glray_scene::encode`), and merges all of them in rank order
-//!    (`glray_scene::merge`): every rank holds the same whole scene;
-//! 2. rank 0, the master, hands out tiles (`Master`); each rank traces what it is given on its
-//!    threads, asking for more while it traces, and sends each finished tile straight to rank
-//!    0, the display;
-//! 3. rank 0 puts the tiles together, adds the pass to the ones before (progressive
-//!    refinement) and sends the picture to every other rank: each returns it (a sort-last
-//!    compositor such as IceT takes a rank's pixels only where its own data projects).
+//!    lack go with it, once: `glray_scene::encode`), with the part of the window its own data
+//!    covers, and merges all of them in rank order (`glray_scene::merge`): every rank holds the
+//!    same whole scene;
+//! 2. the window is cut into a band of rows per rank that traces (`bands`); rank 0's master
+//!    hands out tiles, each rank's own band's first (`Master`, on rank 0's link); each rank
+//!    traces what it is given on its threads and sends the rows of each finished tile to the
+//!    ranks whose bands hold them or whose denoising reads them;
+//! 3. each rank adds its band's pass to the ones before and denoises its AO (the rows of the
+//!    last frame its pixels follow back into fetched from the ranks that held them: bit for
+//!    bit what one process does with the whole frame), then sends every rank the part of its
+//!    band that rank's data covers (rank 0, the display, gets all of it): a sort-last
+//!    compositor (IceT) takes a rank's pixels only where its own data projects.
 //!
-//! The thread that calls `frame` is the one that moves messages (the tracing runs on the
-//! tracer's threads), and every wait on another rank has a time limit: a rank that stops
-//! answering ends the frame with a `Fault` naming it, never a hang.
+//! Nothing of a frame is finished on one rank alone. Messages move on the rank's link
+//! (`link`: a thread of its own, or the host's thread where MPI allows no other), the tracing
+//! on the tracer's threads, and every wait on another rank has a time limit: a rank that
+//! stops answering ends the frame with a `Fault` naming it, never a hang.
 
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
+use std::sync::mpsc::{channel, Receiver};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use glray_render::denoise::AoPixel;
-use glray_render::tiles::{LayersMut, TileGrid, TilePixels, TileWork};
+use glray_render::denoise::{AoPixel, Past};
+use glray_render::tiles::{TileGrid, TilePixels};
 use glray_render::{Rendered, Renderer};
 use glray_scene::encode::{decode, encode, ObjectStore};
 use glray_scene::frame::Frame;
 
+use crate::assembly::{cut, BandRows, Canvas, Piece};
+use crate::bands::Bands;
+use crate::link::Link;
 use crate::master::{imbalance, Master};
-use crate::protocol::{picture, picture_message, tile_message, tile_pixels, Message, RankReport};
+use crate::pack::{Compression, Packed};
+use crate::protocol::{packed, unpacked, Message, RankReport, Rect};
 use crate::transport::Transport;
 
 /// How long a rank waits for another on the first frame (each rank loads its data and builds
@@ -57,7 +66,7 @@ impl std::fmt::Display for Fault {
                 write!(
                     f,
                     "rank{} {} did not answer within {:.1} s (frame {frame}, waiting for {waiting_for}): it stopped, \
-                     died or skipped the frame",
+                     died, skipped the frame or lost its link",
                     if ranks.len() > 1 { "s" } else { "" },
                     names.join(", "),
                     waited.as_secs_f64()
@@ -78,8 +87,13 @@ pub struct FrameReport {
     pub tiles: u32,
     pub tiles_total: u32,
     pub rays: u64,
+    /// Bytes sent and received on the wire, and what they came to before compression.
     pub bytes_sent: u64,
     pub bytes_received: u64,
+    pub raw_sent: u64,
+    pub raw_received: u64,
+    /// Pixels other ranks traced of this frame (for bytes per pixel).
+    pub pixels_elsewhere: u64,
     /// Time spent waiting for other ranks: for their scenes, for tiles, at the end.
     pub wait: Duration,
     /// Step 1: this rank's scene sent, every other rank's received, decoded and merged (on the
@@ -87,6 +101,10 @@ pub struct FrameReport {
     pub exchange: Duration,
     /// This rank's tracing of its tiles.
     pub trace: Duration,
+    /// Its band: waiting for the rows of it traced elsewhere, then adding the pass up and
+    /// denoising it.
+    pub band_wait: Duration,
+    pub band: Duration,
     /// Slowest rank's tracing time over the mean (rank 0 only).
     pub imbalance: Option<f64>,
     /// The picture was the last one's again (converged), or traced by rank 0 alone.
@@ -104,9 +122,14 @@ impl FrameReport {
             rays: self.rays + later.rays,
             bytes_sent: self.bytes_sent + later.bytes_sent,
             bytes_received: self.bytes_received + later.bytes_received,
+            raw_sent: self.raw_sent + later.raw_sent,
+            raw_received: self.raw_received + later.raw_received,
+            pixels_elsewhere: self.pixels_elsewhere + later.pixels_elsewhere,
             wait: self.wait + later.wait,
             exchange: self.exchange + later.exchange,
             trace: self.trace + later.trace,
+            band_wait: self.band_wait + later.band_wait,
+            band: self.band + later.band,
             untraced: self.untraced && later.untraced,
             ..later
         }
@@ -120,13 +143,15 @@ pub struct Agreement {
     pub settings: u64,
 }
 
-/// Whether rank 0 traces too (`Shared`, the default) or only hands out tiles and gathers them
-/// (`Dedicated`: the master and display on a rank of their own, as the paper's roles).
+/// Whether rank 0 traces too (`Shared`, the default) or only hands out tiles and shows the
+/// picture (`Dedicated`); or, as the paper ran it, rank 0 the display and rank 1 the master,
+/// neither tracing (`Paper`: the other ranks trace).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum Roles {
     #[default]
     Shared,
     Dedicated,
+    Paper,
 }
 
 /// How long a rank waits for another: `fixed` (the setting `mpi_timeout`) or, when not set,
@@ -136,28 +161,77 @@ pub struct Limits {
     pub fixed: Option<Duration>,
 }
 
-/// A rank of the job: its messages, what it has sent and been sent, the master's queue.
-pub struct Node<T: Transport> {
-    transport: T,
+/// Which part of the shared picture a rank other than 0 is sent: what its own data covers
+/// (`Own`: what a sort-last compositor takes from it) or the whole window.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum PictureParts {
+    #[default]
+    Own,
+    Whole,
+}
+
+/// How a rank's node is set up (the `mpi_*` settings).
+#[derive(Debug, Clone, Copy)]
+pub struct Setup {
+    pub limits: Limits,
+    pub roles: Roles,
+    /// Its messages move on a thread of their own (MPI_THREAD_MULTIPLE), else on the host's.
+    pub threaded: bool,
+    /// How long the link waits between polls of MPI when it has nothing to do (0: it spins).
+    pub poll: Duration,
+    pub compression: Compression,
+    pub parts: PictureParts,
+}
+
+impl Default for Setup {
+    fn default() -> Setup {
+        Setup {
+            limits: Limits::default(),
+            roles: Roles::Shared,
+            threaded: true,
+            poll: DEFAULT_POLL,
+            compression: Compression::default(),
+            parts: PictureParts::Own,
+        }
+    }
+}
+
+/// The link's wait between polls of MPI when it has nothing to do (docs/distributed.md
+/// measures it against a spin, which is what a blocking probe costs).
+pub const DEFAULT_POLL: Duration = Duration::from_micros(100);
+
+/// A rank of the job: its link, what it has sent and been sent, the pictures it returned.
+pub struct Node {
+    link: Link,
     frame: u64,
     agreement: Agreement,
-    limits: Limits,
+    setup: Setup,
+    /// The ranks that trace.
+    tracing: Vec<usize>,
     /// What every other rank holds of this rank's meshes and textures.
     sent: ObjectStore,
     /// What this rank holds of each rank's.
     held: Vec<ObjectStore>,
     /// Messages of frames this rank has not reached yet.
     ahead: VecDeque<(usize, Message)>,
-    master: Master,
     /// The accumulation key of the last frame and the passes traced under it.
     run: Option<(u64, u32)>,
     last_frame: Option<Duration>,
-    bytes_sent: u64,
-    bytes_received: u64,
     /// Rank 0: settings changes to hand on with the next frame (`announce`).
     announced: Announced,
     /// Other ranks: how to make rank 0's changes (`on_settings`).
     hook: Option<SettingsHook>,
+    /// The picture this rank returned last, shown again while it has converged.
+    last_picture: Option<Rendered>,
+    /// Whether the last frame that changed a renderer was traced by all (bands) or by rank 0
+    /// alone: the passes and AO history of the one do not carry over to the other.
+    last_kind: Option<Kind>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Shared,
+    Alone,
 }
 
 /// Settings changes waiting to go with the next frame: the agreement number after the last of
@@ -185,40 +259,44 @@ impl Announced {
 /// else they matter; the new settings' agreement number, or why they cannot be made.
 pub type SettingsHook = Box<dyn FnMut(&[(String, String)], &mut Renderer) -> Result<u64, String> + Send>;
 
-/// How long the message loop sleeps when there is nothing to do.
-const IDLE: Duration = Duration::from_micros(50);
-/// How long the tracing's message loop waits for the tracer before it looks at MPI again. Other
-/// ranks' asks wait at most this long, hidden by the chunk each keeps in reserve; polled every
-/// 200 us, Open MPI's progress over TCP slowed a one-rank frame's tracing by ~14% (on the
-/// other core), every 1 ms by ~3% (docs/distributed.md).
-const POLL: Duration = Duration::from_millis(1);
+/// How long a wait for the next message lasts before the limits are looked at again.
+const WAKE: Duration = Duration::from_millis(2);
 
-impl<T: Transport> Node<T> {
-    pub fn new(transport: T, agreement: Agreement, limits: Limits) -> Node<T> {
-        Node::with_roles(transport, agreement, limits, Roles::Shared)
-    }
-
-    pub fn with_roles(transport: T, agreement: Agreement, limits: Limits, roles: Roles) -> Node<T> {
+impl Node {
+    pub fn new<T: Transport + Send + 'static>(transport: T, agreement: Agreement, setup: Setup) -> Node {
         let size = transport.size();
         let mut master = Master::new(size);
-        if roles == Roles::Dedicated {
-            master.leave_out(0);
+        match setup.roles {
+            Roles::Shared => {}
+            Roles::Dedicated => master.leave_out(0),
+            Roles::Paper => {
+                master.leave_out(0);
+                if size > 2 {
+                    master.leave_out(1);
+                }
+            }
         }
+        let tracing = master.tracing();
+        // The master's queue lives on the rank that hands out tiles: rank 1 in the paper's
+        // roles (with three ranks or more), else rank 0.
+        let master_rank = if setup.roles == Roles::Paper && size > 2 { 1 } else { 0 };
+        let own_master = (transport.rank() == master_rank).then_some(master);
+        let link = Link::start(Box::new(transport), own_master, setup.threaded, setup.poll, setup.compression);
         Node {
-            transport,
+            link,
             frame: 0,
             agreement,
-            limits,
+            setup,
+            tracing,
             sent: ObjectStore::default(),
             held: (0..size).map(|_| ObjectStore::default()).collect(),
             ahead: VecDeque::new(),
-            master,
             run: None,
             last_frame: None,
-            bytes_sent: 0,
-            bytes_received: 0,
             announced: Announced::default(),
             hook: None,
+            last_picture: None,
+            last_kind: None,
         }
     }
 
@@ -234,60 +312,80 @@ impl<T: Transport> Node<T> {
     }
 
     pub fn rank(&self) -> usize {
-        self.transport.rank()
+        self.link.rank()
     }
 
     pub fn size(&self) -> usize {
-        self.transport.size()
+        self.link.size()
+    }
+
+    /// The rank whose master hands out tiles.
+    fn master_rank(&self) -> usize {
+        if self.setup.roles == Roles::Paper && self.size() > 2 {
+            1
+        } else {
+            0
+        }
     }
 
     /// The time limit of any wait on another rank this frame.
     pub fn limit(&self) -> Duration {
-        self.limits.fixed.unwrap_or_else(|| self.last_frame.map_or(FIRST_FRAME_LIMIT, |t| t + SLACK))
+        self.setup.limits.fixed.unwrap_or_else(|| self.last_frame.map_or(FIRST_FRAME_LIMIT, |t| t + SLACK))
     }
 
     fn send(&mut self, to: usize, message: Message) -> Result<(), Fault> {
-        self.send_bytes(to, message.encode())
+        self.link.send(to, message).map_err(Fault::Transport)
     }
 
-    fn send_bytes(&mut self, to: usize, bytes: Vec<u8>) -> Result<(), Fault> {
-        self.bytes_sent += bytes.len() as u64;
-        self.transport.send(to, bytes).map_err(Fault::Transport)
-    }
-
-    /// The next message of frame `frame`, if one is here: those of earlier frames (a frame
-    /// this rank gave up on) are dropped, those of later ones kept for then.
-    fn receive(&mut self, frame: u64) -> Result<Option<(usize, Message)>, Fault> {
+    /// The next message of frame `frame`, waiting at most `wait` for it: those of earlier
+    /// frames (a frame this rank gave up on) are dropped, those of later ones kept for then.
+    fn receive(&mut self, frame: u64, wait: Duration) -> Result<Option<(usize, Message)>, Fault> {
         if let Some(k) = self.ahead.iter().position(|(_, m)| m.frame() == frame) {
             return Ok(self.ahead.remove(k));
         }
-        while let Some((from, bytes)) = self.transport.poll().map_err(Fault::Transport)? {
-            self.bytes_received += bytes.len() as u64;
-            let message = Message::decode(bytes).map_err(|why| Fault::Damaged { rank: from, why })?;
-            match message.frame() {
-                f if f == frame => return Ok(Some((from, message))),
-                f if f > frame => self.ahead.push_back((from, message)),
-                _ => {}
+        let start = Instant::now();
+        loop {
+            let left = wait.saturating_sub(start.elapsed());
+            match self.link.receive(left) {
+                Some(Ok((from, message))) => match message.frame() {
+                    f if f == frame => return Ok(Some((from, message))),
+                    f if f > frame => self.ahead.push_back((from, message)),
+                    _ => {}
+                },
+                Some(Err(why)) => return Err(Fault::Transport(why)),
+                None => return Ok(None),
+            }
+            if start.elapsed() >= wait {
+                return Ok(None);
             }
         }
-        Ok(None)
     }
 
-    /// Traces `mine` (this rank's captured frame) with every other rank's: rank 0 gets the
-    /// picture, the others None. `previous` is the picture under a frame that does not clear.
+    /// Traces `mine` (this rank's captured frame) with every other rank's, and returns this
+    /// rank's picture: the part of the frame its data covers (rank 0: all of it), over its
+    /// own background; None when `present` is false (a pass of a batch frame before its
+    /// last: only the last is shown). `previous` is the picture under a frame that does not
+    /// clear.
     pub fn frame(
         &mut self,
         mine: &Frame,
         previous: Option<&Rendered>,
         renderer: &mut Renderer,
         pool: Option<&rayon::ThreadPool>,
+        present: bool,
     ) -> Result<(Option<Rendered>, FrameReport), Fault> {
         let frame = self.frame;
         self.frame += 1;
         let started = Instant::now();
-        let (sent0, received0) = (self.bytes_sent, self.bytes_received);
+        let counted = self.link.counters();
         let mut report = FrameReport { frame, ..FrameReport::default() };
-        let (merged, waited) = self.exchange(frame, mine, renderer)?;
+        let want = if self.rank() == 0 || self.setup.parts == PictureParts::Whole {
+            let (w, h) = mine.size();
+            (w > 0 && h > 0).then_some(Rect { x: 0, y: 0, width: w, height: h })
+        } else {
+            glray_scene::covered::covered(mine).map(|(x, y, width, height)| Rect { x, y, width, height })
+        };
+        let (merged, wants, waited) = self.exchange(frame, mine, want, renderer)?;
         report.wait += waited;
         report.exchange = started.elapsed();
         let (w, h) = merged.size();
@@ -297,47 +395,87 @@ impl<T: Transport> Node<T> {
             _ => 0,
         };
         let me = self.rank();
-        let alone = w == 0 || h == 0 || merged.is_empty() || pass >= renderer.converged_passes();
-        let picture = if alone || !Renderer::shares(&merged) {
-            // Nothing to trace (rank 0 shows what the frame cleared to), converged (the last
-            // picture again), or a frame drawn over the last or in several viewports: rank 0
-            // renders it alone, as one process would.
+        let picture = if w > 0 && h > 0 && pass >= renderer.converged_passes() && self.last_picture.is_some() {
+            // Converged: every rank shows the picture it showed last.
             report.untraced = true;
-            if me != 0 {
+            renderer.shown_again(merged.triangle_count() as u64);
+            self.last_picture.clone()
+        } else if w == 0 || h == 0 || merged.is_empty() || !Renderer::shares(&merged) {
+            // Nothing to trace (rank 0 shows what the frame cleared to), or a frame drawn over
+            // the last or in several viewports: rank 0 renders it alone, as one process would,
+            // and sends each rank its part.
+            report.untraced = true;
+            self.kind(Kind::Alone, renderer);
+            self.run = None;
+            let mut canvas = Canvas::new(background(mine, &renderer.options), wants[me]);
+            if me == 0 {
+                let whole = renderer.render(&merged, w, h, previous);
+                if present {
+                    for (r, want) in wants.iter().enumerate().skip(1) {
+                        if let Some(part) = want.filter(|_| whole.width == w && whole.height == h) {
+                            let (rgba, depth) = cut(&whole, 0, part);
+                            let how = self.link.compression();
+                            let m = Message::Part {
+                                frame,
+                                rect: part,
+                                rgba: packed(&rgba, how),
+                                depth: packed(&depth, how),
+                            };
+                            self.send(r, m)?;
+                        }
+                    }
+                }
+                canvas.picture = whole;
+            } else {
                 // Counted all the same: every rank's AO rays stay rank 0's.
                 renderer.pass_frame(merged.triangle_count() as u64);
-            }
-            (me == 0).then(|| renderer.render(&merged, w, h, previous))
-        } else {
-            self.run = key.map(|k| (k, pass + 1));
-            let (linear, ao) = (renderer.linear(key), renderer.denoises());
-            let shared = Shared { frame, merged: &merged, key, pass, linear, ao };
-            self.trace(&shared, renderer, pool, &mut report)?
-        };
-        // Every rank's framebuffer gets the picture (see `Message::Picture`).
-        let picture = if me == 0 {
-            if let Some(p) = &picture {
-                let bytes = picture_message(frame, p).encode();
-                for r in 1..self.size() {
-                    self.send_bytes(r, bytes.clone())?;
+                if present {
+                    let waited = self.await_parts(frame, &mut canvas)?;
+                    report.wait += waited;
                 }
             }
-            picture
+            Some(canvas.picture)
         } else {
-            let (p, waited) = self.await_picture(frame)?;
-            report.wait += waited;
-            Some(p)
+            self.kind(Kind::Shared, renderer);
+            self.run = key.map(|k| (k, pass + 1));
+            let (linear, ao) = (renderer.linear(key), renderer.denoises());
+            let shared = Shared { frame, merged: &merged, key, pass, linear, ao, present };
+            let canvas = Canvas::new(background(mine, &renderer.options), wants[me]);
+            Some(self.trace(&shared, &wants, canvas, renderer, pool, &mut report)?)
         };
         if !report.untraced {
             self.last_frame = Some(started.elapsed());
         }
-        report.bytes_sent = self.bytes_sent - sent0;
-        report.bytes_received = self.bytes_received - received0;
-        Ok((picture, report))
+        let now = self.link.counters();
+        (report.bytes_sent, report.bytes_received) = (now[0] - counted[0], now[1] - counted[1]);
+        (report.raw_sent, report.raw_received) = (now[2] - counted[2], now[3] - counted[3]);
+        if present {
+            self.last_picture = picture.clone();
+            Ok((picture, report))
+        } else {
+            Ok((None, report))
+        }
     }
 
-    /// Step 1: every rank's frame to every rank, merged in rank order; and the time waited.
-    fn exchange(&mut self, frame: u64, mine: &Frame, renderer: &mut Renderer) -> Result<(Frame, Duration), Fault> {
+    /// A frame of kind `kind` on the ranks: a switch between frames all ranks trace in bands and
+    /// frames rank 0 renders alone starts the passes and AO history afresh on every rank (each
+    /// kind keeps them in its own shape).
+    fn kind(&mut self, kind: Kind, renderer: &mut Renderer) {
+        if self.size() > 1 && self.last_kind.is_some_and(|k| k != kind) {
+            renderer.restart();
+        }
+        self.last_kind = Some(kind);
+    }
+
+    /// Step 1: every rank's frame to every rank, merged in rank order; what part of the picture
+    /// each rank wants; and the time waited.
+    fn exchange(
+        &mut self,
+        frame: u64,
+        mine: &Frame,
+        want: Option<Rect>,
+        renderer: &mut Renderer,
+    ) -> Result<(Frame, Vec<Option<Rect>>, Duration), Fault> {
         let (me, size) = (self.rank(), self.size());
         // Scenes sent before a settings change reached their rank carry the settings before it:
         // agreed to for this frame.
@@ -351,29 +489,28 @@ impl<T: Transport> Node<T> {
                 }
             }
         }
+        let mut wants = vec![None; size];
+        wants[me] = want;
         if size > 1 {
             let scene = encode(mine, &mut self.sent);
-            // Encoded once for every rank (the first frame's may be hundreds of megabytes).
-            // Encoded once for every rank (the first frame's may be hundreds of megabytes),
-            // moved to the last one.
-            let bytes = Message::Scene { frame, settings: self.agreement.settings, scene }.encode();
-            let others: Vec<usize> = (0..size).filter(|&r| r != me).collect();
-            let mut bytes = Some(bytes);
-            for (k, &r) in others.iter().enumerate() {
-                let b = if k + 1 == others.len() { bytes.take() } else { bytes.clone() };
-                self.send_bytes(r, b.expect("bytes for every rank"))?;
+            // Packed once for every rank (the first frame's may be hundreds of megabytes).
+            let scene = Packed::new(&scene, 4, self.link.compression());
+            let m = Message::Scene { frame, settings: self.agreement.settings, want, scene };
+            for r in (0..size).filter(|&r| r != me) {
+                self.send(r, m.clone())?;
             }
         }
         // What the others hold of ours is what this frame draws (the rest they forget, below).
         let (meshes, textures) = ids_of(mine);
         self.sent.retain(&meshes, &textures);
-        let mut scenes: Vec<Option<Vec<u8>>> = vec![None; size];
-        // The master's first tiles may come before the last scene: kept for the tracing.
+        let mut scenes: Vec<Option<Packed>> = vec![None; size];
+        // The master's first tiles and other ranks' rows may come before the last scene: kept
+        // for the tracing.
         let mut early = Vec::new();
         let begun = Instant::now();
         let mut last_heard = Instant::now();
         while scenes.iter().enumerate().any(|(r, s)| r != me && s.is_none()) {
-            match self.receive(frame)? {
+            match self.receive(frame, WAKE)? {
                 Some((0, Message::Settings { settings, changes, .. })) if me != 0 => {
                     let made = match self.hook.as_mut() {
                         Some(hook) => hook(&changes, renderer),
@@ -398,7 +535,7 @@ impl<T: Transport> Node<T> {
                     }
                     last_heard = Instant::now();
                 }
-                Some((from, Message::Scene { settings, scene, .. })) => {
+                Some((from, Message::Scene { settings, want, scene, .. })) => {
                     if settings != self.agreement.settings && Some(settings) != before {
                         return Err(Fault::Refused {
                             rank: from,
@@ -409,6 +546,7 @@ impl<T: Transport> Node<T> {
                         });
                     }
                     scenes[from] = Some(scene);
+                    wants[from] = want;
                     last_heard = Instant::now();
                 }
                 Some(early_message) => early.push(early_message),
@@ -422,7 +560,6 @@ impl<T: Transport> Node<T> {
                             waiting_for: "its scene",
                         });
                     }
-                    std::thread::sleep(IDLE);
                 }
             }
         }
@@ -436,35 +573,56 @@ impl<T: Transport> Node<T> {
                 frames.push(mine.clone());
                 continue;
             }
-            let bytes = scene.expect("every scene is in");
-            let f = decode(&bytes, &mut self.held[r])
-                .map_err(|e| Fault::Damaged { rank: r, why: format!("a scene glray cannot read: {e}") })?;
+            let damaged = |why: String| Fault::Damaged { rank: r, why: format!("a scene glray cannot read: {why}") };
+            let bytes = scene.expect("every scene is in").unpack().map_err(damaged)?;
+            let f = decode(&bytes, &mut self.held[r]).map_err(|e| damaged(e.to_string()))?;
             let (meshes, textures) = ids_of(&f);
             self.held[r].retain(&meshes, &textures);
             frames.push(f);
         }
-        Ok((glray_scene::merge::merge(frames), waited))
+        Ok((glray_scene::merge::merge(frames), wants, waited))
     }
 
-    /// Steps 2 and 3: this rank's share traced on its threads while this thread moves the
-    /// messages; rank 0's picture.
+    /// Steps 2 and 3: this rank's share traced on its threads while this thread routes the
+    /// tiles; its band added up and denoised; its picture.
     fn trace(
         &mut self,
         shared: &Shared,
+        wants: &[Option<Rect>],
+        canvas: Canvas,
         renderer: &mut Renderer,
         pool: Option<&rayon::ThreadPool>,
         report: &mut FrameReport,
-    ) -> Result<Option<Rendered>, Fault> {
+    ) -> Result<Rendered, Fault> {
         let (w, h) = shared.merged.size();
         let grid = TileGrid::new(w, h);
+        let bands = Bands::new(w as usize, h as usize, &self.tracing);
         report.tiles_total = grid.count();
-        let (event_tx, event_rx) = channel();
-        let (grant_tx, grant_rx) = channel();
+        let me = self.rank();
+        let mine = bands.of(me).map(|b| BandRows::new(b, shared.linear, shared.ao));
+        let mut state = FrameState {
+            shared,
+            grid,
+            bands,
+            band: mine,
+            history: HistoryState::default(),
+            canvas,
+            wants,
+            reports: vec![None; self.size()],
+            finished: vec![false; self.size()],
+            tiles_here: 0,
+            pixels_here: 0,
+            pending_rows: Vec::new(),
+        };
+        if me == self.master_rank() {
+            let homes = state.bands.homes(&grid);
+            self.link.begin(shared.frame, homes).map_err(Fault::Transport)?;
+        }
+        // Phase 1: the tracer's tiles routed as they come, other ranks' rows taken in.
+        let traces = self.tracing.contains(&me);
+        let (tile_tx, tile_rx) = channel::<TilePixels>();
         let abort = AtomicBool::new(false);
-        let work = ChannelWork { events: Mutex::new(event_tx), grants: Mutex::new(grant_rx), abort: &abort };
-        let traced = AtomicBool::new(false);
         let tracing = Mutex::new((Duration::ZERO, 0u64));
-        let mut lanes = Lanes { events: event_rx, grants: grant_tx, traced: &traced };
         let owned;
         let pool = match pool {
             Some(p) => p,
@@ -475,251 +633,59 @@ impl<T: Transport> Node<T> {
                 &owned
             }
         };
-        let tracer = &mut *renderer;
-        let traces = self.master.traces(self.rank());
+        let traced = AtomicBool::new(!traces);
         if !traces {
-            // A dedicated master: nothing to trace here (the frame counted all the same).
-            tracer.pass_frame(shared.merged.triangle_count() as u64);
-            traced.store(true, Ordering::Release);
+            // Rank 0 of the dedicated roles: nothing to trace (the frame counted all the same).
+            renderer.pass_frame(shared.merged.triangle_count() as u64);
         }
+        let limit = self.limit();
+        let work = self.link.work(shared.frame, tile_tx, &abort, limit);
+        let starved = work.starved();
         let served = pool.in_place_scope(|s| {
+            let tracer = &mut *renderer;
             let (work, traced, tracing) = (&work, &traced, &tracing);
-            s.spawn(move |_| {
-                if !traces {
-                    return;
-                }
-                let start = Instant::now();
-                let stats = tracer.render_tiles(shared.merged, w, h, shared.pass, shared.linear, work);
-                *tracing.lock().unwrap_or_else(|e| e.into_inner()) = (start.elapsed(), stats.rays);
-                traced.store(true, Ordering::Release);
-            });
-            let r = self.serve(shared, grid, &mut lanes, tracing, report);
+            if traces {
+                s.spawn(move |_| {
+                    let start = Instant::now();
+                    let stats = tracer.render_tiles(shared.merged, w, h, shared.pass, shared.linear, work);
+                    *tracing.lock().unwrap_or_else(|e| e.into_inner()) = (start.elapsed(), stats.rays);
+                    traced.store(true, Ordering::Release);
+                });
+            }
+            let r = self.route_while_tracing(&mut state, &tile_rx, traced, &starved);
             abort.store(r.is_err(), Ordering::Release);
             r
         });
-        let gathered = served?;
-        (report.trace, report.rays) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
-        Ok(gathered.map(|(picture, colors, ao)| renderer.add_pass(shared.merged, shared.key, picture, colors, ao)))
-    }
-
-    /// The message loop of a frame's tracing, until this rank's part is done: rank 0 hands out
-    /// tiles and gathers them (returning the picture and its linear colours), the others ask
-    /// for tiles and send them on.
-    fn serve(
-        &mut self,
-        shared: &Shared,
-        grid: TileGrid,
-        lanes: &mut Lanes,
-        tracing: &Mutex<(Duration, u64)>,
-        report: &mut FrameReport,
-    ) -> Result<Option<Gathered>, Fault> {
-        let (me, size, frame) = (self.rank(), self.size(), shared.frame);
-        let tiles = grid.count();
-        // Rank 0: the picture being gathered, and who has reported.
-        let mut gather = (me == 0).then(|| Gather::new(grid, shared.linear, shared.ao));
-        let mut reports: Vec<Option<RankReport>> = vec![None; size];
-        let mut reserve: VecDeque<Vec<u32>> = VecDeque::new();
-        let (mut asked, mut exhausted, mut tracer_waits) = (false, false, false);
-        if me == 0 {
-            let batches = self.master.begin(tiles);
-            // (An empty grant means "no more": a rank without a first batch asks instead.)
-            for (r, batch) in batches.into_iter().enumerate().filter(|(_, b)| !b.is_empty()) {
-                if r == 0 {
-                    reserve.push_back(batch);
-                } else {
-                    self.send(r, Message::Grant { frame, tiles: batch })?;
-                }
-            }
+        drop(work);
+        served?;
+        let (seconds, rays) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
+        let tiles = state.tiles_here;
+        (report.trace, report.rays, report.tiles) = (seconds, rays, tiles);
+        report.pixels_elsewhere = u64::from(w) * u64::from(h) - state.pixels_here;
+        let mine_report = RankReport { tiles, rays, trace: seconds.as_secs_f64() };
+        if me == self.master_rank() {
+            state.reports[me] = Some(mine_report);
+        } else {
+            self.send(self.master_rank(), Message::Done { frame: shared.frame, report: mine_report })?;
         }
-        let mut last_heard = Instant::now();
-        let mut my_tiles = 0u32;
-        let mut traced_at: Option<Instant> = None;
-        let mut busy = true;
-        loop {
-            // What the tracer said: it wants tiles, or has traced some (all of them, once it
-            // has finished: `done` comes before `traced`). The wait for it is the loop's idle
-            // time, so that a tile or an ask is taken at once.
-            let traced = lanes.traced.load(Ordering::Acquire);
-            let mut traced_tiles = Vec::new();
-            // Waited for only when the last round found nothing to do.
-            let wait = if busy { Duration::ZERO } else { POLL };
-            busy = false;
-            let mut first = lanes.events.recv_timeout(wait).ok();
-            while let Some(event) = first.take().or_else(|| lanes.events.try_recv().ok()) {
-                match event {
-                    TracerEvent::Ask => tracer_waits = true,
-                    TracerEvent::Tile(t) => traced_tiles.push(t),
+        // Phase 2: the band finished here, the picture's parts gathered.
+        let band_start = Instant::now();
+        self.finish(&mut state, renderer, report)?;
+        report.band = band_start.elapsed().saturating_sub(report.band_wait);
+        if me == self.master_rank() {
+            let mut times: Vec<Option<f64>> = state.reports.iter().map(|r| r.map(|r| r.trace)).collect();
+            let known: Vec<f64> = self.tracing.iter().filter_map(|&r| times[r]).collect();
+            report.imbalance = Some(imbalance(&known));
+            for (r, t) in times.iter_mut().enumerate() {
+                if !self.tracing.contains(&r) {
+                    *t = None;
                 }
             }
-            if tracer_waits {
-                let chunk = match reserve.pop_front() {
-                    Some(c) => Some(c),
-                    None if me == 0 => Some(self.master.next(0)).filter(|c| !c.is_empty()),
-                    None if exhausted => None,
-                    None => {
-                        // Wait for the master's answer.
-                        if !asked {
-                            self.send(0, Message::Ask { frame })?;
-                            asked = true;
-                            // The wait for the answer starts now.
-                            last_heard = Instant::now();
-                        }
-                        Some(Vec::new())
-                    }
-                };
-                match chunk {
-                    Some(c) if c.is_empty() => {}
-                    Some(c) => {
-                        my_tiles += c.len() as u32;
-                        let _ = lanes.grants.send(Some(c));
-                        tracer_waits = false;
-                        busy = true;
-                    }
-                    None => {
-                        let _ = lanes.grants.send(None);
-                        tracer_waits = false;
-                    }
-                }
-            }
-            // No chunk is asked for ahead of need: one held in reserve at the end of a frame is
-            // work another rank could have taken (2 ranks: 1.54x over one with it, see
-            // docs/distributed.md); an ask costs a round trip of at most `POLL`.
-            // Tiles this rank traced.
-            for t in traced_tiles {
-                busy = true;
-                match gather.as_mut() {
-                    Some(g) => {
-                        g.paste(&t);
-                    }
-                    None => {
-                        let m = tile_message(frame, &t);
-                        self.send(0, m)?;
-                    }
-                }
-            }
-            // Messages from the other ranks.
-            while let Some((from, message)) = self.receive(frame)? {
-                busy = true;
-                last_heard = Instant::now();
-                match message {
-                    Message::Ask { .. } if me == 0 => {
-                        let chunk = self.master.next(from);
-                        self.send(from, Message::Grant { frame, tiles: chunk })?;
-                    }
-                    Message::Grant { tiles, .. } if me != 0 => {
-                        asked = false;
-                        if tiles.is_empty() {
-                            exhausted = true;
-                        } else {
-                            reserve.push_back(tiles);
-                        }
-                    }
-                    Message::Tile { tile, rgba, depth, colors, ao, .. } if me == 0 => {
-                        let pasted = tile_pixels(tile, rgba, &depth, &colors, &ao)
-                            .is_some_and(|t| gather.as_mut().is_some_and(|g| g.paste(&t)));
-                        if !pasted {
-                            return Err(Fault::Damaged { rank: from, why: format!("tile {tile} of another size") });
-                        }
-                    }
-                    Message::Done { report, .. } if me == 0 => reports[from] = Some(report),
-                    other => {
-                        return Err(Fault::Damaged { rank: from, why: format!("{other:?} out of turn") });
-                    }
-                }
-            }
-            if traced && traced_at.is_none() {
-                traced_at = Some(Instant::now());
-            }
-            if traced {
-                match gather.as_ref() {
-                    None => {
-                        let (seconds, rays) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
-                        let r = RankReport { tiles: my_tiles, rays, trace: seconds.as_secs_f64() };
-                        self.send(0, Message::Done { frame, report: r })?;
-                        self.flush(frame)?;
-                        report.tiles = my_tiles;
-                        report.wait += traced_at.map_or(Duration::ZERO, |t| t.elapsed());
-                        return Ok(None);
-                    }
-                    Some(g) if g.count == tiles && (1..size).all(|r| reports[r].is_some()) => {
-                        let (seconds, _) = *tracing.lock().unwrap_or_else(|e| e.into_inner());
-                        let mut times = vec![seconds.as_secs_f64()];
-                        times.extend(reports[1..].iter().flatten().map(|r| r.trace));
-                        let known: Vec<Option<f64>> = times.iter().map(|&t| Some(t)).collect();
-                        if !self.master.traces(0) {
-                            times.remove(0);
-                        }
-                        report.imbalance = Some(imbalance(&times));
-                        report.tiles = my_tiles;
-                        report.wait += traced_at.map_or(Duration::ZERO, |t| t.elapsed());
-                        self.master.end(&known);
-                        let g = gather.take().expect("rank 0 gathers");
-                        return Ok(Some(g.finish()));
-                    }
-                    Some(_) => {}
-                }
-            }
-            if !busy {
-                // Silent past the limit: on rank 0, ranks that have not finished; on another
-                // rank, the master, while this rank's tracer waits for tiles.
-                let silent = last_heard.elapsed() > self.limit();
-                let unfinished: Vec<usize> = (1..size).filter(|&r| reports[r].is_none()).collect();
-                if silent && me == 0 && !unfinished.is_empty() {
-                    let waited = last_heard.elapsed();
-                    return Err(Fault::Silent { ranks: unfinished, waited, frame, waiting_for: "tiles" });
-                }
-                if silent && me != 0 && tracer_waits {
-                    let waited = last_heard.elapsed();
-                    return Err(Fault::Silent { ranks: vec![0], waited, frame, waiting_for: "tiles to trace" });
-                }
-            }
+            self.link.end(times).map_err(Fault::Transport)?;
         }
-    }
-
-    /// A rank other than 0: the display rank's picture of `frame`, and the time waited for it
-    /// (bounded).
-    fn await_picture(&mut self, frame: u64) -> Result<(Rendered, Duration), Fault> {
-        let start = Instant::now();
-        loop {
-            match self.receive(frame)? {
-                Some((from, Message::Picture { width, height, rgba, depth, .. })) => {
-                    let p = picture(width, height, rgba, &depth)
-                        .ok_or_else(|| Fault::Damaged { rank: from, why: "a picture of another size".into() })?;
-                    return Ok((p, start.elapsed()));
-                }
-                Some((from, other)) => {
-                    return Err(Fault::Damaged { rank: from, why: format!("{other:?} out of turn") });
-                }
-                None if start.elapsed() > self.limit() => {
-                    let waited = start.elapsed();
-                    return Err(Fault::Silent { ranks: vec![0], waited, frame, waiting_for: "the picture" });
-                }
-                None => std::thread::sleep(IDLE),
-            }
-        }
-    }
-
-    /// Waits until every send has left (bounded).
-    fn flush(&mut self, frame: u64) -> Result<(), Fault> {
-        let start = Instant::now();
-        while !self.transport.flushed().map_err(Fault::Transport)? {
-            if start.elapsed() > self.limit() {
-                return Err(Fault::Silent {
-                    ranks: vec![0],
-                    waited: start.elapsed(),
-                    frame,
-                    waiting_for: "its tiles to be taken",
-                });
-            }
-            std::thread::sleep(IDLE);
-        }
-        Ok(())
+        Ok(state.canvas.picture)
     }
 }
-
-/// Rank 0's picture of a pass, its colours before rounding when kept, and its AO apart when
-/// denoised.
-type Gathered = (Rendered, Option<Vec<glam::Vec4>>, Option<Vec<AoPixel>>);
 
 /// What every rank traces this frame.
 struct Shared<'a> {
@@ -731,91 +697,381 @@ struct Shared<'a> {
     /// Tiles carry colours before rounding (`Renderer::linear`), and AO apart (`denoises`).
     linear: bool,
     ao: bool,
+    /// The picture is shown (its parts sent): not a batch frame's pass before its last.
+    present: bool,
 }
 
-/// The message loop's ends of the channels to the tracer.
-struct Lanes<'a> {
-    events: Receiver<TracerEvent>,
-    grants: Sender<Option<Vec<u32>>>,
-    traced: &'a AtomicBool,
+/// A shared frame as it goes on this rank.
+struct FrameState<'a> {
+    shared: &'a Shared<'a>,
+    grid: TileGrid,
+    bands: Bands,
+    /// This rank's band, as its rows arrive (None: it has none).
+    band: Option<BandRows>,
+    history: HistoryState,
+    canvas: Canvas,
+    wants: &'a [Option<Rect>],
+    /// The master's rank: every rank's report.
+    reports: Vec<Option<RankReport>>,
+    /// Where the link is inline: which ranks have done their part.
+    finished: Vec<bool>,
+    /// Tiles and pixels this rank traced.
+    tiles_here: u32,
+    pixels_here: u64,
+    /// History rows fetched for the band, for the renderer once the tracer has let go of it.
+    pending_rows: Vec<(usize, Vec<Past>)>,
 }
 
-/// What the tracer tells the message loop.
-enum TracerEvent {
-    Ask,
-    Tile(TilePixels),
+/// The rows of the last frame this rank's band follows back into and does not hold: asked of
+/// the ranks that held them, and their answers.
+#[derive(Default)]
+struct HistoryState {
+    asked: bool,
+    /// Answers awaited, per rank asked.
+    awaited: Vec<(usize, u32)>,
 }
 
-/// The tracer's ends: it asks for tiles and hands them back through the message loop.
-struct ChannelWork<'a> {
-    events: Mutex<Sender<TracerEvent>>,
-    grants: Mutex<Receiver<Option<Vec<u32>>>>,
-    abort: &'a AtomicBool,
-}
-
-impl TileWork for ChannelWork<'_> {
-    fn next(&self) -> Option<Vec<u32>> {
-        let grants = self.grants.lock().unwrap_or_else(|e| e.into_inner());
-        self.events.lock().unwrap_or_else(|e| e.into_inner()).send(TracerEvent::Ask).ok()?;
+impl Node {
+    /// Phase 1 of a shared frame, until this rank's tracer has traced its last tile: each tile
+    /// it traces sent in rows where they are needed (its own band's kept), and what other
+    /// ranks send taken in.
+    fn route_while_tracing(
+        &mut self,
+        state: &mut FrameState,
+        tiles: &Receiver<TilePixels>,
+        traced: &AtomicBool,
+        starved: &AtomicBool,
+    ) -> Result<(), Fault> {
+        let frame = state.shared.frame;
         loop {
-            match grants.recv_timeout(Duration::from_millis(20)) {
-                Ok(g) => return g,
-                Err(RecvTimeoutError::Timeout) if !self.abort.load(Ordering::Acquire) => {}
-                Err(_) => return None,
+            // Read before the tiles are drained: a tracer done has handed over every tile.
+            let done = traced.load(Ordering::Acquire);
+            while let Ok(t) = tiles.try_recv() {
+                self.route(state, t)?;
+            }
+            if done {
+                return Ok(());
+            }
+            if starved.load(Ordering::Acquire) {
+                let master = self.master_rank();
+                return Err(Fault::Silent {
+                    ranks: vec![master],
+                    waited: self.limit(),
+                    frame,
+                    waiting_for: "tiles to trace",
+                });
+            }
+            // (Nothing here waits on another rank for long: the tracer's wait for tiles is
+            // bounded, and so is every wait after it.)
+            if let Some((from, m)) = self.receive(frame, Duration::from_micros(500))? {
+                self.take(state, from, m)?;
             }
         }
     }
 
-    fn done(&self, pixels: TilePixels) {
-        let _ = self.events.lock().unwrap_or_else(|e| e.into_inner()).send(TracerEvent::Tile(pixels));
+    /// A tile this rank traced: its rows to the ranks whose bands hold them or read them.
+    fn route(&mut self, state: &mut FrameState, t: TilePixels) -> Result<(), Fault> {
+        let (x0, y0, tw, th) = state.grid.rect(t.tile);
+        state.tiles_here += 1;
+        state.pixels_here += (tw * th) as u64;
+        let me = self.rank();
+        let how = self.link.compression();
+        let shared = state.shared;
+        for (to, rows, whole) in state.bands.destinations(y0..y0 + th, shared.ao) {
+            let at = (rows.start - y0) * tw..(rows.end - y0) * tw;
+            let ao_of = |lit: bool| -> Vec<AoPixel> {
+                t.ao.get(at.clone()).map_or_else(Vec::new, |a| {
+                    if lit {
+                        a.to_vec()
+                    } else {
+                        // The rows around a band: what guides its denoising, not what AO darkens.
+                        a.iter().map(|p| AoPixel { lit: glam::Vec3::ZERO, ..*p }).collect()
+                    }
+                })
+            };
+            if to == me {
+                let ao = if shared.ao { &t.ao[at.clone()] } else { &[][..] };
+                let piece = Piece {
+                    x: x0,
+                    width: tw,
+                    first: rows.start,
+                    rows: rows.len(),
+                    whole,
+                    rgba: &t.rgba[4 * at.start..4 * at.end],
+                    depth: &t.depth[at.clone()],
+                    colors: if shared.linear { &t.colors[at.clone()] } else { &[] },
+                    ao,
+                };
+                let band = state.band.as_mut().expect("rows for this rank: it has a band");
+                if !band.paste(&piece) {
+                    return Err(Fault::Damaged { rank: me, why: format!("tile {} of another size", t.tile) });
+                }
+                continue;
+            }
+            let m = Message::Rows {
+                frame: shared.frame,
+                tile: t.tile,
+                first_row: rows.start as u32,
+                rows: rows.len() as u32,
+                full: whole,
+                rgba: packed(if whole && !shared.linear { &t.rgba[4 * at.start..4 * at.end] } else { &[] }, how),
+                depth: packed(if whole { &t.depth[at.clone()] } else { &[] }, how),
+                colors: packed(if whole && shared.linear { &t.colors[at.clone()] } else { &[] }, how),
+                ao: packed(&if shared.ao { ao_of(whole) } else { Vec::new() }, how),
+            };
+            self.send(to, m)?;
+        }
+        Ok(())
+    }
+
+    /// A message of this frame from rank `from`.
+    fn take(&mut self, state: &mut FrameState, from: usize, m: Message) -> Result<(), Fault> {
+        let damaged = |why: String| Fault::Damaged { rank: from, why };
+        match m {
+            Message::Rows { tile, first_row, rows, full, rgba, depth, colors, ao, .. } => {
+                let (x, _, width, _) = state.grid.rect(tile.min(state.grid.count().saturating_sub(1)));
+                let (rgba, depth, colors, ao) = (
+                    rgba.unpack().map_err(damaged)?,
+                    unpacked::<f32>(depth).ok_or_else(|| damaged("damaged depths".into()))?,
+                    unpacked::<glam::Vec4>(colors).ok_or_else(|| damaged("damaged colours".into()))?,
+                    unpacked::<AoPixel>(ao).ok_or_else(|| damaged("a damaged AO layer".into()))?,
+                );
+                let piece = Piece {
+                    x,
+                    width,
+                    first: first_row as usize,
+                    rows: rows as usize,
+                    whole: full,
+                    rgba: &rgba,
+                    depth: &depth,
+                    colors: &colors,
+                    ao: &ao,
+                };
+                let pasted = tile < state.grid.count() && state.band.as_mut().is_some_and(|b| b.paste(&piece));
+                if !pasted {
+                    return Err(damaged(format!("rows {first_row}.. of tile {tile}, not for this rank's band")));
+                }
+            }
+            Message::Part { rect, rgba, depth, .. } => {
+                let rgba = rgba.unpack().map_err(damaged)?;
+                let depth = unpacked::<f32>(depth).ok_or_else(|| damaged("damaged depths".into()))?;
+                if !state.canvas.paste(rect, &rgba, &depth) {
+                    return Err(damaged(format!("a part {rect:?} of the picture this rank did not ask for")));
+                }
+            }
+            Message::History { first, rows, held, past, .. } => {
+                let past: Vec<Past> = unpacked(past).ok_or_else(|| damaged("damaged history rows".into()))?;
+                if !held {
+                    return Err(damaged(format!(
+                        "no history of rows {first}..{} (it does not hold them)",
+                        first + rows
+                    )));
+                }
+                let Some(k) = state.history.awaited.iter().position(|(r, _)| *r == from) else {
+                    return Err(damaged("history rows this rank did not ask for".into()));
+                };
+                state.history.awaited[k].1 -= 1;
+                if state.history.awaited[k].1 == 0 {
+                    state.history.awaited.remove(k);
+                }
+                state.pending_rows.push((first as usize, past));
+            }
+            Message::Done { report, .. } if from < state.reports.len() => state.reports[from] = Some(report),
+            Message::Finished { .. } if from < state.finished.len() => state.finished[from] = true,
+            other => return Err(damaged(format!("{other:?} out of turn"))),
+        }
+        Ok(())
     }
 }
 
-/// Rank 0's picture, tile by tile.
-struct Gather {
-    grid: TileGrid,
-    rgba: Vec<u8>,
-    depth: Vec<f32>,
-    colors: Option<Vec<glam::Vec4>>,
-    ao: Option<Vec<AoPixel>>,
-    have: Vec<bool>,
-    count: u32,
+impl Node {
+    /// Phase 2 of a shared frame: this rank's band added up and denoised once its rows are in
+    /// (the last frame's rows it follows back into fetched first), its parts sent to the ranks
+    /// that want them; until this rank's picture is whole (and, on the master's rank, every
+    /// rank has reported).
+    fn finish(
+        &mut self,
+        state: &mut FrameState,
+        renderer: &mut Renderer,
+        report: &mut FrameReport,
+    ) -> Result<(), Fault> {
+        let shared = state.shared;
+        let (frame, me) = (shared.frame, self.rank());
+        let start = Instant::now();
+        let mut last_heard = Instant::now();
+        let mut said_finished = false;
+        loop {
+            if state.band.as_ref().is_some_and(BandRows::complete) {
+                if !state.history.asked {
+                    report.band_wait = start.elapsed();
+                    state.history.asked = true;
+                    self.ask_history(state, renderer)?;
+                }
+                if state.history.awaited.is_empty() {
+                    self.band_done(state, renderer)?;
+                    last_heard = Instant::now();
+                }
+            }
+            let band_done = state.band.is_none();
+            let reports_due = me == self.master_rank() && self.tracing.iter().any(|&r| state.reports[r].is_none());
+            let parts_due = shared.present && !state.canvas.complete();
+            if band_done && !reports_due && !parts_due {
+                if !self.link.is_inline() {
+                    return Ok(());
+                }
+                // Glray's messages move only inside the host's GL calls here: every rank stays
+                // until every other has done its part, so that each is there to answer.
+                if !said_finished {
+                    said_finished = true;
+                    state.finished[me] = true;
+                    for r in (0..self.size()).filter(|&r| r != me) {
+                        self.send(r, Message::Finished { frame })?;
+                    }
+                }
+                if state.finished.iter().all(|&f| f) {
+                    return Ok(());
+                }
+            }
+            match self.receive(frame, WAKE)? {
+                Some((from, m)) => {
+                    self.take(state, from, m)?;
+                    last_heard = Instant::now();
+                }
+                None if last_heard.elapsed() > self.limit() => {
+                    let waited = last_heard.elapsed();
+                    let others: Vec<usize> = (0..self.size()).filter(|&r| r != me).collect();
+                    let (ranks, waiting_for) = if !state.history.awaited.is_empty() {
+                        (state.history.awaited.iter().map(|(r, _)| *r).collect(), "the last frame's denoising rows")
+                    } else if !band_done {
+                        (others, "the rows of its band traced elsewhere")
+                    } else if parts_due {
+                        (self.tracing.iter().copied().filter(|&r| r != me).collect(), "its part of the picture")
+                    } else if reports_due {
+                        (self.tracing.iter().copied().filter(|&r| state.reports[r].is_none()).collect(), "tiles")
+                    } else {
+                        ((0..self.size()).filter(|&r| !state.finished[r]).collect(), "the others to finish the frame")
+                    };
+                    return Err(Fault::Silent { ranks, waited, frame, waiting_for });
+                }
+                None => {}
+            }
+        }
+    }
+
+    /// The last frame's rows the band follows back into and does not hold, asked of the ranks
+    /// whose bands held them (their bands were these bands: the window and ranks are the same,
+    /// or nothing is followed).
+    fn ask_history(&mut self, state: &mut FrameState, renderer: &Renderer) -> Result<(), Fault> {
+        let band = state.band.as_ref().expect("a band");
+        let Some(layer) = band.layer().filter(|_| state.shared.ao) else { return Ok(()) };
+        let missing = renderer.history_missing(state.shared.merged, &band.band, layer);
+        let mut asks: Vec<(usize, Vec<(u32, u32)>)> = Vec::new();
+        for run in missing {
+            // A run may lie across two bands: cut it where their owners change.
+            let mut y = run.start;
+            while y < run.end {
+                let owner = state.bands.owner(y).unwrap_or(0);
+                let mut end = y + 1;
+                while end < run.end && state.bands.owner(end) == Some(owner) {
+                    end += 1;
+                }
+                match asks.iter_mut().find(|(r, _)| *r == owner) {
+                    Some((_, rows)) => rows.push((y as u32, end as u32)),
+                    None => asks.push((owner, vec![(y as u32, end as u32)])),
+                }
+                y = end;
+            }
+        }
+        for (owner, rows) in asks {
+            state.history.awaited.push((owner, rows.len() as u32));
+            self.send(owner, Message::HistoryAsk { frame: state.shared.frame, rows })?;
+        }
+        Ok(())
+    }
+
+    /// The band's rows are all here, and the rows of history it needs: its pass added up and
+    /// denoised, its history kept for the other ranks to fetch, its parts sent.
+    fn band_done(&mut self, state: &mut FrameState, renderer: &mut Renderer) -> Result<(), Fault> {
+        let shared = state.shared;
+        for (first, past) in state.pending_rows.drain(..) {
+            renderer.take_history_rows(first, &past);
+        }
+        let (band, picture, colors, ao) = state.band.take().expect("a band").into_pass();
+        let picture = renderer.add_band_pass(shared.merged, shared.key, &band, picture, colors, ao);
+        if shared.ao {
+            self.link.publish(shared.frame, renderer.held_history()).map_err(Fault::Transport)?;
+        }
+        if !shared.present {
+            return Ok(());
+        }
+        let me = self.rank();
+        let how = self.link.compression();
+        let rows = band.rows.start as u32..band.rows.end as u32;
+        for (r, want) in state.wants.iter().enumerate() {
+            let Some(part) = want.and_then(|w| w.rows(rows.clone())) else { continue };
+            let (rgba, depth) = cut(&picture, band.rows.start, part);
+            if r == me {
+                if !state.canvas.paste(part, &rgba, &depth) {
+                    return Err(Fault::Damaged { rank: me, why: format!("a part {part:?} outside its own") });
+                }
+            } else {
+                let m = Message::Part {
+                    frame: shared.frame,
+                    rect: part,
+                    rgba: packed(&rgba, how),
+                    depth: packed(&depth, how),
+                };
+                self.send(r, m)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// A rank other than 0, in a frame rank 0 renders alone: its part of the picture, and the
+    /// time waited for it (bounded).
+    fn await_parts(&mut self, frame: u64, canvas: &mut Canvas) -> Result<Duration, Fault> {
+        let start = Instant::now();
+        while !canvas.complete() {
+            match self.receive(frame, WAKE)? {
+                Some((from, Message::Part { rect, rgba, depth, .. })) => {
+                    let damaged = |why: String| Fault::Damaged { rank: from, why };
+                    let rgba = rgba.unpack().map_err(damaged)?;
+                    let depth = unpacked::<f32>(depth).ok_or_else(|| damaged("damaged depths".into()))?;
+                    if !canvas.paste(rect, &rgba, &depth) {
+                        return Err(damaged(format!("a part {rect:?} of the picture this rank did not ask for")));
+                    }
+                }
+                Some((from, other)) => {
+                    return Err(Fault::Damaged { rank: from, why: format!("{other:?} out of turn") });
+                }
+                None if start.elapsed() > self.limit() => {
+                    return Err(Fault::Silent {
+                        ranks: vec![0],
+                        waited: start.elapsed(),
+                        frame,
+                        waiting_for: "the picture",
+                    });
+                }
+                None => {}
+            }
+        }
+        Ok(start.elapsed())
+    }
 }
 
-impl Gather {
-    fn new(grid: TileGrid, linear: bool, ao: bool) -> Gather {
-        let n = grid.width as usize * grid.height as usize;
-        Gather {
-            grid,
-            rgba: vec![0; 4 * n],
-            depth: vec![1.0; n],
-            colors: linear.then(|| vec![glam::Vec4::ZERO; n]),
-            ao: ao.then(|| vec![AoPixel::NONE; n]),
-            have: vec![false; grid.count() as usize],
-            count: 0,
-        }
-    }
-
-    fn paste(&mut self, t: &TilePixels) -> bool {
-        let image = LayersMut {
-            rgba: &mut self.rgba,
-            depth: &mut self.depth,
-            colors: self.colors.as_deref_mut(),
-            ao: self.ao.as_deref_mut(),
-        };
-        if !self.grid.paste(t, image) {
-            return false;
-        }
-        if !std::mem::replace(&mut self.have[t.tile as usize], true) {
-            self.count += 1;
-        }
-        true
-    }
-
-    fn finish(self) -> Gathered {
-        let (width, height) = (self.grid.width, self.grid.height);
-        (Rendered { width, height, rgba: self.rgba, depth: self.depth }, self.colors, self.ao)
-    }
+/// What a rank shows where the shared picture is not sent to it: what its frame cleared to, at
+/// the depth it cleared to (far), which a sort-last compositor passes over.
+fn background(mine: &Frame, options: &glray_render::Options) -> Rendered {
+    let (w, h) = mine.size();
+    let clear = Frame {
+        clear_color: mine.clear_color,
+        cleared: true,
+        depth_cleared: mine.depth_cleared,
+        width: w,
+        height: h,
+        ..Frame::default()
+    };
+    glray_render::render(&clear, w, h, None, options)
 }
 
 /// The meshes and textures a frame draws with.

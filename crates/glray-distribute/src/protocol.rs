@@ -1,10 +1,12 @@
 //! The messages ranks exchange, each carrying the frame it belongs to (a rank may be a frame
-//! ahead of another: its messages wait until that frame), encoded with postcard; byte fields as
-//! one run of bytes (serde_bytes), not as a sequence of numbers. Pixels travel as their bytes (little-endian floats: every rank of a job is the same kind of machine; the
-//! scene encoding checks the byte order of the first message).
+//! ahead of another: its messages wait until that frame), encoded with postcard; big fields
+//! shuffled and compressed (`pack`). Pixels travel as their bytes (little-endian floats: every
+//! rank of a job is the same kind of machine; the scene encoding checks the byte order of the
+//! first message).
 
-use glray_render::denoise::AoPixel;
 use serde::{Deserialize, Serialize};
+
+use crate::pack::{Compression, Packed};
 
 /// What a rank says of its frame to rank 0 when its share is traced.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -15,15 +17,33 @@ pub struct RankReport {
     pub trace: f64,
 }
 
+/// A rectangle of the window, in pixels, rows counted from the bottom (GL's).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct Rect {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Rect {
+    pub fn area(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height)
+    }
+
+    /// The part of this rectangle in rows `rows`, if any.
+    pub fn rows(&self, rows: std::ops::Range<u32>) -> Option<Rect> {
+        let (y0, y1) = (self.y.max(rows.start), (self.y + self.height).min(rows.end));
+        (y1 > y0 && self.width > 0).then_some(Rect { y: y0, height: y1 - y0, ..*self })
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum Message {
-    /// A rank's captured frame (`glray_scene::encode`), with what its settings must agree on.
-    Scene {
-        frame: u64,
-        settings: u64,
-        #[serde(with = "serde_bytes")]
-        scene: Vec<u8>,
-    },
+    /// A rank's captured frame (`glray_scene::encode`, packed), with what its settings must
+    /// agree on, and the part of the window its own data covers (None: nothing drawn): the part
+    /// of the picture it is sent back (`Part`).
+    Scene { frame: u64, settings: u64, want: Option<Rect>, scene: Packed },
     /// Rank 0's settings changed (from the live control panel): every rank makes the same
     /// changes (setting, value) before it traces this frame, after which their settings agree
     /// on `settings` again. Sent before rank 0's scene of the frame.
@@ -32,34 +52,33 @@ pub enum Message {
     Ask { frame: u64 },
     /// The master's answer: tiles to trace, or none (the frame's tiles are all handed out).
     Grant { frame: u64, tiles: Vec<u32> },
-    /// A traced tile for the display rank: RGBA bytes, and as bytes its depths, linear colours
-    /// and the AO kept apart for denoising (`AoPixel`s; empty when not denoised).
-    Tile {
+    /// Rows `first_row..first_row + rows` of a traced tile, for the rank whose band holds them
+    /// (`full`: its depth, colours before rounding or RGBA, and AO) or whose band's denoising
+    /// reads them (only their AO, without `lit`).
+    Rows {
         frame: u64,
         tile: u32,
-        #[serde(with = "serde_bytes")]
-        rgba: Vec<u8>,
-        #[serde(with = "serde_bytes")]
-        depth: Vec<u8>,
-        #[serde(with = "serde_bytes")]
-        colors: Vec<u8>,
-        #[serde(with = "serde_bytes")]
-        ao: Vec<u8>,
+        first_row: u32,
+        rows: u32,
+        full: bool,
+        rgba: Packed,
+        depth: Packed,
+        colors: Packed,
+        ao: Packed,
     },
+    /// The last frame's denoising history of these rows, asked of the rank whose band held
+    /// them.
+    HistoryAsk { frame: u64, rows: Vec<(u32, u32)> },
+    /// The answer: the rows from `first` (`Past`s), or `held` false when they are not held.
+    History { frame: u64, first: u32, rows: u32, held: bool, past: Packed },
+    /// A part of the finished picture, for the rank whose data covers it.
+    Part { frame: u64, rect: Rect, rgba: Packed, depth: Packed },
     /// A rank's share is traced and every tile of it sent.
     Done { frame: u64, report: RankReport },
-    /// The display rank's finished picture, for every other rank's framebuffer: a sort-last
-    /// compositor (IceT) takes each rank's pixels only where that rank's own data projects, so
-    /// every rank must hold the whole picture for the composite to be whole.
-    Picture {
-        frame: u64,
-        width: u32,
-        height: u32,
-        #[serde(with = "serde_bytes")]
-        rgba: Vec<u8>,
-        #[serde(with = "serde_bytes")]
-        depth: Vec<u8>,
-    },
+    /// A rank has done its part of the frame (sent only where glray's messages move on the
+    /// host's thread: every rank waits for every other's before it leaves the frame, so that
+    /// each is there to answer the others' asks).
+    Finished { frame: u64 },
 }
 
 impl Message {
@@ -69,32 +88,50 @@ impl Message {
             | Message::Settings { frame, .. }
             | Message::Ask { frame }
             | Message::Grant { frame, .. }
-            | Message::Tile { frame, .. }
+            | Message::Rows { frame, .. }
+            | Message::HistoryAsk { frame, .. }
+            | Message::History { frame, .. }
+            | Message::Part { frame, .. }
             | Message::Done { frame, .. }
-            | Message::Picture { frame, .. } => *frame,
+            | Message::Finished { frame } => *frame,
         }
     }
 
+    /// The bytes its packed fields unpack to and travel as (what compression saved).
+    pub fn packed_sizes(&self) -> (u64, u64) {
+        let fields: Vec<&Packed> = match self {
+            Message::Scene { scene, .. } => vec![scene],
+            Message::Rows { rgba, depth, colors, ao, .. } => vec![rgba, depth, colors, ao],
+            Message::History { past, .. } => vec![past],
+            Message::Part { rgba, depth, .. } => vec![rgba, depth],
+            _ => vec![],
+        };
+        fields.iter().map(|p| p.sizes()).fold((0, 0), |(r, s), (a, b)| (r + a, s + b))
+    }
+
     /// The message's bytes. A scene goes as its own bytes after a short header (`RAW_SCENE`,
-    /// frame, settings): at 10M triangles it is 400 MB, and every copy of it costs.
+    /// frame, settings, the part wanted, how it is packed): at 10M triangles it is 400 MB, and
+    /// every copy of it costs.
     pub fn encode(self) -> Vec<u8> {
-        if let Message::Scene { frame, settings, mut scene } = self {
+        if let Message::Scene { frame, settings, want, scene } = self {
+            let (how, value_size, raw, mut bytes) = scene.into_parts();
             let mut header = Vec::with_capacity(RAW_HEADER);
             header.push(RAW_SCENE);
             header.extend_from_slice(&frame.to_le_bytes());
             header.extend_from_slice(&settings.to_le_bytes());
-            scene.splice(0..0, header);
-            return scene;
+            let w = want.unwrap_or(Rect { x: 0, y: 0, width: 0, height: 0 });
+            header.push(u8::from(want.is_some()));
+            for v in [w.x, w.y, w.width, w.height] {
+                header.extend_from_slice(&v.to_le_bytes());
+            }
+            header.extend_from_slice(&raw.to_le_bytes());
+            header.push(how);
+            header.extend_from_slice(&value_size.to_le_bytes());
+            bytes.splice(0..0, header);
+            return bytes;
         }
-        let room = 64
-            + match &self {
-                Message::Tile { rgba, depth, colors, ao, .. } => rgba.len() + depth.len() + colors.len() + ao.len(),
-                Message::Picture { rgba, depth, .. } => rgba.len() + depth.len(),
-                Message::Grant { tiles, .. } => 5 * tiles.len(),
-                _ => 0,
-            };
         // Writing to a Vec cannot fail; every message serializes.
-        postcard::to_extend(&self, Vec::with_capacity(room)).expect("a message encodes")
+        postcard::to_extend(&self, Vec::with_capacity(64 + self.packed_sizes().1 as usize)).expect("a message encodes")
     }
 
     pub fn decode(mut bytes: Vec<u8>) -> Result<Message, String> {
@@ -103,9 +140,19 @@ impl Message {
                 return Err(format!("a scene message cut short ({} bytes)", bytes.len()));
             }
             let word = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
+            let half = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
             let (frame, settings) = (word(1), word(9));
+            let rect = Rect { x: half(18), y: half(22), width: half(26), height: half(30) };
+            let want = (bytes[17] != 0).then_some(rect);
+            let (raw, how) = (word(34), bytes[42]);
+            let value_size = u16::from_le_bytes([bytes[43], bytes[44]]);
             bytes.drain(..RAW_HEADER);
-            return Ok(Message::Scene { frame, settings, scene: bytes });
+            return Ok(Message::Scene {
+                frame,
+                settings,
+                want,
+                scene: Packed::from_parts(how, value_size, raw, bytes),
+            });
         }
         postcard::from_bytes(&bytes).map_err(|e| format!("a damaged message ({} bytes): {e}", bytes.len()))
     }
@@ -114,60 +161,19 @@ impl Message {
 /// The first byte of a scene message: never the first byte of a postcard-encoded `Message`
 /// (its variant's number, a varint below 128).
 const RAW_SCENE: u8 = 0xFF;
-const RAW_HEADER: usize = 1 + 8 + 8;
+/// Marker, frame, settings, the part wanted (a flag and four numbers), the raw size, how it is
+/// packed (`Packed`'s kind and value size).
+const RAW_HEADER: usize = 1 + 8 + 8 + 1 + 16 + 8 + 1 + 2;
 
-/// A tile's pixels as a message.
-pub fn tile_message(frame: u64, t: &glray_render::tiles::TilePixels) -> Message {
-    Message::Tile {
-        frame,
-        tile: t.tile,
-        rgba: t.rgba.clone(),
-        depth: bytemuck::cast_slice(&t.depth).to_vec(),
-        colors: bytemuck::cast_slice(&t.colors).to_vec(),
-        ao: bytemuck::cast_slice(&t.ao).to_vec(),
-    }
+/// The values of a packed field of `size`-byte values (None: damaged, or not whole values).
+pub fn unpacked<T: bytemuck::Pod>(p: Packed) -> Option<Vec<T>> {
+    let bytes = p.unpack().ok()?;
+    (bytes.len() % std::mem::size_of::<T>() == 0).then(|| bytemuck::pod_collect_to_vec(&bytes))
 }
 
-/// A picture as a message.
-pub fn picture_message(frame: u64, r: &glray_render::Rendered) -> Message {
-    Message::Picture {
-        frame,
-        width: r.width,
-        height: r.height,
-        rgba: r.rgba.clone(),
-        depth: r.depth.iter().flat_map(|d| d.to_le_bytes()).collect(),
-    }
-}
-
-/// A picture from a message's fields (None when the sizes do not agree).
-pub fn picture(width: u32, height: u32, rgba: Vec<u8>, depth: &[u8]) -> Option<glray_render::Rendered> {
-    let n = width as usize * height as usize;
-    if rgba.len() != 4 * n || depth.len() != 4 * n {
-        return None;
-    }
-    let depth = depth.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
-    Some(glray_render::Rendered { width, height, rgba, depth })
-}
-
-/// A tile's pixels from a message's fields (None when the byte counts are not whole values).
-pub fn tile_pixels(
-    tile: u32,
-    rgba: Vec<u8>,
-    depth: &[u8],
-    colors: &[u8],
-    ao: &[u8],
-) -> Option<glray_render::tiles::TilePixels> {
-    let ao_size = std::mem::size_of::<AoPixel>();
-    if depth.len() % 4 != 0 || colors.len() % 16 != 0 || ao.len() % ao_size != 0 {
-        return None;
-    }
-    let floats =
-        |b: &[u8]| -> Vec<f32> { b.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect() };
-    let depth = floats(depth);
-    let colors = floats(colors).chunks_exact(4).map(glam::Vec4::from_slice).collect();
-    // Copied out (the bytes need not sit at a float's alignment).
-    let ao = bytemuck::pod_collect_to_vec(ao);
-    Some(glray_render::tiles::TilePixels { tile, rgba, depth, colors, ao })
+/// `values` packed as `how` says, shuffled by `T`'s size (a pixel record as one value).
+pub fn packed<T: bytemuck::Pod>(values: &[T], how: Compression) -> Packed {
+    Packed::new(bytemuck::cast_slice(values), std::mem::size_of::<T>(), how)
 }
 
 #[cfg(test)]
@@ -175,33 +181,34 @@ mod tests {
     use super::*;
 
     #[test]
-    fn messages_and_tiles_cross_intact() {
-        let t = glray_render::tiles::TilePixels {
+    fn messages_cross_intact() {
+        let how = Compression::Lz4;
+        let depth: Vec<f32> = (0..5000).map(|k| 0.5 + k as f32 * 1e-6).collect();
+        let rows = Message::Rows {
+            frame: 9,
             tile: 3,
-            rgba: vec![1, 2, 3, 4, 5, 6, 7, 8],
-            depth: vec![0.25, 1.0],
-            colors: vec![glam::Vec4::new(0.1, 0.2, 0.3, 1.0), glam::Vec4::ONE],
-            ao: vec![
-                AoPixel { eye: glam::Vec3::new(1.0, 2.0, -3.0), object: 7, hidden: 0.25, ..AoPixel::NONE },
-                AoPixel { normal: glam::Vec3::Z, lit: glam::Vec3::ONE, hidden: 1.0, ..AoPixel::NONE },
-            ],
+            first_row: 64,
+            rows: 10,
+            full: true,
+            rgba: packed(&[7u8; 2000], how),
+            depth: packed(&depth, how),
+            colors: packed::<f32>(&[], how),
+            ao: packed(&[1.5f32; 300], how),
         };
-        let m = Message::decode(tile_message(9, &t).encode()).unwrap();
-        assert_eq!(m.frame(), 9);
-        let Message::Tile { tile, rgba, depth, colors, ao, .. } = m else { panic!("{m:?}") };
-        assert_eq!(tile_pixels(tile, rgba.clone(), &depth, &colors, &ao), Some(t));
-        assert_eq!(tile_pixels(tile, rgba, &depth, &colors, &ao[1..]), None, "AO cut short");
+        let (raw, sent) = rows.packed_sizes();
+        assert!(raw == 2000 + 20000 + 1200 && sent < raw / 3, "{raw} {sent}");
+        let m = Message::decode(rows.clone().encode()).unwrap();
+        assert_eq!(m, rows);
+        let Message::Rows { depth: d, .. } = m else { panic!() };
+        assert_eq!(unpacked::<f32>(d), Some(depth));
         assert!(Message::decode(vec![200, 1]).is_err());
-        let scene = Message::Scene { frame: 3, settings: 99, scene: vec![1, 2, 3] };
-        assert_eq!(Message::decode(scene.clone().encode()), Ok(scene));
+        for want in [None, Some(Rect { x: 1, y: 2, width: 30, height: 40 })] {
+            let scene = Message::Scene { frame: 3, settings: 99, want, scene: Packed::new(&[1, 2, 3], 4, how) };
+            assert_eq!(Message::decode(scene.clone().encode()), Ok(scene));
+        }
         assert!(Message::decode(vec![0xFF, 1, 2]).is_err(), "a scene cut short");
-        let r = glray_render::Rendered { width: 2, height: 1, rgba: vec![9; 8], depth: vec![0.5, 1.0] };
-        let Message::Picture { width, height, rgba, depth, .. } =
-            Message::decode(picture_message(4, &r).encode()).unwrap()
-        else {
-            panic!("not a picture")
-        };
-        assert_eq!(picture(width, height, rgba, &depth), Some(r));
-        assert_eq!(picture(3, 1, vec![0; 8], &[0; 8]), None, "sizes that do not agree");
+        let r = Rect { x: 0, y: 10, width: 5, height: 20 };
+        assert_eq!(r.rows(0..15), Some(Rect { y: 10, height: 5, ..r }));
+        assert_eq!(r.rows(30..40), None);
     }
 }

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use glray_capture::fixed::Context;
 use glray_core::trace::Value::{self, Int, F64};
-use glray_distribute::node::Roles;
+use glray_distribute::node::{Roles, Setup};
 use glray_distribute::transport::memory::MemoryTransport;
 use glray_distribute::{Agreement, Fault, Limits, Node};
 use glray_render::{Effects, Options, Renderer};
@@ -25,6 +25,12 @@ fn call(c: &mut Context, name: &str, args: &[Value<'static>]) {
 /// The frames of `frames` frames drawn by the rank `rank` of `ranks`: a ground (rank 0's) and
 /// its block of the boxes, lit, with the same camera everywhere.
 fn frames_of(rank: usize, ranks: usize, frames: usize) -> Vec<Frame> {
+    frames_moving(rank, ranks, frames, 0.0)
+}
+
+/// `frames_of`, the boxes lifted by `lift` every other frame (their points move up and down
+/// the window from frame to frame: across the ranks' bands).
+fn frames_moving(rank: usize, ranks: usize, frames: usize, lift: f64) -> Vec<Frame> {
     let mut c = Context::default();
     c.set_drawable(W, H);
     call(&mut c, "glMatrixMode", &[Int(0x1701)]);
@@ -51,7 +57,7 @@ fn frames_of(rank: usize, ranks: usize, frames: usize) -> Vec<Frame> {
     call(&mut c, "glEndList", &[]);
     let mine = rank * BOXES / ranks..(rank + 1) * BOXES / ranks;
     (0..frames)
-        .map(|_| {
+        .map(|f| {
             call(&mut c, "glClear", &[Int(0x4100)]);
             call(&mut c, "glLoadIdentity", &[]);
             call(&mut c, "glTranslatef", &[0.0, -1.0, -9.0].map(F64));
@@ -67,7 +73,8 @@ fn frames_of(rank: usize, ranks: usize, frames: usize) -> Vec<Frame> {
             }
             for k in mine.clone() {
                 call(&mut c, "glPushMatrix", &[]);
-                call(&mut c, "glTranslatef", &[-3.75 + 1.5 * k as f64, 0.0, -((k % 2) as f64)].map(F64));
+                let y = lift * (f % 2) as f64;
+                call(&mut c, "glTranslatef", &[-3.75 + 1.5 * k as f64, y, -((k % 2) as f64)].map(F64));
                 call(&mut c, "glScalef", &[0.6, 0.6, 0.6].map(F64));
                 call(&mut c, "glColor3f", &[0.9, 0.2 + 0.12 * k as f64, 0.3].map(F64));
                 // The current normal is part of a draw's state (a list leaves its last one
@@ -92,6 +99,17 @@ fn traced(ranks: usize, preset: &str, frames: usize) -> Vec<glray_render::Render
 }
 
 fn traced_with(ranks: usize, preset: &str, frames: usize, roles: Roles) -> Vec<glray_render::Rendered> {
+    traced_frames(ranks, preset, roles, move |rank| frames_of(rank, ranks, frames))
+}
+
+/// Rank 0's pictures of the frames `frames(rank)` each rank draws, over `ranks` ranks in
+/// threads.
+fn traced_frames(
+    ranks: usize,
+    preset: &str,
+    roles: Roles,
+    frames: impl Fn(usize) -> Vec<Frame> + Send + Sync + Copy + 'static,
+) -> Vec<glray_render::Rendered> {
     let transports = MemoryTransport::group(ranks);
     let handles: Vec<_> = transports
         .into_iter()
@@ -100,20 +118,35 @@ fn traced_with(ranks: usize, preset: &str, frames: usize, roles: Roles) -> Vec<g
             let preset = preset.to_string();
             std::thread::spawn(move || {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-                let limits = Limits { fixed: Some(Duration::from_secs(30)) };
-                let mut node = Node::with_roles(t, Agreement { settings: 7 }, limits, roles);
+                let setup =
+                    Setup { limits: Limits { fixed: Some(Duration::from_secs(30)) }, roles, ..Setup::default() };
+                let mut node = Node::new(t, Agreement { settings: 7 }, setup);
                 let mut renderer = Renderer::new(options(&preset));
-                frames_of(rank, ranks, frames)
+                frames(rank)
                     .iter()
-                    .map(|f| node.frame(f, None, &mut renderer, Some(&pool)).unwrap())
+                    .map(|f| node.frame(f, None, &mut renderer, Some(&pool), true).unwrap())
                     .collect::<Vec<_>>()
             })
         })
         .collect();
     let mut all: Vec<_> = handles.into_iter().map(|h| h.join().unwrap()).collect();
+    // Rank 0 (the display) gets the whole picture; every other rank the part its own boxes
+    // cover, over its background (the clear colour at the far depth), which is what a
+    // sort-last compositor takes from it.
     for (rank, out) in all.iter().enumerate().skip(1) {
         for (k, (p, _)) in out.iter().enumerate() {
-            assert_eq!(p, &all[0][k].0, "rank {rank} returns rank 0's picture of frame {k}");
+            let (p, whole) = (p.as_ref().unwrap(), all[0][k].0.as_ref().unwrap());
+            let mut sent = 0;
+            for i in 0..(W * H) as usize {
+                let same = p.rgba[4 * i..4 * i + 4] == whole.rgba[4 * i..4 * i + 4] && p.depth[i] == whole.depth[i];
+                let background = p.rgba[4 * i..4 * i + 4] == [0, 0, 0, 0] && p.depth[i] == 1.0;
+                assert!(
+                    same || background,
+                    "rank {rank}, frame {k}, pixel {i}: neither the picture nor the background"
+                );
+                sent += usize::from(same && !background);
+            }
+            assert!(sent > 0, "rank {rank} got its part of frame {k}");
         }
     }
     let zero = all.swap_remove(0);
@@ -148,6 +181,24 @@ fn a_scene_split_over_ranks_is_traced_as_one_process_traces_it_all() {
 }
 
 #[test]
+fn a_moving_scene_denoised_in_bands_over_ranks_is_one_process_picture() {
+    // The boxes lifted every other frame, their surfaces move up and down the window by ~40
+    // rows: each band's denoising follows their pixels back into rows another rank's band held
+    // the frame before, fetched from it. Every frame, for 1 to 4 ranks, one process's picture.
+    for preset in ["ao", "full"] {
+        let mut one = Renderer::new(options(preset));
+        let expected: Vec<_> = frames_moving(0, 1, 4, 2.5).iter().map(|f| one.render(f, W, H, None)).collect();
+        assert_ne!(expected[1].rgba, expected[2].rgba, "the scene moves");
+        for ranks in [2, 3, 4, 1] {
+            let got = traced_frames(ranks, preset, Roles::Shared, move |rank| frames_moving(rank, ranks, 4, 2.5));
+            for (k, (g, e)) in got.iter().zip(&expected).enumerate() {
+                assert!(g == e, "{preset}, {ranks} ranks, frame {k}: not the one-process picture");
+            }
+        }
+    }
+}
+
+#[test]
 fn a_silent_rank_is_named_within_the_limit() {
     let mut transports = MemoryTransport::group(3);
     let _silent = transports.pop();
@@ -157,10 +208,11 @@ fn a_silent_rank_is_named_within_the_limit() {
         .enumerate()
         .map(|(rank, t)| {
             std::thread::spawn(move || {
-                let mut node = Node::new(t, Agreement { settings: 1 }, Limits { fixed: Some(limit) });
+                let setup = Setup { limits: Limits { fixed: Some(limit) }, ..Setup::default() };
+                let mut node = Node::new(t, Agreement { settings: 1 }, setup);
                 let start = Instant::now();
                 let f = &frames_of(rank, 3, 1)[0];
-                let r = node.frame(f, None, &mut Renderer::new(options("gl")), None);
+                let r = node.frame(f, None, &mut Renderer::new(options("gl")), None, true);
                 (r.map(|_| ()), start.elapsed())
             })
         })
@@ -184,9 +236,9 @@ fn a_rank_set_differently_is_refused_by_name() {
         .enumerate()
         .map(|(rank, t)| {
             std::thread::spawn(move || {
-                let limits = Limits { fixed: Some(Duration::from_secs(5)) };
-                let mut node = Node::new(t, Agreement { settings: rank as u64 }, limits);
-                node.frame(&frames_of(rank, 2, 1)[0], None, &mut Renderer::new(options("gl")), None).map(|_| ())
+                let setup = Setup { limits: Limits { fixed: Some(Duration::from_secs(5)) }, ..Setup::default() };
+                let mut node = Node::new(t, Agreement { settings: rank as u64 }, setup);
+                node.frame(&frames_of(rank, 2, 1)[0], None, &mut Renderer::new(options("gl")), None, true).map(|_| ())
             })
         })
         .collect();

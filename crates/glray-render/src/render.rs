@@ -12,7 +12,7 @@ use glray_scene::frame::{Frame, TriangleId};
 use rayon::prelude::*;
 
 use crate::bvh_choice::ray_work;
-use crate::denoise::{AoPixel, Denoiser, Motion};
+use crate::denoise::{AoPixel, Band, Denoiser, HeldRows, Motion, Past};
 use crate::gouraud::Gouraud;
 use crate::meshes::Meshes;
 use crate::options::{Options, MAX_PASSES};
@@ -45,6 +45,11 @@ fn to_u8(c: Vec4) -> [u8; 4] {
     ((x + SHIFT) - SHIFT).to_array().map(|x| x as u8)
 }
 
+/// Colours rounded to RGBA bytes as the tracer rounds them.
+pub fn rgba_of(colors: &[Vec4]) -> Vec<u8> {
+    colors.iter().flat_map(|&c| to_u8(c)).collect()
+}
+
 fn from_u8(c: &[u8]) -> Vec4 {
     Vec4::from_array(std::array::from_fn(|i| c[i] as f32 / 255.0))
 }
@@ -71,11 +76,33 @@ pub struct Stats {
     /// Meshes whose tree was refitted from the last frame's (a time step of the same mesh)
     /// rather than built.
     pub refits: u32,
+    /// Triangles of the frame's own (immediate mode, small draws, and draws carried over from
+    /// another camera: `Frame::unified`), whose tree is built every frame: none where everything
+    /// is drawn from kept meshes.
+    pub loose: u64,
     /// Bytes of freed big arrays kept for the next frame's (`glray_core::reuse`), as the frame
     /// ends: more than none only while the program replaces its meshes.
     pub kept_bytes: u64,
     /// Denoising the frame's AO (`denoise`), and composing its picture.
     pub denoise: Duration,
+}
+
+impl Stats {
+    /// An `earlier` pass's work added to this one's: the passes of a batch program's frame
+    /// reported as one frame (times, rays and trees made add up; the rest is this pass's).
+    pub fn and_before(self, earlier: &Stats) -> Stats {
+        Stats {
+            build: self.build + earlier.build,
+            trace: self.trace + earlier.trace,
+            rays: self.rays + earlier.rays,
+            builds: self.builds + earlier.builds,
+            fast_builds: self.fast_builds + earlier.fast_builds,
+            refits: self.refits + earlier.refits,
+            loose: self.loose + earlier.loose,
+            denoise: self.denoise + earlier.denoise,
+            ..self
+        }
+    }
 }
 
 /// Samples added up over frames that show the same scene (for the GL look, one pass: the
@@ -108,7 +135,8 @@ pub struct Renderer {
     stats: Stats,
 }
 
-/// A pass's AO kept apart, and what the denoiser needs of its frame.
+/// A pass's AO kept apart (of its band's `layer_rows`), and what the denoiser needs of its
+/// frame.
 struct Denoised {
     layer: Vec<AoPixel>,
     camera: Camera,
@@ -162,18 +190,11 @@ impl Renderer {
         glray_core::reuse::frame_begins();
         self.meshes.prune();
         let seed = self.next_seed();
-        let effects = self.options.effects;
         let key = self.accumulation_key(frame, width, height);
         let pass = key.map_or(0, |k| self.passes(k));
         if pass >= self.converged_passes() {
-            // Nothing traced: the trees set aside for refits go (as after any frame below).
-            self.meshes.forget_gone();
-            let a = self.accumulation.as_ref().expect("accumulated");
-            let triangles = frame.triangle_count() as u64;
-            let kept_bytes = glray_core::reuse::kept_bytes() as u64;
-            let samples = a.passes * effects.samples.max(1);
-            self.stats = Stats { samples, reused: true, triangles, kept_bytes, ..Stats::default() };
-            return a.last.clone();
+            self.converged(frame.triangle_count() as u64);
+            return self.accumulation.as_ref().expect("accumulated").last.clone();
         }
         let mut job = Job {
             frame,
@@ -216,6 +237,24 @@ impl Renderer {
         } else {
             0
         }
+    }
+
+    /// A frame of `triangles` whose picture has all its samples (`converged_passes`) and is
+    /// shown again, untraced (by `render`, or by each MPI rank from its own last picture):
+    /// counted as any frame, its statistics those of a frame shown again.
+    pub fn shown_again(&mut self, triangles: u64) {
+        self.next_seed();
+        self.converged(triangles);
+    }
+
+    /// The statistics of a converged frame shown again; the trees set aside for refits go (as
+    /// after any frame).
+    fn converged(&mut self, triangles: u64) {
+        self.meshes.forget_gone();
+        let passes = self.accumulation.as_ref().map_or(1, |a| a.passes);
+        let kept_bytes = glray_core::reuse::kept_bytes() as u64;
+        let samples = passes * self.options.effects.samples.max(1);
+        self.stats = Stats { samples, reused: true, triangles, kept_bytes, ..Stats::default() };
     }
 
     /// A frame of `triangles` this renderer takes no part in (another rank traces and shows
@@ -285,33 +324,70 @@ impl Renderer {
         linear: Option<Vec<Vec4>>,
         ao: Option<Vec<AoPixel>>,
     ) -> Rendered {
+        let band = Band::whole(rendered.width as usize, rendered.height as usize);
+        self.add_band_pass(frame, key, &band, rendered, linear, ao)
+    }
+
+    /// `add_pass` for the rows of `band` alone: an MPI rank's band of a frame the ranks
+    /// share, added up and denoised where it was traced. `rendered` and `linear` are the
+    /// band's rows, `ao` its `layer_rows`; the rows of the last frame its denoising follows
+    /// back into must be held (`history_missing`, `take_history_rows`). Every band of a frame
+    /// comes out as that part of the frame added whole (`add_pass`), bit for bit.
+    pub fn add_band_pass(
+        &mut self,
+        frame: &Frame,
+        key: Option<u64>,
+        band: &Band,
+        rendered: Rendered,
+        linear: Option<Vec<Vec4>>,
+        ao: Option<Vec<AoPixel>>,
+    ) -> Rendered {
         let start = Instant::now();
         let denoised =
             ao.zip(camera_of(frame)).map(|(layer, camera)| Denoised { layer, camera, motion: Motion::of(frame) });
-        let picture = self.add_pass_with(key, rendered, linear, denoised);
+        let picture = self.add_pass_with(key, band, rendered, linear, denoised);
         self.stats.denoise = start.elapsed();
         picture
     }
 
-    /// `add_pass`, with the pass's AO kept apart (`denoised`): the colours (without AO) are
-    /// added up as ever, the AO denoised, and the picture is the one times the other.
+    /// The rows of the last frame that denoising `band` of `frame` (its AO `layer`, the band's
+    /// `layer_rows`) follows back into and this renderer does not hold (another rank's band
+    /// held them).
+    pub fn history_missing(&self, frame: &Frame, band: &Band, layer: &[AoPixel]) -> Vec<std::ops::Range<usize>> {
+        self.denoiser.missing(layer, band, &Motion::of(frame))
+    }
+
+    /// The last frame's denoising rows from `first`, fetched from the rank that held them.
+    pub fn take_history_rows(&mut self, first: usize, past: &[Past]) {
+        self.denoiser.take_rows(first, past);
+    }
+
+    /// The rows of the last frame's denoising this renderer holds, for other ranks to fetch.
+    pub fn held_history(&self) -> HeldRows {
+        self.denoiser.held()
+    }
+
+    /// `add_band_pass`, with the pass's AO kept apart (`denoised`): the colours (without AO)
+    /// are added up as ever, the AO denoised, and the picture is the one times the other.
     fn add_pass_with(
         &mut self,
         key: Option<u64>,
+        band: &Band,
         mut rendered: Rendered,
         linear: Option<Vec<Vec4>>,
         denoised: Option<Denoised>,
     ) -> Rendered {
         let samples = self.options.effects.samples.max(1);
-        let width = rendered.width as usize;
         let mut hidden = |passes: u32| {
             let d = denoised.as_ref()?;
             // A still scene (the same as the last frame's: a pass added to its samples) keeps
             // its averages; a moving one's are followed and held to what the frame shows.
             let rays = self.options.effects.ao_samples * samples;
-            Some(self.denoiser.denoise(&d.layer, width, &d.camera, &d.motion, rays, passes > 1))
+            Some(self.denoiser.denoise_band(&d.layer, band, &d.camera, &d.motion, rays, passes > 1))
         };
-        let layer = denoised.as_ref().map(|d| &d.layer[..]);
+        // The band's own rows of the layer (what AO darkens of each pixel).
+        let own = (band.rows.start - band.layer_rows().start) * band.width..;
+        let layer = denoised.as_ref().map(|d| &d.layer[own.start..own.start + band.rows.len() * band.width]);
         let intensity = self.options.effects.ao_intensity;
         match (key, linear) {
             (Some(key), Some(linear)) => {
@@ -599,6 +675,7 @@ impl Job<'_> {
         let scene = Scene::build(frame, meshes, self.options.bvh, ray_work(pixels, &self.options.effects));
         stats.builds = scene.builds;
         stats.fast_builds = scene.fast_builds;
+        stats.loose = frame.triangles.len() as u64;
         stats.refits = scene.refits;
         stats.build = start.elapsed();
         let start = Instant::now();
@@ -751,6 +828,7 @@ impl Job<'_> {
             (stats.rays, stats.triangles) = (stats.rays + s.rays, stats.triangles + s.triangles);
             stats.builds += s.builds;
             stats.fast_builds += s.fast_builds;
+            stats.loose += s.loose;
             stats.refits += s.refits;
             last = Some((rendered, colors));
         }

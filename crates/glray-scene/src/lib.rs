@@ -24,6 +24,7 @@
 //! - `gl_enum`: typed enums for sets of GL values, with GL's numbers by name.
 
 pub mod camera;
+pub mod covered;
 pub mod draw_lighting;
 pub mod encode;
 pub mod facing;

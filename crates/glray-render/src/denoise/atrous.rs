@@ -8,15 +8,33 @@
 //! variance is m (1 - m) / rays, divided by the passes averaged; the filter narrows itself as
 //! the passes add up, and a still scene's average converges to the unfiltered one.
 
+use std::ops::Range;
+
 use glam::{Vec3, Vec4};
 use glray_scene::camera::Camera;
 use rayon::prelude::*;
 
-use super::temporal::{Averaged, Motion};
+use super::temporal::{Averaged, Motion, Rows};
 use super::AoPixel;
 
 /// The passes of the kernel, each twice as wide as the one before.
 const LEVELS: u32 = 5;
+
+/// How many rows above and below a pixel the filter reads, all levels together: 1 + 2 + 4 + 8
+/// + 16.
+pub const FILTER_REACH: usize = (1 << LEVELS) - 1;
+
+/// How many rows above and below a pixel `neighbourhood` reads: its two passes, 1 + 2.
+pub const NEAR_REACH: usize = 3;
+
+/// The rows a pass with taps `step` rows apart can work out from rows `known` of a frame of
+/// `height` rows: all but `step` rows at each end, except at the frame's own edges (where the
+/// taps beyond are left out, not read).
+pub fn within(known: &Range<usize>, step: usize, height: usize) -> Range<usize> {
+    let start = if known.start == 0 { 0 } else { known.start + step };
+    let end = if known.end >= height { height } else { known.end.saturating_sub(step) };
+    start..end.max(start)
+}
 
 /// How many standard deviations of a pixel's noise a neighbour's value may differ by and still
 /// count fully (SVGF's sigma_l).
@@ -70,22 +88,36 @@ impl Guides {
 
 /// Each pixel's value (`values`: 0 where there is no surface) averaged over its neighbourhood
 /// on the same surface (two passes of the kernel, weighed by the surfaces alone): what this
-/// frame alone says the AO around a pixel is, where one pixel's few rays cannot.
-pub fn neighbourhood(g: &Guides, values: &[f32], width: usize) -> Vec<f32> {
+/// frame alone says the AO around a pixel is, where one pixel's few rays cannot. The buffers
+/// hold the rows from `at.first`; the averages are worked out for the rows they allow
+/// (`within` them, twice).
+pub fn neighbourhood(g: &Guides, values: &[f32], width: usize, at: Rows) -> Vec<f32> {
     let n = values.len();
     let (mut near, mut once) = (vec![0.0; n], vec![0.0; n]);
     let (ignored, mut spare) = (vec![0.0; n], vec![0.0; n]);
-    pass(g, [values, &ignored], [&mut once, &mut spare], width, 1, false);
-    pass(g, [&once, &ignored], [&mut near, &mut spare], width, 2, false);
+    let known = at.first..at.first + n / width.max(1);
+    let first = within(&known, 1, at.height);
+    pass(g, [values, &ignored], [&mut once, &mut spare], width, 1, false, at, &first);
+    pass(g, [&once, &ignored], [&mut near, &mut spare], width, 2, false, at, &within(&first, 2, at.height));
     near
 }
 
-/// The filtered fraction hidden of each pixel (NaN where there is no surface), from its average
-/// over frames, and `near`, this frame's AO around it (`neighbourhood`), which says how noisy a
-/// pass is there: a binomial mean's variance p (1 - p) / rays (a pixel's own value is too noisy
-/// to say it: one none of whose few rays hit would count as certain, and keep its speckle),
-/// with a floor, over the passes averaged.
-pub fn filter(g: &Guides, averaged: &[Averaged], near: &[f32], width: usize, rays: u32) -> Vec<f32> {
+/// The filtered fraction hidden of each pixel of rows `out` (NaN where there is no surface),
+/// from its average over frames (`averaged`, known for the rows `out` and `FILTER_REACH` rows
+/// around them), and `near`, this frame's AO around it (`neighbourhood`), which says how noisy
+/// a pass is there: a binomial mean's variance p (1 - p) / rays (a pixel's own value is too
+/// noisy to say it: one none of whose few rays hit would count as certain, and keep its
+/// speckle), with a floor, over the passes averaged. The buffers hold the rows from
+/// `at.first`.
+pub fn filter(
+    g: &Guides,
+    averaged: &[Averaged],
+    near: &[f32],
+    width: usize,
+    rays: u32,
+    at: Rows,
+    out: Range<usize>,
+) -> Vec<f32> {
     let rays = rays as f32;
     let n = averaged.len();
     let mut mean: Vec<f32> = averaged.iter().zip(&g.valid).map(|(m, &v)| if v > 0.0 { m.mean } else { 0.0 }).collect();
@@ -98,12 +130,17 @@ pub fn filter(g: &Guides, averaged: &[Averaged], near: &[f32], width: usize, ray
         })
         .collect();
     let (mut next_mean, mut next_variance) = (vec![0.0; n], vec![0.0; n]);
+    // Each level works out fewer rows: the last, `out`.
+    let mut known = out.start.saturating_sub(FILTER_REACH)..(out.end + FILTER_REACH).min(at.height);
     for level in 0..LEVELS {
-        pass(g, [&mean, &variance], [&mut next_mean, &mut next_variance], width, 1 << level, true);
+        known = within(&known, 1 << level, at.height);
+        pass(g, [&mean, &variance], [&mut next_mean, &mut next_variance], width, 1 << level, true, at, &known);
         std::mem::swap(&mut mean, &mut next_mean);
         std::mem::swap(&mut variance, &mut next_variance);
     }
-    mean.iter().zip(&g.valid).map(|(&m, &v)| if v > 0.0 { m } else { f32::NAN }).collect()
+    debug_assert!(known.start <= out.start && known.end >= out.end, "{known:?} covers {out:?}");
+    let rows = (out.start - at.first) * width..(out.end - at.first) * width;
+    mean[rows.clone()].iter().zip(&g.valid[rows]).map(|(&m, &v)| if v > 0.0 { m } else { f32::NAN }).collect()
 }
 
 /// e^-x for x >= 0 (four at a time), near enough for weights: (1 + x/8)^-8 (three squarings
@@ -128,17 +165,34 @@ fn along4(cos: Vec4) -> Vec4 {
 }
 
 /// One pass of the kernel with taps `step` pixels apart, from `from` (means, variances) into
-/// `to`; `by_value`: weighing taps by how far their value is from the pixel's too (else by the
-/// surfaces alone). Each row: for each of the nine taps, a loop along the row adding that tap's weighted
-/// value to every pixel's sums, without branches (a tap off the surface weighs 0).
-fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: usize, by_value: bool) {
+/// `to`, for the rows `rows` of a frame (the buffers hold the rows from `at.first`: those of
+/// `rows`, and `step` rows each side within the frame); `by_value`: weighing taps by how far
+/// their value is from the pixel's too (else by the surfaces alone). Each row: for each of the
+/// nine taps, a loop along the row adding that tap's weighted value to every pixel's sums,
+/// without branches (a tap off the surface weighs 0).
+#[allow(clippy::too_many_arguments)]
+fn pass(
+    g: &Guides,
+    from: [&[f32]; 2],
+    to: [&mut [f32]; 2],
+    width: usize,
+    step: usize,
+    by_value: bool,
+    at: Rows,
+    rows: &Range<usize>,
+) {
     const KERNEL: [f32; 3] = [0.25, 0.5, 0.25];
     let [mean, variance] = from;
     let [to_mean, to_variance] = to;
-    let height = mean.len() / width.max(1);
+    let height = at.height;
     to_mean.par_chunks_mut(width.max(1)).zip(to_variance.par_chunks_mut(width.max(1))).enumerate().for_each(
-        |(y, (out_mean, out_variance))| {
-            let row = y * width..(y + 1) * width;
+        |(k, (out_mean, out_variance))| {
+            // (`y` the frame's row, `k` the buffers'.)
+            let y = at.first + k;
+            if !rows.contains(&y) {
+                return;
+            }
+            let row = k * width..(k + 1) * width;
             let (row_mean, pv) = (&mean[row.clone()], &g.valid[row.clone()]);
             // Only the row's pixels from its first surface to its last are filtered (most of a
             // small program's window is background).
@@ -160,6 +214,8 @@ fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: 
                 if qy < 0 || qy >= height as isize {
                     continue;
                 }
+                // (Within the buffers: `rows` leaves room for the taps.)
+                let qk = qy as usize - at.first;
                 for (i, kx) in KERNEL.iter().enumerate() {
                     let dx = (i as isize - 1) * step as isize;
                     // The pixels x whose tap x + dx lies in the row.
@@ -168,9 +224,9 @@ fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: 
                     if x0 >= x1 {
                         continue;
                     }
-                    let q0 = (qy as usize * width) as isize + x0 as isize + dx;
+                    let q0 = (qk * width) as isize + x0 as isize + dx;
                     let q = q0 as usize..q0 as usize + (x1 - x0);
-                    let p = y * width + x0..y * width + x1;
+                    let p = k * width + x0..k * width + x1;
                     let k = kx * ky;
                     let (qm, qv, qvalid, qobj) =
                         (&mean[q.clone()], &variance[q.clone()], &g.valid[q.clone()], &g.object[q.clone()]);
@@ -219,7 +275,7 @@ fn pass(g: &Guides, from: [&[f32]; 2], to: [&mut [f32]; 2], width: usize, step: 
                 // is tiny, and then it keeps its value).
                 if pv[x] > 0.0 && (weights[x].is_nan() || weights[x] <= 1e-6) {
                     out_mean[x] = row_mean[x];
-                    out_variance[x] = variance[y * width + x];
+                    out_variance[x] = variance[k * width + x];
                 } else if pv[x] > 0.0 {
                     out_mean[x] = sum[x] / weights[x];
                     out_variance[x] = spread[x] / (weights[x] * weights[x]);

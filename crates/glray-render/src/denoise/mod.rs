@@ -16,9 +16,12 @@
 mod atrous;
 mod temporal;
 
+use std::ops::Range;
+
 use glam::Vec3;
 
-pub use temporal::Motion;
+use temporal::Rows;
+pub use temporal::{HeldRows, Motion, Past};
 
 /// One pixel's AO as the tracer leaves it for the denoiser (plain bytes: tiles traced on other
 /// ranks carry it).
@@ -66,13 +69,47 @@ pub struct Denoiser {
 /// move against each other (gears turning) lags behind them.
 pub const MOVING_HISTORY: f32 = 16.0;
 
+/// The rows of a frame one denoising works out (`rows`, its band) and the frame they lie in.
+/// A frame traced by one process is one band; a frame shared by MPI ranks is cut into a band
+/// per rank, each denoised where it was traced: a band reads the AO of `layer_rows` (the rows
+/// around it the filter and the neighbourhood reach) and follows `followed_rows` back into the
+/// last frame, so that each of its pixels comes out as in the whole frame, bit for bit.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Band {
+    pub rows: Range<usize>,
+    pub width: usize,
+    pub height: usize,
+}
+
+impl Band {
+    /// The whole of a `width` x `height` frame.
+    pub fn whole(width: usize, height: usize) -> Band {
+        Band { rows: 0..height, width, height }
+    }
+
+    fn around(&self, reach: usize) -> Range<usize> {
+        self.rows.start.saturating_sub(reach)..(self.rows.end + reach).min(self.height)
+    }
+
+    /// The rows whose AO the band's denoising reads (`AoPixel`s from the tracer).
+    pub fn layer_rows(&self) -> Range<usize> {
+        self.around(atrous::FILTER_REACH + atrous::NEAR_REACH)
+    }
+
+    /// The rows whose average over frames the band's filter reads: followed back into the last
+    /// frame, and kept as this band's history.
+    pub fn followed_rows(&self) -> Range<usize> {
+        self.around(atrous::FILTER_REACH)
+    }
+
+    fn layer_at(&self) -> Rows {
+        Rows { first: self.layer_rows().start, height: self.height }
+    }
+}
+
 impl Denoiser {
     /// The denoised fraction hidden of every pixel of a `width` x `height` frame (NaN where
-    /// `layer` has no surface). `rays` is the AO rays one pass traced per pixel (all its
-    /// samples'), which says how noisy one pass's value is; `camera` and `motion` are the
-    /// frame's; `still`: the frame shows what the last one did (the same scene and camera), so
-    /// the last frame's averages are all valid and go on up to `MAX_PASSES` (else up to
-    /// `MOVING_HISTORY`, held to what this frame shows around each point).
+    /// `layer` has no surface): `denoise_band` of the whole frame.
     pub fn denoise(
         &mut self,
         layer: &[AoPixel],
@@ -82,13 +119,53 @@ impl Denoiser {
         rays: u32,
         still: bool,
     ) -> Vec<f32> {
+        let band = Band::whole(width, layer.len() / width.max(1));
+        self.denoise_band(layer, &band, camera, motion, rays, still)
+    }
+
+    /// The denoised fraction hidden of every pixel of `band` (NaN where it has no surface), from
+    /// `layer`, the AO of its `layer_rows`. `rays` is the AO rays one pass traced per pixel (all
+    /// its samples'), which says how noisy one pass's value is; `camera` and `motion` are the
+    /// frame's; `still`: the frame shows what the last one did (the same scene and camera), so
+    /// the last frame's averages are all valid and go on up to `MAX_PASSES` (else up to
+    /// `MOVING_HISTORY`, held to what this frame shows around each point). The last frame's
+    /// rows it follows back into must be held (`missing`, `take_rows`).
+    pub fn denoise_band(
+        &mut self,
+        layer: &[AoPixel],
+        band: &Band,
+        camera: &glray_scene::camera::Camera,
+        motion: &Motion,
+        rays: u32,
+        still: bool,
+    ) -> Vec<f32> {
+        let (width, at) = (band.width, band.layer_at());
         let guides = atrous::Guides::new(layer, camera, motion);
         let raw: Vec<f32> = layer.iter().map(|a| if a.is_surface() { a.hidden } else { 0.0 }).collect();
-        let raw_near = atrous::neighbourhood(&guides, &raw, width);
+        let raw_near = atrous::neighbourhood(&guides, &raw, width, at);
         let span = if still { crate::options::MAX_PASSES as f32 } else { MOVING_HISTORY };
         let near = (!still).then_some(&raw_near[..]);
-        let averaged = self.history.follow(layer, near, width, camera, motion, span, rays.max(1));
-        atrous::filter(&guides, &averaged, &raw_near, width, rays.max(1))
+        let followed = band.followed_rows();
+        let averaged = self.history.follow(layer, near, width, at, followed, camera, motion, span, rays.max(1));
+        atrous::filter(&guides, &averaged, &raw_near, width, rays.max(1), at, band.rows.clone())
+    }
+
+    /// The rows of the last frame `band`'s denoising (of `layer`, its `layer_rows`) follows
+    /// back into and this denoiser does not hold: to be fetched from the ranks whose bands
+    /// held them (`take_rows`) before `denoise_band`.
+    pub fn missing(&self, layer: &[AoPixel], band: &Band, motion: &Motion) -> Vec<Range<usize>> {
+        self.history.missing(layer, band.width, band.layer_at(), band.followed_rows(), motion)
+    }
+
+    /// The last frame's rows from `first`, fetched from the rank that held them.
+    pub fn take_rows(&mut self, first: usize, past: &[Past]) {
+        self.history.take_rows(first, past);
+    }
+
+    /// The rows the last denoising kept, for other ranks to fetch (`missing`) while the next
+    /// frame is denoised.
+    pub fn held(&self) -> HeldRows {
+        self.history.held()
     }
 
     /// Forgets the frames before: the next starts afresh.

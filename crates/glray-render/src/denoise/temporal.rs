@@ -12,6 +12,8 @@
 //! neighbourhood clamping, by the known binomial noise rather than a measured one).
 
 use std::collections::HashMap;
+use std::ops::Range;
+use std::sync::Arc;
 
 use glam::{DMat4, DVec3, Vec3};
 use glray_scene::camera::Camera;
@@ -101,9 +103,11 @@ const CLAMP: f32 = 2.0;
 /// The passes a clamped history counts for at most: it was stale.
 const CLAMPED: f32 = 2.0;
 
-/// A pixel's average as kept for the next frame.
-#[derive(Debug, Clone, Copy)]
-struct Past {
+/// A pixel's average as kept for the next frame (plain bytes: rows of it cross ranks, for
+/// the pixels of a band whose points were in another rank's band the frame before).
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct Past {
     eye: Vec3,
     normal: Vec3,
     id: u32,
@@ -122,18 +126,31 @@ pub struct Averaged {
     pub count: f32,
 }
 
-/// The last frame's averages, where they were, and its camera and placements.
+/// The last frame's averages, by row (the rows this denoiser worked out, and those fetched for
+/// it: a band of a frame shared by MPI ranks holds only the rows around its own), where they
+/// were, and its camera and placements.
 #[derive(Default)]
 pub struct History {
     width: usize,
-    past: Vec<Past>,
+    height: usize,
+    rows: Vec<Option<Arc<[Past]>>>,
     camera: Option<Camera>,
     placements: HashMap<u32, DMat4>,
 }
 
+/// Rows of a frame: a part of the frame's pixels, row by row from `first` (buffers of a band
+/// and the rows around it), in a frame of `height` rows.
+#[derive(Debug, Clone, Copy)]
+pub struct Rows {
+    pub first: usize,
+    pub height: usize,
+}
+
 impl History {
-    /// Every pixel's AO averaged with what the last frame had where its point was (up to
-    /// `span` passes), kept as the history for the next frame.
+    /// Every pixel's AO of rows `followed` averaged with what the last frame had where its
+    /// point was (up to `span` passes), kept as the history for the next frame (the rows
+    /// held before go). `layer` and `near` are the pixels of the rows from `at.first`, which
+    /// cover `followed`; the averages come back in the same rows (NaN outside `followed`).
     /// `near`: this frame's AO around each pixel (`atrous::neighbourhood`), from `rays` rays
     /// per pixel, to hold the history to (None: the scene is still, and the history holds).
     #[allow(clippy::too_many_arguments)]
@@ -142,51 +159,40 @@ impl History {
         layer: &[AoPixel],
         near: Option<&[f32]>,
         width: usize,
+        at: Rows,
+        followed: Range<usize>,
         camera: &Camera,
         motion: &Motion,
         span: f32,
         rays: u32,
     ) -> Vec<Averaged> {
         let rays = rays as f32;
-        // For each instance, the way from its point now to where it was: the last placement
-        // after the inverse of this one (None: not drawn last frame).
-        let back: Vec<Option<DMat4>> = motion
-            .ids
-            .iter()
-            .zip(&motion.placements)
-            .map(|(id, now)| {
-                let before = self.placements.get(id)?;
-                let inverse = now.inverse();
-                inverse.is_finite().then(|| *before * inverse)
-            })
-            .collect();
-        let last = self.camera.as_ref().filter(|_| self.width == width && self.past.len() == layer.len());
-        let height = layer.len() / width.max(1);
+        let back = self.back(motion);
+        let last = self.last(width, at.height);
+        let height = at.height;
         let mut past = vec![NOTHING; layer.len()];
         let mut averaged = vec![Averaged { mean: f32::NAN, count: 0.0 }; layer.len()];
         past.par_chunks_mut(width.max(1)).zip(averaged.par_chunks_mut(width.max(1))).enumerate().for_each(
-            |(y, (past_row, out_row))| {
+            |(k, (past_row, out_row))| {
+                let y = at.first + k;
+                if !followed.contains(&y) {
+                    return;
+                }
                 for x in 0..width {
-                    let a = &layer[y * width + x];
+                    let a = &layer[k * width + x];
                     if !a.is_surface() {
                         continue;
                     }
                     let id = motion.id(a.object);
                     let found = last.and_then(|before| {
-                        let (eye, normal) = match a.object {
-                            TriangleId::FLAT => (a.eye.as_dvec3(), a.normal.as_dvec3()),
-                            i => {
-                                let m = back.get(i as usize).copied().flatten()?;
-                                (m.transform_point3(a.eye.as_dvec3()), m.transform_vector3(a.normal.as_dvec3()))
-                            }
-                        };
+                        let (eye, normal) = whence(a, &back)?;
                         self.seen(before, eye, normal.normalize_or_zero(), id, width, height)
                     });
                     let (mean, count) = match found {
                         Some(q) => {
                             // How far this frame's AO around the point may be from the history's
                             // by noise alone: the neighbourhood's mean is over a dozen pixels'.
-                            let (before, count) = match near.map(|n| n[y * width + x].clamp(0.0, 1.0)) {
+                            let (before, count) = match near.map(|n| n[k * width + x].clamp(0.0, 1.0)) {
                                 Some(p) => {
                                     let sigma = ((p * (1.0 - p) + 0.25 / rays) / (rays * NEIGHBOURS)).sqrt();
                                     let (low, high) = (p - CLAMP * sigma - 0.01, p + CLAMP * sigma + 0.01);
@@ -208,11 +214,79 @@ impl History {
                 }
             },
         );
-        self.past = past;
-        self.width = width;
+        let mut rows: Vec<Option<Arc<[Past]>>> = vec![None; height];
+        for y in followed {
+            let k = y - at.first;
+            rows[y] = Some(Arc::from(&past[k * width..(k + 1) * width]));
+        }
+        self.rows = rows;
+        (self.width, self.height) = (width, height);
         self.camera = Some(camera.clone());
         self.placements = motion.ids.iter().copied().zip(motion.placements.iter().copied()).collect();
         averaged
+    }
+
+    /// For each instance, the way from its point now to where it was: the last placement after
+    /// the inverse of this one (None: not drawn last frame).
+    fn back(&self, motion: &Motion) -> Vec<Option<DMat4>> {
+        motion
+            .ids
+            .iter()
+            .zip(&motion.placements)
+            .map(|(id, now)| {
+                let before = self.placements.get(id)?;
+                let inverse = now.inverse();
+                inverse.is_finite().then(|| *before * inverse)
+            })
+            .collect()
+    }
+
+    /// The last frame's camera, if its averages are of a frame of this size.
+    fn last(&self, width: usize, height: usize) -> Option<&Camera> {
+        self.camera.as_ref().filter(|_| self.width == width && self.height == height)
+    }
+
+    /// The rows of the last frame that following rows `followed` of `layer` (the pixels of
+    /// the rows from `at.first`) reads and this history does not hold: where another rank's
+    /// band kept them (`take_rows`).
+    pub fn missing(
+        &self,
+        layer: &[AoPixel],
+        width: usize,
+        at: Rows,
+        followed: Range<usize>,
+        motion: &Motion,
+    ) -> Vec<Range<usize>> {
+        let Some(before) = self.last(width, at.height) else { return Vec::new() };
+        let back = self.back(motion);
+        let mut wanted = vec![false; at.height];
+        for y in followed {
+            for a in layer[(y - at.first) * width..(y - at.first + 1) * width].iter().filter(|a| a.is_surface()) {
+                // The pixel `seen` reads.
+                let Some((eye, _)) = whence(a, &back) else { continue };
+                let (x, y) = before.window_position(eye);
+                if x >= 0.0 && y >= 0.0 && x < width as f64 && y < at.height as f64 {
+                    wanted[y as usize] = true;
+                }
+            }
+        }
+        runs(&wanted, |y| self.rows.get(y).is_none_or(Option::is_none))
+    }
+
+    /// The last frame's rows from `first` (another rank's), to follow from.
+    pub fn take_rows(&mut self, first: usize, past: &[Past]) {
+        let width = self.width.max(1);
+        for (k, row) in past.chunks_exact(width).enumerate() {
+            if let Some(slot) = self.rows.get_mut(first + k) {
+                *slot = Some(Arc::from(row));
+            }
+        }
+    }
+
+    /// The rows this history holds, for other ranks to fetch while it is followed (cheap: the
+    /// rows are shared).
+    pub fn held(&self) -> HeldRows {
+        HeldRows { width: self.width, rows: self.rows.clone() }
     }
 
     /// What the last frame kept at the pixel where eye-space point `eye` (facing `normal`,
@@ -222,9 +296,55 @@ impl History {
         if !(x >= 0.0 && y >= 0.0 && x < width as f64 && y < height as f64) {
             return None;
         }
-        let q = self.past[y as usize * width + x as usize];
+        // (A row not held is a row no rank fetched for this band: `missing` names every row
+        // read here, so only a frame traced without them would meet one.)
+        let q = *self.rows.get(y as usize)?.as_ref()?.get(x as usize)?;
         let reach = 2.0 * camera.pixel_size(eye) + 1e-6 * eye.length();
         let close = (q.eye.as_dvec3() - eye).length() <= reach;
         (q.count > 0.0 && q.id == id && close && q.normal.as_dvec3().dot(normal) > 0.9).then_some(q)
+    }
+}
+
+/// Where the point a pixel sees was, and which way it faced, in the last frame's eye space:
+/// an instance's point through its motion (None: the instance was not drawn then), the frame's
+/// own triangles' where it is.
+fn whence(a: &AoPixel, back: &[Option<DMat4>]) -> Option<(DVec3, DVec3)> {
+    match a.object {
+        TriangleId::FLAT => Some((a.eye.as_dvec3(), a.normal.as_dvec3())),
+        i => {
+            let m = back.get(i as usize).copied().flatten()?;
+            Some((m.transform_point3(a.eye.as_dvec3()), m.transform_vector3(a.normal.as_dvec3())))
+        }
+    }
+}
+
+/// The runs of rows that are `wanted` and `lacking`.
+fn runs(wanted: &[bool], lacking: impl Fn(usize) -> bool) -> Vec<Range<usize>> {
+    let mut out: Vec<Range<usize>> = Vec::new();
+    for y in (0..wanted.len()).filter(|&y| wanted[y] && lacking(y)) {
+        match out.last_mut() {
+            Some(r) if r.end == y => r.end = y + 1,
+            _ => out.push(y..y + 1),
+        }
+    }
+    out
+}
+
+/// A history's rows as another rank fetches them: shared with the history, unchanged while the
+/// next frame is followed.
+#[derive(Clone, Default)]
+pub struct HeldRows {
+    width: usize,
+    rows: Vec<Option<Arc<[Past]>>>,
+}
+
+impl HeldRows {
+    /// Rows `rows`, if all are held.
+    pub fn rows(&self, rows: Range<usize>) -> Option<Vec<Past>> {
+        let mut out = Vec::with_capacity(rows.len() * self.width);
+        for y in rows {
+            out.extend_from_slice(self.rows.get(y)?.as_ref()?);
+        }
+        Some(out)
     }
 }

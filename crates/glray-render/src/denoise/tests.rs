@@ -60,6 +60,20 @@ fn noisy(
         .collect()
 }
 
+/// The whole 64x64 frame's rows.
+const WHOLE: super::temporal::Rows = super::temporal::Rows { first: 0, height: W };
+
+/// `History::follow` over the whole frame, 16 rays a pixel.
+fn follow_all(
+    history: &mut History,
+    layer: &[AoPixel],
+    near: Option<&[f32]>,
+    motion: &Motion,
+    span: f32,
+) -> Vec<Averaged> {
+    history.follow(layer, near, W, WHOLE, 0..W, &camera(), motion, span, 16)
+}
+
 /// The root-mean-square difference from the truth over the pixels with a surface.
 fn rms(values: &[f32], truth: impl Fn(usize, usize) -> f32) -> f32 {
     let sum: f32 = values.iter().enumerate().map(|(k, v)| (v - truth(k % W, k / W)).powi(2)).sum();
@@ -111,7 +125,7 @@ fn a_still_scene_averages_its_passes_and_converges_to_the_unfiltered_mean() {
         for (s, a) in sum.iter_mut().zip(&layer) {
             *s += a.hidden;
         }
-        last = history.follow(&layer, None, W, &camera(), &Motion::default(), 64.0, 16);
+        last = follow_all(&mut history, &layer, None, &Motion::default(), 64.0);
     }
     for (k, a) in last.iter().enumerate() {
         assert_eq!(a.count, 64.0);
@@ -121,7 +135,7 @@ fn a_still_scene_averages_its_passes_and_converges_to_the_unfiltered_mean() {
     let averaged: Vec<Averaged> = last.clone();
     let layer = noisy(truth, |_, _| TriangleIdFlat::ID, 16, 1);
     let guides = super::atrous::Guides::new(&layer, &camera(), &Motion::default());
-    let out = super::atrous::filter(&guides, &averaged, &near(&layer), W, 16);
+    let out = super::atrous::filter(&guides, &averaged, &near(&layer), W, 16, WHOLE, 0..W);
     let means: Vec<f32> = last.iter().map(|a| a.mean).collect();
     assert!(rms(&out, truth) <= rms(&means, truth) * 1.1 + 0.003, "{} {}", rms(&out, truth), rms(&means, truth));
 }
@@ -137,17 +151,17 @@ fn a_moved_object_is_followed_and_a_new_one_starts_afresh() {
     let first: Vec<AoPixel> = (0..W * W)
         .map(|k| AoPixel { eye: eye(k % W, k / W), normal: Vec3::Z, object: 0, hidden: 0.25, lit: Vec3::ONE })
         .collect();
-    history.follow(&first, Some(&near(&first)), W, &camera(), &motion(0.0), 16.0, 16);
+    follow_all(&mut history, &first, Some(&near(&first)), &motion(0.0), 16.0);
     let second: Vec<AoPixel> = (0..W * W)
         .map(|k| AoPixel { eye: eye(k % W, k / W), normal: Vec3::Z, object: 0, hidden: 0.75, lit: Vec3::ONE })
         .collect();
-    let out = history.follow(&second, Some(&near(&first)), W, &camera(), &motion(shift), 16.0, 16);
+    let out = follow_all(&mut history, &second, Some(&near(&first)), &motion(shift), 16.0);
     // Pixel x now saw the point pixel x - 8 saw before.
     assert_eq!(out[10 * W + 20], Averaged { mean: 0.5, count: 2.0 }, "followed back 8 pixels");
     assert_eq!(out[10 * W + 3], Averaged { mean: 0.75, count: 1.0 }, "came from outside the last frame");
     // Another object's id, or a frame of flat triangles only: nothing to follow.
     let other = Motion::placed(vec![(8, place(shift))]);
-    let out = history.follow(&second, Some(&near(&first)), W, &camera(), &other, 16.0, 16);
+    let out = follow_all(&mut history, &second, Some(&near(&first)), &other, 16.0);
     assert!(out.iter().all(|a| a.count == 1.0));
 }
 
@@ -209,4 +223,49 @@ fn instances_drawn_under_one_transform_are_one_object() {
     assert_eq!(motion.id(0), motion.id(2), "one object, one id to follow it by");
     assert_ne!(motion.id(0), motion.id(1));
     assert_eq!(motion.object(TriangleId::FLAT), TriangleId::FLAT);
+}
+
+#[test]
+fn a_frame_denoised_in_bands_is_the_frame_denoised_whole() {
+    // A plane moving 8 pixels right and 5 down a frame (its points followed back across the
+    // bands' edges), a corner of background, noisy AO: each band of a frame cut as MPI ranks
+    // cut it, denoised from the rows around it and the last frame's rows fetched from the band
+    // that held them, comes out as the whole frame denoised at once, bit for bit.
+    let step = glam::DVec3::new(8.0, -5.0, 0.0) * 2.0 / W as f64;
+    let layer_of = |frame: u32| -> Vec<AoPixel> {
+        noisy(|x, y| 0.2 + 0.5 * ((x + 2 * y) % 17) as f32 / 17.0, |_, _| 0, 16, 40 + frame)
+            .into_iter()
+            .enumerate()
+            .map(|(k, a)| if (k % W) + (k / W) < 12 { AoPixel::NONE } else { a })
+            .collect()
+    };
+    for cuts in [vec![0, 64], vec![0, 30, 64], vec![0, 7, 25, 50, 64]] {
+        let bands: Vec<Band> = cuts.windows(2).map(|c| Band { rows: c[0]..c[1], width: W, height: W }).collect();
+        let mut whole = Denoiser::default();
+        let mut parts: Vec<Denoiser> = bands.iter().map(|_| Denoiser::default()).collect();
+        let mut fetched = 0;
+        for frame in 0..5u32 {
+            let layer = layer_of(frame);
+            let motion = Motion::placed(vec![(7, DMat4::from_translation(step * f64::from(frame)))]);
+            let still = frame == 4;
+            let expected = whole.denoise(&layer, W, &camera(), &motion, 16, still);
+            let held: Vec<HeldRows> = parts.iter().map(Denoiser::held).collect();
+            for (band, d) in bands.iter().zip(&mut parts) {
+                let rows = band.layer_rows();
+                let own = &layer[rows.start * W..rows.end * W];
+                for run in d.missing(own, band, &motion) {
+                    let past = held.iter().find_map(|h| h.rows(run.clone())).expect("another band held them");
+                    d.take_rows(run.start, &past);
+                    fetched += 1;
+                }
+                let out = d.denoise_band(own, band, &camera(), &motion, 16, still);
+                let want = &expected[band.rows.start * W..band.rows.end * W];
+                assert_eq!(out.len(), want.len());
+                let differ = out.iter().zip(want).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
+                assert_eq!(differ, 0, "frame {frame}, band {:?} of {cuts:?}", band.rows);
+            }
+        }
+        // Moving down 5 rows a frame, the bands' points came from other bands' rows.
+        assert_eq!(fetched > 0, bands.len() > 1, "{cuts:?}: {fetched} rows fetched");
+    }
 }
