@@ -153,8 +153,9 @@ fn paraview_under_two_ranks_composites_the_ray_traced_picture_whole() {
         let s = stats.display().to_string();
         let env = [("GLRAY_PRESET", "gl"), ("GLRAY_DISTRIBUTE", distribute), ("GLRAY_STATS", &s)];
         pvbatch(&x.display, &out, Some(&env), true);
-        // Image-parallel: 1.26% off (facets along the folds, not found yet: docs/compatibility.md).
-        let was = if distribute == "replicated" { measured(1.2574, 34.9) } else { measured(0.0087, 52.9) };
+        // Image-parallel as close as data-parallel (it was 1.26% off, facets along the folds: the
+        // ranks' cameras, apart by rounding, were taken for two, and rank 1's half lit as drawn).
+        let was = if distribute == "replicated" { measured(0.0087, 53.0) } else { measured(0.0087, 52.9) };
         assert_close(&mesa, &out, was, &format!("the GL look, 2 ranks, {distribute}, against ParaView's own"));
         let lines = std::fs::read_to_string(&stats).unwrap();
         let first: Vec<&str> = lines.lines().filter(|l| l.starts_with("{\"frame\":0,")).collect();
