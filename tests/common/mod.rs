@@ -259,12 +259,19 @@ pub fn frameshot_command(way: Way, program: &Path, args: &[&str], display: &str,
 /// compiles it here).
 pub fn icet_like() -> PathBuf {
     static BUILT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
-    BUILT.get_or_init(build_icet_like).clone()
+    BUILT.get_or_init(|| build_mpi_example("icet_like", &["-lOSMesa", "-lz", "-lm"])).clone()
 }
 
-fn build_icet_like() -> PathBuf {
-    let out = build_dir().join("examples").join("icet_like");
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/mpi/icet_like.c");
+/// The second sort-last host (examples/mpi/direct_send.c: GLX windows, direct-send
+/// compositing), compiled with mpicc likewise.
+pub fn direct_send() -> PathBuf {
+    static BUILT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    BUILT.get_or_init(|| build_mpi_example("direct_send", &["-lGL", "-lX11", "-lm"])).clone()
+}
+
+fn build_mpi_example(name: &str, libraries: &[&str]) -> PathBuf {
+    let out = build_dir().join("examples").join(name);
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/mpi/{name}.c"));
     let fresh = |p: &Path| p.metadata().and_then(|m| m.modified()).ok();
     if fresh(&out).is_none() || fresh(&out) < fresh(&source) {
         let tmp = out.with_extension(format!("{}.tmp", std::process::id()));
@@ -272,7 +279,8 @@ fn build_icet_like() -> PathBuf {
             .arg(&source)
             .arg("-o")
             .arg(&tmp)
-            .args(["-O2", "-lOSMesa", "-lz", "-lm"])
+            .arg("-O2")
+            .args(libraries)
             .status()
             .expect("mpicc is not installed: scripts/test installs libopenmpi-dev");
         assert!(status.success(), "mpicc {}", source.display());
