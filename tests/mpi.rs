@@ -137,6 +137,12 @@ fn image_parallel_pictures_are_one_process_picture_for_any_rank_count() {
     let said = ranks(3, &[full[0], ("GLRAY_MPI_ROLES", "dedicated"), ("GLRAY_STATS", "stderr")], &dedicated, "2");
     assert!(pixels(&dedicated) == pixels(&alone), "a dedicated master\n{said}");
     assert!(said.contains("rank 0 of 3: 0 of "), "rank 0 traces no tile: {said}");
+    // The paper's roles (rank 0 the display, rank 1 the master, neither tracing): the same.
+    let paper = dir.join("paper.png");
+    let said = ranks(4, &[full[0], ("GLRAY_MPI_ROLES", "paper"), ("GLRAY_STATS", "stderr")], &paper, "2");
+    assert!(pixels(&paper) == pixels(&alone), "the paper's roles\n{said}");
+    assert!(said.contains("rank 0 of 4: 0 of ") && said.contains("rank 1 of 4: 0 of "), "{said}");
+    assert!(said.contains("rank 2 of 4: ") && !said.contains("rank 2 of 4: 0 of "), "rank 2 traces: {said}");
     // The launcher: the same picture.
     let launched = dir.join("launched.png");
     let mut cmd = Command::new("timeout");
@@ -453,4 +459,50 @@ fn a_second_host_written_apart_composites_one_process_picture_for_any_rank_count
         Measured { share: 0.000013, psnr: 61.1 },
         "direct_send, 2 ranks, the GL look against Mesa's",
     );
+}
+
+#[test]
+fn a_mesh_drawn_in_pieces_by_the_ranks_is_one_mesh_built_once() {
+    // The anchors' isosurface (100K triangles) split over the example's ranks, the scene turning
+    // (its meshes unchanged): under `glray run --np 2` and `--np 3` the pieces are joined into
+    // the mesh one process draws (the picture is one process's, byte for byte), its tree built in
+    // the first frame and kept (no tree built, no loose triangles, after it).
+    let dir = scratch("mpi-pieces");
+    let mesh = dir.join("iso-100K.bin");
+    let mut bench = Command::new(glray_bin());
+    bench.args(["bench", "--triangles", "100K", "--save-mesh"]).arg(&mesh);
+    run_ok(&mut bench, "glray bench --save-mesh");
+    let args = |png: &Path| -> Vec<String> {
+        [png.display().to_string(), "4".into(), "320".into(), "240".into(), "1".into(), mesh.display().to_string()]
+            .to_vec()
+    };
+    let alone = dir.join("alone.png");
+    let mut cmd = command(Way::Preload, &[], &icet_like(), 120);
+    cmd.args(args(&alone)).envs([("GLRAY_PRESET", "ao"), ("GLRAY_DISTRIBUTE", "local"), ("ICET_LIKE_ORBIT", "3")]);
+    run_ok(&mut cmd, "icet_like alone");
+    for np in [2, 3] {
+        let (png, stats) = (dir.join(format!("np{np}.png")), dir.join(format!("np{np}.jsonl")));
+        let mut cmd = Command::new("timeout");
+        cmd.args(["-k", "5", "180"]).arg(glray_bin()).args(["run", "--np", &np.to_string(), "--set"]);
+        cmd.arg(format!("stats={}", stats.display())).args(["--mpirun-arg=-x", "--mpirun-arg=ICET_LIKE_ORBIT=3"]);
+        cmd.args(["--mpirun-arg=--mca", "--mpirun-arg=btl", "--mpirun-arg=self,tcp", "--"]);
+        cmd.arg(icet_like()).args(args(&png));
+        without_glray(&mut cmd);
+        run_ok(&mut cmd, &format!("glray run --np {np}"));
+        assert!(pixels(&png) == pixels(&alone), "{np} ranks: not one process's picture");
+        let lines = std::fs::read_to_string(&stats).unwrap();
+        let field = |l: &str, k: &str| -> u64 {
+            l.split(&format!("\"{k}\":")).nth(1).and_then(|v| v.split([',', '}']).next()?.parse().ok()).unwrap()
+        };
+        assert_eq!(lines.lines().count(), 4 * np, "a line per frame and rank:\n{lines}");
+        let triangles = field(lines.lines().next().unwrap(), "triangles");
+        assert!(triangles > 90_000, "the whole mesh on every rank: {triangles}");
+        for l in lines.lines() {
+            let (frame, builds) = (field(l, "frame"), field(l, "builds"));
+            // One tree in the first frame: the joined mesh's (its pieces' are never built).
+            assert!(if frame == 0 { builds == 1 } else { builds == 0 }, "{l}");
+            assert_eq!(field(l, "loose_triangles"), 0, "{l}");
+            assert_eq!(field(l, "triangles"), triangles, "{l}");
+        }
+    }
 }

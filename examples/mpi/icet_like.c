@@ -26,6 +26,10 @@
  * ICET_LIKE_STALL=RANK:FRAME makes that rank stop itself (SIGSTOP) as that frame begins: a rank
  * that stops answering, for glray's tests of its time limits.
  *
+ * ICET_LIKE_PIECES=N (with MESH) draws each rank's share of the mesh as N display lists of
+ * consecutive triangles: one process drawing the mesh in as many pieces as N ranks draw it
+ * (scripts/bench-mpi: what tracing a scene in pieces costs apart from MPI).
+ *
  * Built with: mpicc icet_like.c -o icet_like -lOSMesa -lz -lm (scripts/lib/build.sh). */
 #include <GL/gl.h>
 #include <GL/osmesa.h>
@@ -195,9 +199,13 @@ int main(int argc, char **argv) {
   glEnable(GL_COLOR_MATERIAL);
   glEnable(GL_NORMALIZE);
   cube_list(1);
+  int pieces = getenv("ICET_LIKE_PIECES") ? atoi(getenv("ICET_LIKE_PIECES")) : 1;
+  if (pieces < 1) die("bad ICET_LIKE_PIECES");
   if (mesh_path) {
     Mesh m = read_mesh(mesh_path);
-    mesh_list(2, &m, (size_t)rank * m.nt / size, (size_t)(rank + 1) * m.nt / size);
+    size_t from = (size_t)rank * m.nt / size, to = (size_t)(rank + 1) * m.nt / size;
+    for (int k = 0; k < pieces; k++)
+      mesh_list(2 + k, &m, from + (to - from) * k / pieces, from + (to - from) * (k + 1) / pieces);
     free(m.pos), free(m.nrm), free(m.idx);
   }
 
@@ -224,7 +232,7 @@ int main(int argc, char **argv) {
       glRotatef(orbit * (orbit_first + frame), 0.0f, 1.0f, 0.0f);
       glColor3f(0.8f, 0.7f, 0.5f);
       glNormal3f(0.0f, 0.0f, 1.0f);
-      glCallList(2);
+      for (int k = 0; k < pieces; k++) glCallList(2 + k);
     } else {
       glTranslatef(0.0f, -1.2f, -11.0f);
       glRotatef(28.0f, 1.0f, 0.0f, 0.0f);

@@ -255,7 +255,7 @@ pub const SETTINGS: &[Setting] = &[
     Setting {
         key: "mpi_poll",
         kind: Kind::Int(0, 100_000),
-        default: "100",
+        default: "1000",
         doc: "Microseconds glray's MPI thread waits between looks at MPI when it has nothing to do: an ask \
               from another rank waits at most this long. 0: it never waits (a core kept busy, as a blocking \
               MPI_Probe keeps one with Open MPI over TCP).",
@@ -686,7 +686,7 @@ impl Config {
 
     /// `mpi_poll` in microseconds.
     pub fn mpi_poll(&self) -> u64 {
-        self.get("mpi_poll").parse().unwrap_or(100)
+        self.get("mpi_poll").parse().unwrap_or(1000)
     }
 
     /// Whether ranks other than 0 get the whole picture back (`mpi_picture = whole`).

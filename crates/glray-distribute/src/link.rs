@@ -65,8 +65,17 @@ enum Command {
     },
 }
 
-/// What the link tells the rank's frame: a message from another rank, or a fault.
-pub type Delivery = Result<(usize, Message), String>;
+/// What reaches the rank's frame: a message from another rank (or the link's fault), a tile
+/// its tracer traced, its tracer done. One channel for all, so the frame's thread sleeps until
+/// there is something to do (it woke every half millisecond to look at two, and the tracer
+/// beside it was the slower for it).
+#[derive(Debug)]
+pub enum Event {
+    Message(usize, Message),
+    Failed(String),
+    Tile(TilePixels),
+    Traced,
+}
 
 /// Tiles for a rank's tracer: the frame, and the tiles (None: no more this frame).
 type Grant = (u64, Option<Vec<u32>>);
@@ -91,7 +100,9 @@ pub struct Link {
     rank: usize,
     size: usize,
     commands: Sender<Command>,
-    inbox: Receiver<Delivery>,
+    inbox: Receiver<Event>,
+    /// For the tracer's tiles (`work`) and its end (`traced`).
+    events: Sender<Event>,
     /// Tiles for this rank's tracer: (frame, tiles; None when there are no more).
     grants: Arc<Mutex<Receiver<Grant>>>,
     counters: Arc<Counters>,
@@ -105,11 +116,12 @@ pub struct Link {
 
 impl Link {
     /// A link over `transport`, in a thread of its own (`threaded`) or stepped by the caller;
-    /// `master` is rank 0's tile queue (None on other ranks); between polls the loop waits
-    /// `poll` for its own threads' work.
+    /// `master` is the tile queue on the rank that hands out tiles (`master_rank`; None on the
+    /// others); between polls the loop waits `poll` for its own threads' work.
     pub fn start(
         transport: Box<dyn Transport + Send>,
         master: Option<Master>,
+        master_rank: usize,
         threaded: bool,
         poll: Duration,
         compression: Compression,
@@ -123,8 +135,9 @@ impl Link {
         let core = Core {
             transport,
             master,
+            master_rank,
             commands: command_rx,
-            inbox: inbox_tx,
+            inbox: inbox_tx.clone(),
             grants: grant_tx,
             counters: counters.clone(),
             tiles: TileState::default(),
@@ -139,6 +152,7 @@ impl Link {
             size,
             commands: command_tx,
             inbox: inbox_rx,
+            events: inbox_tx,
             grants: Arc::new(Mutex::new(grant_rx)),
             counters,
             inline: None,
@@ -218,8 +232,8 @@ impl Link {
         self.command(Command::Held { generation, rows })
     }
 
-    /// The next delivery, waiting at most `wait` for it.
-    pub fn receive(&mut self, wait: Duration) -> Option<Delivery> {
+    /// The next event, waiting at most `wait` for it.
+    pub fn receive(&mut self, wait: Duration) -> Option<Event> {
         self.pump();
         match self.inbox.try_recv() {
             Ok(d) => return Some(d),
@@ -243,8 +257,13 @@ impl Link {
         match self.inbox.recv_timeout(wait) {
             Ok(d) => Some(d),
             Err(RecvTimeoutError::Timeout) => None,
-            Err(RecvTimeoutError::Disconnected) => Some(Err("glray's MPI thread has ended".into())),
+            Err(RecvTimeoutError::Disconnected) => Some(Event::Failed("glray's MPI thread has ended".into())),
         }
+    }
+
+    /// Where the tracer says it is done (`Event::Traced`), after its last tile.
+    pub fn tracer_events(&self) -> Sender<Event> {
+        self.events.clone()
     }
 
     /// Bytes moved so far (sent and received, on the wire and before compression).
@@ -254,20 +273,14 @@ impl Link {
 
     /// The tracer's side for frame `frame`: it asks for tiles through this link (answered at
     /// once by the master's rank, or by it over MPI), waiting at most `limit` for them, and
-    /// hands each traced tile to `done`. (An inline link is stepped meanwhile by the thread
-    /// that waits for the tracer.)
-    pub fn work<'a>(
-        &self,
-        frame: u64,
-        done: Sender<TilePixels>,
-        abort: &'a AtomicBool,
-        limit: Duration,
-    ) -> LinkWork<'a> {
+    /// hands each traced tile to the rank's frame (`Event::Tile`). (An inline link is stepped
+    /// meanwhile by the thread that waits for the tracer.)
+    pub fn work<'a>(&self, frame: u64, abort: &'a AtomicBool, limit: Duration) -> LinkWork<'a> {
         LinkWork {
             frame,
             commands: Mutex::new(self.commands.clone()),
             grants: self.grants.clone(),
-            done: Mutex::new(done),
+            done: Mutex::new(self.events.clone()),
             abort,
             limit,
             starved: Arc::new(AtomicBool::new(false)),
@@ -299,7 +312,7 @@ pub struct LinkWork<'a> {
     frame: u64,
     commands: Mutex<Sender<Command>>,
     grants: Arc<Mutex<Receiver<Grant>>>,
-    done: Mutex<Sender<TilePixels>>,
+    done: Mutex<Sender<Event>>,
     abort: &'a AtomicBool,
     limit: Duration,
     /// No tiles came within the limit: the master's rank is silent.
@@ -334,7 +347,7 @@ impl TileWork for LinkWork<'_> {
     }
 
     fn done(&self, pixels: TilePixels) {
-        let _ = self.done.lock().unwrap_or_else(|e| e.into_inner()).send(pixels);
+        let _ = self.done.lock().unwrap_or_else(|e| e.into_inner()).send(Event::Tile(pixels));
     }
 }
 
@@ -353,8 +366,10 @@ struct TileState {
 struct Core {
     transport: Box<dyn Transport + Send>,
     master: Option<Master>,
+    /// The rank that hands out tiles (where this rank's tracer asks).
+    master_rank: usize,
     commands: Receiver<Command>,
-    inbox: Sender<Delivery>,
+    inbox: Sender<Event>,
     grants: Sender<Grant>,
     counters: Arc<Counters>,
     tiles: TileState,
@@ -428,7 +443,7 @@ impl Core {
 
     fn fail(&mut self, why: String) {
         self.failed = true;
-        let _ = self.inbox.send(Err(format!("MPI failed: {why}")));
+        let _ = self.inbox.send(Event::Failed(format!("MPI failed: {why}")));
     }
 
     fn send(&mut self, to: usize, m: Message) {
@@ -527,7 +542,7 @@ impl Core {
             None => {
                 if !self.tiles.asked {
                     self.tiles.asked = true;
-                    self.send(0, Message::Ask { frame });
+                    self.send(self.master_rank, Message::Ask { frame });
                 }
                 return;
             }
@@ -555,7 +570,7 @@ impl Core {
         let message = match Message::decode(bytes) {
             Ok(m) => m,
             Err(why) => {
-                let _ = self.inbox.send(Err(format!("rank {from} sent {why}")));
+                let _ = self.inbox.send(Event::Failed(format!("rank {from} sent {why}")));
                 return;
             }
         };
@@ -584,7 +599,7 @@ impl Core {
                 }
             }
             other => {
-                let _ = self.inbox.send(Ok((from, other)));
+                let _ = self.inbox.send(Event::Message(from, other));
             }
         }
     }

@@ -21,7 +21,6 @@
 
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{channel, Receiver};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -33,7 +32,7 @@ use glray_scene::frame::Frame;
 
 use crate::assembly::{cut, BandRows, Canvas, Piece};
 use crate::bands::Bands;
-use crate::link::Link;
+use crate::link::{Event, Link};
 use crate::master::{imbalance, Master};
 use crate::pack::{Compression, Packed};
 use crate::protocol::{packed, unpacked, Message, RankReport, Rect};
@@ -198,7 +197,7 @@ impl Default for Setup {
 
 /// The link's wait between polls of MPI when it has nothing to do (docs/distributed.md
 /// measures it against a spin, which is what a blocking probe costs).
-pub const DEFAULT_POLL: Duration = Duration::from_micros(100);
+pub const DEFAULT_POLL: Duration = Duration::from_micros(1000);
 
 /// A rank of the job: its link, what it has sent and been sent, the pictures it returned.
 pub struct Node {
@@ -212,6 +211,8 @@ pub struct Node {
     sent: ObjectStore,
     /// What this rank holds of each rank's.
     held: Vec<ObjectStore>,
+    /// The meshes joined from the ranks' pieces of one mesh.
+    joined: glray_scene::join::Joined,
     /// Messages of frames this rank has not reached yet.
     ahead: VecDeque<(usize, Message)>,
     /// The accumulation key of the last frame and the passes traced under it.
@@ -261,6 +262,16 @@ pub type SettingsHook = Box<dyn FnMut(&[(String, String)], &mut Renderer) -> Res
 
 /// How long a wait for the next message lasts before the limits are looked at again.
 const WAKE: Duration = Duration::from_millis(2);
+/// The same while this rank's tracer runs (its tiles and its end wake the wait).
+const TRACER_WAKE: Duration = Duration::from_millis(50);
+
+/// What the frame's thread is given: a message of this frame, a tile this rank's tracer
+/// traced, or the tracer done.
+enum Incoming {
+    Message(usize, Message),
+    Tile(TilePixels),
+    Traced,
+}
 
 impl Node {
     pub fn new<T: Transport + Send + 'static>(transport: T, agreement: Agreement, setup: Setup) -> Node {
@@ -281,7 +292,8 @@ impl Node {
         // roles (with three ranks or more), else rank 0.
         let master_rank = if setup.roles == Roles::Paper && size > 2 { 1 } else { 0 };
         let own_master = (transport.rank() == master_rank).then_some(master);
-        let link = Link::start(Box::new(transport), own_master, setup.threaded, setup.poll, setup.compression);
+        let link =
+            Link::start(Box::new(transport), own_master, master_rank, setup.threaded, setup.poll, setup.compression);
         Node {
             link,
             frame: 0,
@@ -290,6 +302,7 @@ impl Node {
             tracing,
             sent: ObjectStore::default(),
             held: (0..size).map(|_| ObjectStore::default()).collect(),
+            joined: Default::default(),
             ahead: VecDeque::new(),
             run: None,
             last_frame: None,
@@ -337,27 +350,39 @@ impl Node {
         self.link.send(to, message).map_err(Fault::Transport)
     }
 
-    /// The next message of frame `frame`, waiting at most `wait` for it: those of earlier
-    /// frames (a frame this rank gave up on) are dropped, those of later ones kept for then.
-    fn receive(&mut self, frame: u64, wait: Duration) -> Result<Option<(usize, Message)>, Fault> {
+    /// The next message of frame `frame`, or tile or end of this rank's tracer, waiting at most
+    /// `wait` for it: messages of earlier frames (a frame this rank gave up on) are dropped,
+    /// those of later ones kept for then.
+    fn receive(&mut self, frame: u64, wait: Duration) -> Result<Option<Incoming>, Fault> {
         if let Some(k) = self.ahead.iter().position(|(_, m)| m.frame() == frame) {
-            return Ok(self.ahead.remove(k));
+            return Ok(self.ahead.remove(k).map(|(from, m)| Incoming::Message(from, m)));
         }
         let start = Instant::now();
         loop {
             let left = wait.saturating_sub(start.elapsed());
             match self.link.receive(left) {
-                Some(Ok((from, message))) => match message.frame() {
-                    f if f == frame => return Ok(Some((from, message))),
+                Some(Event::Message(from, message)) => match message.frame() {
+                    f if f == frame => return Ok(Some(Incoming::Message(from, message))),
                     f if f > frame => self.ahead.push_back((from, message)),
                     _ => {}
                 },
-                Some(Err(why)) => return Err(Fault::Transport(why)),
+                Some(Event::Tile(t)) => return Ok(Some(Incoming::Tile(t))),
+                Some(Event::Traced) => return Ok(Some(Incoming::Traced)),
+                Some(Event::Failed(why)) => return Err(Fault::Transport(why)),
                 None => return Ok(None),
             }
             if start.elapsed() >= wait {
                 return Ok(None);
             }
+        }
+    }
+
+    /// The next message of frame `frame` (waiting at most `wait`); anything else is out of turn.
+    fn message(&mut self, frame: u64, wait: Duration) -> Result<Option<(usize, Message)>, Fault> {
+        match self.receive(frame, wait)? {
+            Some(Incoming::Message(from, m)) => Ok(Some((from, m))),
+            Some(_) => Err(Fault::Damaged { rank: self.rank(), why: "a tile after its tracer was done".into() }),
+            None => Ok(None),
         }
     }
 
@@ -510,7 +535,7 @@ impl Node {
         let begun = Instant::now();
         let mut last_heard = Instant::now();
         while scenes.iter().enumerate().any(|(r, s)| r != me && s.is_none()) {
-            match self.receive(frame, WAKE)? {
+            match self.message(frame, WAKE)? {
                 Some((0, Message::Settings { settings, changes, .. })) if me != 0 => {
                     let made = match self.hook.as_mut() {
                         Some(hook) => hook(&changes, renderer),
@@ -580,7 +605,12 @@ impl Node {
             self.held[r].retain(&meshes, &textures);
             frames.push(f);
         }
-        Ok((glray_scene::merge::merge(frames), wants, waited))
+        // Pieces of one mesh the ranks drew under one transform: one mesh again, one tree.
+        let ranks: Vec<usize> =
+            frames.iter().enumerate().flat_map(|(r, f)| std::iter::repeat_n(r, f.instances.len())).collect();
+        let mut merged = glray_scene::merge::merge(frames);
+        self.joined.join(&mut merged.instances, &ranks);
+        Ok((merged, wants, waited))
     }
 
     /// Steps 2 and 3: this rank's share traced on its threads while this thread routes the
@@ -620,7 +650,6 @@ impl Node {
         }
         // Phase 1: the tracer's tiles routed as they come, other ranks' rows taken in.
         let traces = self.tracing.contains(&me);
-        let (tile_tx, tile_rx) = channel::<TilePixels>();
         let abort = AtomicBool::new(false);
         let tracing = Mutex::new((Duration::ZERO, 0u64));
         let owned;
@@ -633,26 +662,27 @@ impl Node {
                 &owned
             }
         };
-        let traced = AtomicBool::new(!traces);
+        let done = Mutex::new(self.link.tracer_events());
         if !traces {
             // Rank 0 of the dedicated roles: nothing to trace (the frame counted all the same).
             renderer.pass_frame(shared.merged.triangle_count() as u64);
+            let _ = done.lock().unwrap_or_else(|e| e.into_inner()).send(Event::Traced);
         }
         let limit = self.limit();
-        let work = self.link.work(shared.frame, tile_tx, &abort, limit);
+        let work = self.link.work(shared.frame, &abort, limit);
         let starved = work.starved();
         let served = pool.in_place_scope(|s| {
             let tracer = &mut *renderer;
-            let (work, traced, tracing) = (&work, &traced, &tracing);
+            let (work, tracing, done) = (&work, &tracing, &done);
             if traces {
                 s.spawn(move |_| {
                     let start = Instant::now();
                     let stats = tracer.render_tiles(shared.merged, w, h, shared.pass, shared.linear, work);
                     *tracing.lock().unwrap_or_else(|e| e.into_inner()) = (start.elapsed(), stats.rays);
-                    traced.store(true, Ordering::Release);
+                    let _ = done.lock().unwrap_or_else(|e| e.into_inner()).send(Event::Traced);
                 });
             }
-            let r = self.route_while_tracing(&mut state, &tile_rx, traced, &starved);
+            let r = self.route_while_tracing(&mut state, &starved);
             abort.store(r.is_err(), Ordering::Release);
             r
         });
@@ -735,23 +765,11 @@ impl Node {
     /// Phase 1 of a shared frame, until this rank's tracer has traced its last tile: each tile
     /// it traces sent in rows where they are needed (its own band's kept), and what other
     /// ranks send taken in.
-    fn route_while_tracing(
-        &mut self,
-        state: &mut FrameState,
-        tiles: &Receiver<TilePixels>,
-        traced: &AtomicBool,
-        starved: &AtomicBool,
-    ) -> Result<(), Fault> {
+    fn route_while_tracing(&mut self, state: &mut FrameState, starved: &AtomicBool) -> Result<(), Fault> {
         let frame = state.shared.frame;
         loop {
-            // Read before the tiles are drained: a tracer done has handed over every tile.
-            let done = traced.load(Ordering::Acquire);
-            while let Ok(t) = tiles.try_recv() {
-                self.route(state, t)?;
-            }
-            if done {
-                return Ok(());
-            }
+            // (Nothing here waits on another rank for long: the tracer's wait for tiles is
+            // bounded, and so is every wait after it.)
             if starved.load(Ordering::Acquire) {
                 let master = self.master_rank();
                 return Err(Fault::Silent {
@@ -761,10 +779,12 @@ impl Node {
                     waiting_for: "tiles to trace",
                 });
             }
-            // (Nothing here waits on another rank for long: the tracer's wait for tiles is
-            // bounded, and so is every wait after it.)
-            if let Some((from, m)) = self.receive(frame, Duration::from_micros(500))? {
-                self.take(state, from, m)?;
+            match self.receive(frame, TRACER_WAKE)? {
+                Some(Incoming::Tile(t)) => self.route(state, t)?,
+                Some(Incoming::Message(from, m)) => self.take(state, from, m)?,
+                // (After its last tile, on the same channel.)
+                Some(Incoming::Traced) => return Ok(()),
+                None => {}
             }
         }
     }
@@ -932,7 +952,7 @@ impl Node {
                     return Ok(());
                 }
             }
-            match self.receive(frame, WAKE)? {
+            match self.message(frame, WAKE)? {
                 Some((from, m)) => {
                     self.take(state, from, m)?;
                     last_heard = Instant::now();
@@ -1032,7 +1052,7 @@ impl Node {
     fn await_parts(&mut self, frame: u64, canvas: &mut Canvas) -> Result<Duration, Fault> {
         let start = Instant::now();
         while !canvas.complete() {
-            match self.receive(frame, WAKE)? {
+            match self.message(frame, WAKE)? {
                 Some((from, Message::Part { rect, rgba, depth, .. })) => {
                     let damaged = |why: String| Fault::Damaged { rank: from, why };
                     let rgba = rgba.unpack().map_err(damaged)?;

@@ -32,6 +32,7 @@ pub mod frame;
 mod gl_enum;
 pub mod ids;
 pub mod instance;
+pub mod join;
 pub mod lighting;
 pub mod merge;
 pub mod mesh;
