@@ -2,7 +2,8 @@
 //! image-parallel picture is the same for 1 to 4 ranks over TCP and equal to one process's
 //! picture of all the data, with AO, shadows and a reflection crossing the ranks' pieces;
 //! data-parallel mode composites as before; a rank that stops answering is named within the
-//! time limit; programs that do not use MPI never load it.
+//! time limit, on one machine and across network-namespace hosts (scripts/lib/netns-hosts, a
+//! link cut mid-frame); programs that do not use MPI never load it.
 
 mod common;
 
@@ -505,4 +506,142 @@ fn a_mesh_drawn_in_pieces_by_the_ranks_is_one_mesh_built_once() {
             assert_eq!(field(l, "triangles"), triangles, "{l}");
         }
     }
+}
+
+/// Hosts with real links on this machine (scripts/lib/netns-hosts): a network namespace per
+/// host, each with its own address, joined through a bridge; removed, with every process in
+/// them, when dropped (on a failure too).
+struct Hosts {
+    name: String,
+}
+
+impl Hosts {
+    fn script() -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/lib/netns-hosts")
+    }
+
+    /// `n` hosts named `name`-h0.., their links shaped to `rate` (tc's token bucket).
+    fn up(name: &str, n: u32, rate: &str) -> Hosts {
+        // Left over from a run that was killed: gone first.
+        let _ = Command::new(Self::script()).args(["down", name]).status();
+        let hosts = Hosts { name: name.to_string() };
+        run_ok(
+            Command::new(Self::script()).args(["up", name, &n.to_string(), rate]),
+            "network namespaces for test hosts (ip netns: root is needed)",
+        );
+        hosts
+    }
+
+    fn tool(&self, args: &[&str]) -> String {
+        stdout(&run_ok(Command::new(Self::script()).args(args), &format!("netns-hosts {args:?}"))).trim().to_string()
+    }
+
+    /// mpirun on host 0 for one rank on each host, Open MPI's daemons started on the others
+    /// through the namespace agent, every byte over the hosts' links (TCP on their network).
+    fn mpirun(&self) -> Command {
+        let addresses = self.tool(&["addresses", &self.name]).replace('\n', ",");
+        let subnet = self.tool(&["subnet", &self.name]);
+        let mut cmd = Command::new(Self::script());
+        cmd.args(["run", &self.name, "0", "timeout", "-k", "5", "120", "mpirun", "--allow-run-as-root"]);
+        cmd.args(["--host", &addresses, "-np", &addresses.split(',').count().to_string()]);
+        cmd.arg("--mca").arg("plm_rsh_agent").arg(format!("{} rsh", Self::script().display()));
+        for key in ["oob_tcp_if_include", "btl_tcp_if_include"] {
+            cmd.args(["--mca", key, &subnet]);
+        }
+        cmd.args(["--mca", "btl", "self,tcp"]);
+        without_glray(&mut cmd);
+        cmd
+    }
+
+    /// Bytes host `k` has received on its link.
+    fn received(&self, k: u32) -> u64 {
+        let ns = format!("{}-h{k}", self.name);
+        let out = run_ok(
+            Command::new("ip").args(["netns", "exec", &ns, "cat", "/sys/class/net/eth0/statistics/rx_bytes"]),
+            "rx_bytes",
+        );
+        stdout(&out).trim().parse().unwrap()
+    }
+}
+
+impl Drop for Hosts {
+    fn drop(&mut self) {
+        let _ = Command::new(Self::script()).args(["down", &self.name]).status();
+    }
+}
+
+#[test]
+fn three_hosts_joined_by_shaped_links_trace_one_process_picture() {
+    let dir = scratch("mpi-hosts");
+    let full = [("GLRAY_PRESET", "full")];
+    let alone = dir.join("alone.png");
+    let mut cmd = command(Way::Preload, &[], &icet_like(), 120);
+    cmd.arg(&alone).arg("2").envs(full).env("GLRAY_DISTRIBUTE", "local");
+    run_ok(&mut cmd, "icet_like alone");
+    // Three hosts on a 1 Gbit/s-like network.
+    let hosts = Hosts::up("gx", 3, "1gbit");
+    let before = hosts.received(1);
+    let png = dir.join("hosts.png");
+    let mut cmd = hosts.mpirun();
+    cmd.arg("-x").arg(format!("LD_PRELOAD={}", libglray().display()));
+    cmd.args(["-x", "GLRAY_PRESET=full", "-x", "GLRAY_STATS=stderr"]);
+    cmd.arg(icet_like()).arg(&png).arg("2");
+    let said = stderr(&run_ok(&mut cmd, "icet_like on 3 namespace hosts"));
+    assert!(pixels(&png) == pixels(&alone), "3 hosts: not the one-process picture\n{said}");
+    for r in 0..3 {
+        assert!(said.contains(&format!("rank {r} of 3: ")), "rank {r} traced a share: {said}");
+    }
+    // The ranks' scenes and tiles crossed host 1's link (the scene alone is ~100 KB).
+    let crossed = hosts.received(1) - before;
+    assert!(crossed > 100_000, "{crossed} bytes reached host 1 over its link");
+}
+
+#[test]
+fn a_host_whose_link_is_cut_mid_frame_is_named_within_the_timeout() {
+    let dir = scratch("mpi-cut");
+    let log = dir.join("stderr.txt");
+    let hosts = Hosts::up("gc", 3, "none");
+    let mut cmd = hosts.mpirun();
+    cmd.arg("-x").arg(format!("LD_PRELOAD={}", libglray().display()));
+    // Rank 2 stops itself as frame 3 begins (past the host's own barrier, so rank 0 then waits
+    // inside glray for its part of the frame); its link is cut, and it is let go: alive, on a
+    // dead link.
+    cmd.args(["-x", "GLRAY_PRESET=gl", "-x", "GLRAY_MPI_TIMEOUT=3", "-x", "ICET_LIKE_STALL=2:3"]);
+    cmd.arg(icet_like()).arg(dir.join("out.png")).arg("100000");
+    let child = cmd.stdout(Stdio::null()).stderr(std::fs::File::create(&log).unwrap()).spawn().expect("mpirun");
+    let _job = Stopped(child);
+    let read = || std::fs::read_to_string(&log).unwrap_or_default();
+    let until = |what: &dyn Fn(&str) -> bool, limit: Duration| {
+        let start = Instant::now();
+        while start.elapsed() < limit {
+            if what(&read()) {
+                return true;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        false
+    };
+    let pid_line =
+        |s: &str| s.lines().find_map(|l| l.strip_prefix("icet_like: rank 2 of 3 is pid ")?.trim().parse::<i32>().ok());
+    assert!(until(&|s| pid_line(s).is_some(), Duration::from_secs(30)), "{}", read());
+    let pid = pid_line(&read()).unwrap();
+    let stopped = || {
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+        stat.rsplit(')').next().is_some_and(|rest| rest.trim_start().starts_with('T'))
+    };
+    let start = Instant::now();
+    while !stopped() && start.elapsed() < Duration::from_secs(30) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(stopped(), "rank 2 did not stop itself: {}", read());
+    hosts.tool(&["cut", "gc", "2"]);
+    let cut = Instant::now();
+    // SAFETY: a signal to a process this test started.
+    unsafe { libc::kill(pid, libc::SIGCONT) };
+    let named = until(&|s| s.contains("rank 2 did not answer within 3.0 s"), Duration::from_secs(30));
+    let took = cut.elapsed();
+    let said = read();
+    assert!(named, "rank 0 names the host cut off: {said}");
+    assert!(took < Duration::from_secs(3 + 8), "named {took:?} after the cut");
+    assert!(said.contains("this rank traces its own data from here on"), "{said}");
 }
