@@ -19,7 +19,7 @@
  * frames a ray tracer may refine).
  *
  * Rank 0 writes the composite of the last frame as a binary PPM (its own, not glray's image
- * code). Built with: mpicc direct_send.c -o direct_send -lGL -lX11 -lm (scripts/lib/build.sh). */
+ * code), and each frame's time on standard output. Built with: mpicc direct_send.c -o direct_send -lGL -lX11 -lm (scripts/lib/build.sh). */
 #include <GL/gl.h>
 #include <GL/glx.h>
 #include <X11/Xlib.h>
@@ -184,6 +184,7 @@ int main(int argc, char **argv) {
                                   {0.7f, 0.3f, 0.8f}, {0.9f, 0.9f, 0.9f}, {0.3f, 0.8f, 0.8f}};
 
   for (int frame = 0; frame < frames; frame++) {
+    double start = MPI_Wtime();
     glViewport(0, 0, w, h);
     glClearColor(0, 0, 0, 0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -296,6 +297,8 @@ int main(int argc, char **argv) {
       }
     }
     glXSwapBuffers(dpy, win);
+    /* A frame's time, drawing to swap, as the host sees it (scripts/bench-mpi). */
+    if (rank == 0) printf("direct_send: frame %d: %.4f s\n", frame, MPI_Wtime() - start);
   }
   glXMakeCurrent(dpy, None, NULL);
   glXDestroyContext(dpy, ctx);
