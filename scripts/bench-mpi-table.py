@@ -79,7 +79,20 @@ measured["trace_ms_1"] = med([r["rank_trace_ms"] for r in rank0("ranks-1x1")])
 measured["tiles_total"] = med([r["tiles_total"] for r in two])
 measured["received_per_pixel"] = per_pixel(two, "bytes_received")
 measured["raw_per_pixel"] = per_pixel(two, "raw_received")
-measured["frame_1"] = times("ranks-1x1")[1]
+gl = rank0("gl-2x1")
+measured["gl_received_per_pixel"] = per_pixel(gl, "bytes_received")
+measured["gl_raw_per_pixel"] = per_pixel(gl, "raw_received")
+for np in [1, 2, 3, 4]:
+    measured[f"frame_{np}"] = times(f"ranks-{np}x1")[1]
+one_rank = rank0("ranks-1x1")
+measured["band_ms_1"] = med([r["band_ms"] for r in one_rank])
+measured["capture_ms"] = med([r["capture_ms"] for r in one_rank])
+measured["mrays_per_s_core"] = med([r["rays"] / r["rank_trace_ms"] / 1e3 for r in one_rank])
+every_two = [r for r in stats("ranks-2x1") if r["frame"] > 0 and "rank" in r]
+unpacked = sum(r.get("unpack_ms", 0) for r in every_two)
+packed = sum(r.get("pack_ms", 0) for r in every_two)
+measured["unpack_gb_s"] = sum(r["raw_received"] for r in every_two) / unpacked / 1e6 if unpacked else None
+measured["pack_gb_s"] = sum(r["raw_sent"] for r in every_two) / packed / 1e6 if packed else None
 
 print("\nCompression (mpi_compression), 2 ranks x 1 thread:\n")
 print("| link | compression | steady frame (s) | rank 0 receives, bytes a pixel | raw | ratio | first frame (s) |")

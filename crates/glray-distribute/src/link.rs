@@ -20,7 +20,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use glray_render::denoise::HeldRows;
-use glray_render::tiles::{TilePixels, TileWork};
+use glray_render::tiles::{TileGrid, TilePixels, TileWork};
 
 use crate::master::Master;
 use crate::pack::Compression;
@@ -273,11 +273,12 @@ impl Link {
 
     /// The tracer's side for frame `frame`: it asks for tiles through this link (answered at
     /// once by the master's rank, or by it over MPI), waiting at most `limit` for them, and
-    /// hands each traced tile to the rank's frame (`Event::Tile`). (An inline link is stepped
-    /// meanwhile by the thread that waits for the tracer.)
-    pub fn work<'a>(&self, frame: u64, abort: &'a AtomicBool, limit: Duration) -> LinkWork<'a> {
+    /// hands each traced tile of `grid` to the rank's frame (`Event::Tile`). (An inline link
+    /// is stepped meanwhile by the thread that waits for the tracer.)
+    pub fn work<'a>(&self, frame: u64, grid: TileGrid, abort: &'a AtomicBool, limit: Duration) -> LinkWork<'a> {
         LinkWork {
             frame,
+            grid,
             commands: Mutex::new(self.commands.clone()),
             grants: self.grants.clone(),
             done: Mutex::new(self.events.clone()),
@@ -310,6 +311,7 @@ const DRAIN: Duration = Duration::from_secs(2);
 /// The tracer's `TileWork` over a link.
 pub struct LinkWork<'a> {
     frame: u64,
+    grid: TileGrid,
     commands: Mutex<Sender<Command>>,
     grants: Arc<Mutex<Receiver<Grant>>>,
     done: Mutex<Sender<Event>>,
@@ -327,6 +329,10 @@ impl LinkWork<'_> {
 }
 
 impl TileWork for LinkWork<'_> {
+    fn grid(&self, _: u32, _: u32) -> TileGrid {
+        self.grid
+    }
+
     fn next(&self) -> Option<Vec<u32>> {
         let grants = self.grants.lock().unwrap_or_else(|e| e.into_inner());
         self.commands.lock().unwrap_or_else(|e| e.into_inner()).send(Command::Want { frame: self.frame }).ok()?;

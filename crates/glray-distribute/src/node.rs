@@ -104,6 +104,9 @@ pub struct FrameReport {
     /// denoising it.
     pub band_wait: Duration,
     pub band: Duration,
+    /// Compressing and decompressing messages (`mpi_compression`), on any of its threads.
+    pub pack: Duration,
+    pub unpack: Duration,
     /// Slowest rank's tracing time over the mean (rank 0 only).
     pub imbalance: Option<f64>,
     /// The picture was the last one's again (converged), or traced by rank 0 alone.
@@ -129,6 +132,8 @@ impl FrameReport {
             trace: self.trace + later.trace,
             band_wait: self.band_wait + later.band_wait,
             band: self.band + later.band,
+            pack: self.pack + later.pack,
+            unpack: self.unpack + later.unpack,
             untraced: self.untraced && later.untraced,
             ..later
         }
@@ -403,6 +408,7 @@ impl Node {
         self.frame += 1;
         let started = Instant::now();
         let counted = self.link.counters();
+        let packing = crate::pack::spent();
         let mut report = FrameReport { frame, ..FrameReport::default() };
         let want = if self.rank() == 0 || self.setup.parts == PictureParts::Whole {
             let (w, h) = mine.size();
@@ -474,6 +480,8 @@ impl Node {
         let now = self.link.counters();
         (report.bytes_sent, report.bytes_received) = (now[0] - counted[0], now[1] - counted[1]);
         (report.raw_sent, report.raw_received) = (now[2] - counted[2], now[3] - counted[3]);
+        let packed = crate::pack::spent();
+        (report.pack, report.unpack) = (packed.0 - packing.0, packed.1 - packing.1);
         if present {
             self.last_picture = picture.clone();
             Ok((picture, report))
@@ -625,7 +633,8 @@ impl Node {
         report: &mut FrameReport,
     ) -> Result<Rendered, Fault> {
         let (w, h) = shared.merged.size();
-        let grid = TileGrid::new(w, h);
+        // Tiles small enough for every tracing rank to get its share in several chunks.
+        let grid = TileGrid::for_ranks(w, h, self.tracing.len());
         let bands = Bands::new(w as usize, h as usize, &self.tracing);
         report.tiles_total = grid.count();
         let me = self.rank();
@@ -669,7 +678,7 @@ impl Node {
             let _ = done.lock().unwrap_or_else(|e| e.into_inner()).send(Event::Traced);
         }
         let limit = self.limit();
-        let work = self.link.work(shared.frame, &abort, limit);
+        let work = self.link.work(shared.frame, grid, &abort, limit);
         let starved = work.starved();
         let served = pool.in_place_scope(|s| {
             let tracer = &mut *renderer;

@@ -7,7 +7,24 @@
 //! hold long runs a compressor finds, where the floats as they lie in memory look random to
 //! it. A pixel record (`AoPixel`, 44 bytes) is shuffled as one value of 44 bytes.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
 use serde::{Deserialize, Serialize};
+
+/// Time this process spent packing and unpacking, in nanoseconds (on whichever thread: the
+/// host's, the MPI thread), for the statistics' `pack_ms` and `unpack_ms`.
+static PACKING: AtomicU64 = AtomicU64::new(0);
+static UNPACKING: AtomicU64 = AtomicU64::new(0);
+
+/// Time spent packing and unpacking so far in this process.
+pub fn spent() -> (Duration, Duration) {
+    (Duration::from_nanos(PACKING.load(Ordering::Relaxed)), Duration::from_nanos(UNPACKING.load(Ordering::Relaxed)))
+}
+
+fn count(counter: &AtomicU64, since: Instant) {
+    counter.fetch_add(since.elapsed().as_nanos() as u64, Ordering::Relaxed);
+}
 
 /// How message fields are compressed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -56,6 +73,13 @@ impl Packed {
     /// `bytes` (values of `value_size` bytes each) packed as `how` says. Fields smaller than
     /// `SMALL` go as they are: compressing them saves nothing worth the time.
     pub fn new(bytes: &[u8], value_size: usize, how: Compression) -> Packed {
+        let since = Instant::now();
+        let packed = Self::pack(bytes, value_size, how);
+        count(&PACKING, since);
+        packed
+    }
+
+    fn pack(bytes: &[u8], value_size: usize, how: Compression) -> Packed {
         let raw = bytes.len() as u64;
         if bytes.len() < SMALL || how == Compression::None {
             return Packed { how: RAW, value_size: 1, raw, bytes: bytes.to_vec() };
@@ -102,6 +126,13 @@ impl Packed {
 
     /// The original bytes, or why they cannot be had (a damaged message).
     pub fn unpack(self) -> Result<Vec<u8>, String> {
+        let since = Instant::now();
+        let out = self.unpacked();
+        count(&UNPACKING, since);
+        out
+    }
+
+    fn unpacked(self) -> Result<Vec<u8>, String> {
         let raw = usize::try_from(self.raw).map_err(|_| format!("a field of {} bytes", self.raw))?;
         // The room for it is asked for, not taken: a damaged size is an error, never an abort.
         let room = |raw: usize| -> Result<Vec<u8>, String> {

@@ -55,7 +55,24 @@ pub(crate) fn split<'a>(
     width: usize,
     tiled: bool,
 ) -> Vec<Piece<'a>> {
-    let (band, segment) = if tiled { (TILE, SEGMENT) } else { (2, width) };
+    split_in(rgba, depth, colors, ao, width, if tiled { Some(SEGMENT) } else { None })
+}
+
+/// `split`, tiled pieces `segment` columns wide (a multiple of `TILE`, at most `SEGMENT`: the
+/// side of the tiles image-parallel ranks are handed, so that a piece lies in one tile). A
+/// pixel comes out the same whatever piece it is traced in.
+pub(crate) fn split_in<'a>(
+    rgba: &'a mut [u8],
+    depth: &'a mut [f32],
+    colors: Option<&'a mut [Vec4]>,
+    ao: Option<&'a mut [AoPixel]>,
+    width: usize,
+    segment: Option<usize>,
+) -> Vec<Piece<'a>> {
+    let (band, segment) = match segment {
+        Some(s) => (TILE, s.clamp(TILE, SEGMENT) / TILE * TILE),
+        None => (2, width),
+    };
     let mut pieces = Vec::new();
     if width == 0 {
         // A window with no columns (minimised) has no pixels, and no rows to cut.

@@ -21,7 +21,7 @@ use crate::progress::Progress;
 use crate::resolve::closest_hit_suffices;
 use crate::scene::{Hit, Scene};
 use crate::signature::signature;
-use crate::tiles::{Layers, TileGrid, TileWork};
+use crate::tiles::{Layers, TileWork};
 use crate::tracer::{count, Scratch, Tracer};
 
 /// A rendered frame, laid out as GL's framebuffer: rows bottom-up.
@@ -789,12 +789,13 @@ impl Job<'_> {
             Some(work) => {
                 // Chunk by chunk as they are handed out: each chunk's pieces on every thread,
                 // then its tiles cut out and handed back.
-                let grid = TileGrid::new(width, height);
+                let grid = work.grid(width, height);
                 let mut wanted = vec![false; grid.count() as usize];
                 while let Some(chunk) = work.next() {
                     let chunk: Vec<u32> = chunk.into_iter().filter(|&t| t < grid.count()).collect();
                     chunk.iter().for_each(|&t| wanted[t as usize] = true);
-                    pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), ao.as_deref_mut(), w, true)
+                    let (c, a) = (colors.as_deref_mut(), ao.as_deref_mut());
+                    pieces::split_in(&mut rgba, &mut depth, c, a, w, Some(grid.side()))
                         .into_par_iter()
                         .filter(|p| wanted[grid.tile_at(p.x0, p.y0) as usize])
                         .for_each(process);
@@ -841,6 +842,7 @@ impl Job<'_> {
 mod tests {
     use super::*;
     use crate::options::Effects;
+    use crate::tiles::TileGrid;
     use glam::{DMat4, Vec2, Vec3};
     use glray_gl::{GL_COLOR_MATERIAL, GL_DEPTH_TEST, GL_LIGHT0, GL_LIGHTING};
     use glray_scene::camera::Viewport;
@@ -1051,12 +1053,16 @@ mod tests {
 
     /// Hands out a frame's tiles in chunks of `chunk` from the last, and keeps what comes back.
     struct Chunks {
+        grid: TileGrid,
         left: std::sync::Mutex<Vec<u32>>,
         chunk: usize,
         back: std::sync::Mutex<Vec<crate::tiles::TilePixels>>,
     }
 
     impl crate::tiles::TileWork for Chunks {
+        fn grid(&self, _: u32, _: u32) -> TileGrid {
+            self.grid
+        }
         fn next(&self) -> Option<Vec<u32>> {
             let mut left = self.left.lock().unwrap();
             let at = left.len().saturating_sub(self.chunk);
@@ -1078,7 +1084,8 @@ mod tests {
         let c = followed_at(150, 100, &calls);
         let frame = c.frame().clone();
         assert!(!frame.is_empty() && Renderer::shares(&frame));
-        for preset in ["gl", "ao", "full"] {
+        // Tiles of 64, 32 and 16 pixels (0, 1 and 2 ranks to share 150x100 by 16 tiles each).
+        for (preset, ranks) in [("gl", 0), ("ao", 0), ("full", 0), ("ao", 1), ("full", 2)] {
             // Twice: the second pass adds up to the first (and the AO's history is followed).
             let options = Options { effects: Effects::preset(preset).unwrap(), ..Options::default() };
             let (mut whole, mut shared) = (Renderer::new(options), Renderer::new(options));
@@ -1089,9 +1096,10 @@ mod tests {
                     break;
                 }
                 let expected = whole.render(&frame, 150, 100, None);
-                let grid = crate::tiles::TileGrid::new(150, 100);
+                let grid = TileGrid::for_ranks(150, 100, ranks);
+                assert_eq!(grid.side(), [64, 32, 16][ranks]);
                 let left = std::sync::Mutex::new((0..grid.count()).collect());
-                let work = Chunks { left, chunk: 2, back: Default::default() };
+                let work = Chunks { grid, left, chunk: 2, back: Default::default() };
                 let linear = shared.linear(key);
                 let ao = shared.denoises();
                 assert_eq!(ao, preset != "gl");
@@ -1114,7 +1122,8 @@ mod tests {
                 let gathered = shared.add_pass(&frame, key, gathered, linear.then_some(colors), ao.then_some(layer));
                 assert!(
                     gathered == expected,
-                    "{preset}, pass {pass}: the tiles gathered are the whole frame's picture"
+                    "{preset}, pass {pass}, tiles of {}: the tiles gathered are the whole frame's picture",
+                    grid.side()
                 );
             }
         }

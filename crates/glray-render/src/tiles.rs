@@ -1,7 +1,8 @@
 //! A frame traced in tiles handed out one chunk at a time (`TileWork`): how image-parallel
-//! ranks share a frame. The tiles are squares of `TILE_SIDE` pixels in a fixed grid over the
-//! window (`TileGrid`), each the same pieces (`pieces`) a whole-frame render traces, so that a
-//! pixel comes out the same whichever rank, thread or chunk traces it.
+//! ranks share a frame. The tiles are squares in a fixed grid over the window (`TileGrid`): 64
+//! pixels a side, or 32 or 16 when there are many ranks to share them (`TileGrid::for_ranks`),
+//! traced in pieces that lie inside one tile; a pixel comes out the same whichever rank,
+//! thread, chunk or tile size traces it.
 
 use glam::Vec4;
 
@@ -11,39 +12,64 @@ use crate::denoise::AoPixel;
 /// one segment of their columns (`pieces::TILE`, `pieces::SEGMENT`).
 pub const TILE_SIDE: usize = crate::pieces::SEGMENT;
 
+/// The sides a grid may take, largest first: multiples of the pieces' bands of rows.
+pub const TILE_SIDES: [usize; 3] = [TILE_SIDE, TILE_SIDE / 2, TILE_SIDE / 4];
+
+/// Tiles a tracing rank is to have at least, for the master's chunks to even the ranks out (at
+/// 64x64, a 1280x720 frame has 240 tiles: 3.75 a rank at 64 ranks, and one slow tile is a
+/// quarter of a rank's frame).
+pub const TILES_PER_RANK: usize = 16;
+
 /// The tiles of a `width` x `height` window, numbered row by row from the bottom left (GL's
 /// first row).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TileGrid {
     pub width: u32,
     pub height: u32,
+    side: usize,
 }
 
 impl TileGrid {
+    /// Tiles of `TILE_SIDE`.
     pub fn new(width: u32, height: u32) -> TileGrid {
-        TileGrid { width, height }
+        TileGrid { width, height, side: TILE_SIDE }
+    }
+
+    /// Tiles of the largest of `TILE_SIDES` that gives each of `ranks` tracing ranks
+    /// `TILES_PER_RANK` tiles (the smallest side when none does).
+    pub fn for_ranks(width: u32, height: u32, ranks: usize) -> TileGrid {
+        let side = TILE_SIDES
+            .into_iter()
+            .find(|&side| TileGrid { width, height, side }.count() as usize >= TILES_PER_RANK * ranks)
+            .unwrap_or(TILE_SIDES[TILE_SIDES.len() - 1]);
+        TileGrid { width, height, side }
+    }
+
+    /// The side of its tiles.
+    pub fn side(&self) -> usize {
+        self.side
     }
 
     fn columns(&self) -> usize {
-        (self.width as usize).div_ceil(TILE_SIDE)
+        (self.width as usize).div_ceil(self.side)
     }
 
     /// How many tiles cover the window.
     pub fn count(&self) -> u32 {
-        (self.columns() * (self.height as usize).div_ceil(TILE_SIDE)) as u32
+        (self.columns() * (self.height as usize).div_ceil(self.side)) as u32
     }
 
     /// Tile `tile`'s first column and row, and its width and height (smaller at the right and
     /// top edges).
     pub fn rect(&self, tile: u32) -> (usize, usize, usize, usize) {
         let (tx, ty) = (tile as usize % self.columns(), tile as usize / self.columns());
-        let (x0, y0) = (tx * TILE_SIDE, ty * TILE_SIDE);
-        (x0, y0, TILE_SIDE.min(self.width as usize - x0), TILE_SIDE.min(self.height as usize - y0))
+        let (x0, y0) = (tx * self.side, ty * self.side);
+        (x0, y0, self.side.min(self.width as usize - x0), self.side.min(self.height as usize - y0))
     }
 
     /// The tile holding pixel (x, y).
     pub fn tile_at(&self, x: usize, y: usize) -> u32 {
-        ((y / TILE_SIDE) * self.columns() + x / TILE_SIDE) as u32
+        ((y / self.side) * self.columns() + x / self.side) as u32
     }
 
     /// Tile `tile`'s pixels cut out of a whole image's (rows bottom-up, as `Rendered`).
@@ -138,6 +164,10 @@ pub struct TilePixels {
 /// Where the tiles a render traces come from and where they go: a rank's share of a frame,
 /// asked for chunk by chunk while it traces (`Renderer::render_tiles`).
 pub trait TileWork: Sync {
+    /// The grid the tiles are numbered in, over a `width` x `height` window.
+    fn grid(&self, width: u32, height: u32) -> TileGrid {
+        TileGrid::new(width, height)
+    }
     /// The next tiles to trace; None when there are no more for this rank this frame.
     fn next(&self) -> Option<Vec<u32>>;
     /// A tile traced.
@@ -175,5 +205,15 @@ mod tests {
         let no_ao = TilePixels { ao: vec![], ..grid.cut(0, whole) };
         let into = LayersMut { rgba: &mut r2, depth: &mut d2, colors: Some(&mut c2), ao: Some(&mut a2) };
         assert!(!grid.paste(&no_ao, into), "a tile without the AO the image keeps is refused");
+    }
+
+    #[test]
+    fn many_ranks_get_smaller_tiles() {
+        let sides: Vec<usize> = [1, 2, 15, 16, 32, 64, 256].map(|n| TileGrid::for_ranks(1280, 720, n).side()).to_vec();
+        // 240 tiles of 64 (15 ranks' worth), 920 of 32 (57), 3,600 of 16.
+        assert_eq!(sides, [64, 64, 64, 32, 32, 16, 16]);
+        let grid = TileGrid::for_ranks(1280, 720, 64);
+        assert_eq!((grid.count(), grid.rect(81)), (3600, (16, 16, 16, 16)));
+        assert_eq!(grid.tile_at(1279, 719), 3599);
     }
 }
