@@ -88,6 +88,9 @@ one_rank = rank0("ranks-1x1")
 measured["band_ms_1"] = med([r["band_ms"] for r in one_rank])
 measured["capture_ms"] = med([r["capture_ms"] for r in one_rank])
 measured["mrays_per_s_core"] = med([r["rays"] / r["rank_trace_ms"] / 1e3 for r in one_rank])
+# Each rank's tracing speed with 2 ranks on the node (every rank's steady frames).
+measured["mrays_per_s_core_2"] = med([r["rays"] / r["rank_trace_ms"] / 1e3 for r in stats("ranks-2x1")
+                                      if r["frame"] > 0 and "rank" in r])
 every_two = [r for r in stats("ranks-2x1") if r["frame"] > 0 and "rank" in r]
 unpacked = sum(r.get("unpack_ms", 0) for r in every_two)
 packed = sum(r.get("pack_ms", 0) for r in every_two)

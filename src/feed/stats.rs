@@ -71,7 +71,7 @@ impl RankStats {
             ",\"rank\":{},\"ranks\":{},\"tiles\":{},\"tiles_total\":{},\"bytes_sent\":{},\"bytes_received\":{},\
              \"raw_sent\":{},\"raw_received\":{},\"pixels_elsewhere\":{},\"received_per_pixel\":{:.3},\
              \"wait_ms\":{:.3},\"exchange_ms\":{:.3},\"rank_trace_ms\":{:.3},\"band_wait_ms\":{:.3},\"band_ms\":{:.3},\
-             \"pack_ms\":{:.3},\"unpack_ms\":{:.3},\"imbalance\":{}",
+             \"pack_ms\":{:.3},\"unpack_ms\":{:.3},\"picture_pixels\":{},\"imbalance\":{}",
             self.rank,
             self.ranks,
             r.tiles,
@@ -89,6 +89,7 @@ impl RankStats {
             ms(r.band),
             ms(r.pack),
             ms(r.unpack),
+            r.picture_pixels,
             r.imbalance.map_or("null".to_string(), |i| format!("{i:.3}"))
         )
     }

@@ -107,6 +107,8 @@ pub struct FrameReport {
     /// Compressing and decompressing messages (`mpi_compression`), on any of its threads.
     pub pack: Duration,
     pub unpack: Duration,
+    /// Pixels of the picture other ranks sent this rank (its part: `mpi_picture`).
+    pub picture_pixels: u64,
     /// Slowest rank's tracing time over the mean (rank 0 only).
     pub imbalance: Option<f64>,
     /// The picture was the last one's again (converged), or traced by rank 0 alone.
@@ -133,6 +135,7 @@ impl FrameReport {
             band_wait: self.band_wait + later.band_wait,
             band: self.band + later.band,
             pack: self.pack + later.pack,
+            picture_pixels: self.picture_pixels + later.picture_pixels,
             unpack: self.unpack + later.unpack,
             untraced: self.untraced && later.untraced,
             ..later
@@ -218,6 +221,8 @@ pub struct Node {
     held: Vec<ObjectStore>,
     /// The meshes joined from the ranks' pieces of one mesh.
     joined: glray_scene::join::Joined,
+    /// Pixels of the picture other ranks have sent this rank, all told (`FrameReport::picture_pixels`).
+    picture_pixels: u64,
     /// Messages of frames this rank has not reached yet.
     ahead: VecDeque<(usize, Message)>,
     /// The accumulation key of the last frame and the passes traced under it.
@@ -308,6 +313,7 @@ impl Node {
             sent: ObjectStore::default(),
             held: (0..size).map(|_| ObjectStore::default()).collect(),
             joined: Default::default(),
+            picture_pixels: 0,
             ahead: VecDeque::new(),
             run: None,
             last_frame: None,
@@ -409,6 +415,7 @@ impl Node {
         let started = Instant::now();
         let counted = self.link.counters();
         let packing = crate::pack::spent();
+        let pictured = self.picture_pixels;
         let mut report = FrameReport { frame, ..FrameReport::default() };
         let want = if self.rank() == 0 || self.setup.parts == PictureParts::Whole {
             let (w, h) = mine.size();
@@ -482,6 +489,7 @@ impl Node {
         (report.raw_sent, report.raw_received) = (now[2] - counted[2], now[3] - counted[3]);
         let packed = crate::pack::spent();
         (report.pack, report.unpack) = (packed.0 - packing.0, packed.1 - packing.1);
+        report.picture_pixels = self.picture_pixels - pictured;
         if present {
             self.last_picture = picture.clone();
             Ok((picture, report))
@@ -639,8 +647,21 @@ impl Node {
         report.tiles_total = grid.count();
         let me = self.rank();
         let mine = bands.of(me).map(|b| BandRows::new(b, shared.linear, shared.ao));
+        // The tracer's threads: its tiles, then its band's adding up and denoising (on the
+        // threads `threads` gives the rank, not rayon's pool of every core).
+        let owned;
+        let pool = match pool {
+            Some(p) => p,
+            None => {
+                owned = rayon::ThreadPoolBuilder::new()
+                    .build()
+                    .map_err(|e| Fault::Transport(format!("no threads: {e}")))?;
+                &owned
+            }
+        };
         let mut state = FrameState {
             shared,
+            pool,
             grid,
             bands,
             band: mine,
@@ -661,16 +682,6 @@ impl Node {
         let traces = self.tracing.contains(&me);
         let abort = AtomicBool::new(false);
         let tracing = Mutex::new((Duration::ZERO, 0u64));
-        let owned;
-        let pool = match pool {
-            Some(p) => p,
-            None => {
-                owned = rayon::ThreadPoolBuilder::new()
-                    .build()
-                    .map_err(|e| Fault::Transport(format!("no threads: {e}")))?;
-                &owned
-            }
-        };
         let done = Mutex::new(self.link.tracer_events());
         if !traces {
             // Rank 0 of the dedicated roles: nothing to trace (the frame counted all the same).
@@ -743,6 +754,7 @@ struct Shared<'a> {
 /// A shared frame as it goes on this rank.
 struct FrameState<'a> {
     shared: &'a Shared<'a>,
+    pool: &'a rayon::ThreadPool,
     grid: TileGrid,
     bands: Bands,
     /// This rank's band, as its rows arrive (None: it has none).
@@ -882,6 +894,7 @@ impl Node {
                 }
             }
             Message::Part { rect, rgba, depth, .. } => {
+                self.picture_pixels += u64::from(rect.width) * u64::from(rect.height);
                 let rgba = rgba.unpack().map_err(damaged)?;
                 let depth = unpacked::<f32>(depth).ok_or_else(|| damaged("damaged depths".into()))?;
                 if !state.canvas.paste(rect, &rgba, &depth) {
@@ -1026,7 +1039,8 @@ impl Node {
             renderer.take_history_rows(first, &past);
         }
         let (band, picture, colors, ao) = state.band.take().expect("a band").into_pass();
-        let picture = renderer.add_band_pass(shared.merged, shared.key, &band, picture, colors, ao);
+        let picture =
+            state.pool.install(|| renderer.add_band_pass(shared.merged, shared.key, &band, picture, colors, ao));
         if shared.ao {
             self.link.publish(shared.frame, renderer.held_history()).map_err(Fault::Transport)?;
         }
@@ -1063,6 +1077,7 @@ impl Node {
         while !canvas.complete() {
             match self.message(frame, WAKE)? {
                 Some((from, Message::Part { rect, rgba, depth, .. })) => {
+                    self.picture_pixels += u64::from(rect.width) * u64::from(rect.height);
                     let damaged = |why: String| Fault::Damaged { rank: from, why };
                     let rgba = rgba.unpack().map_err(damaged)?;
                     let depth = unpacked::<f32>(depth).ok_or_else(|| damaged("damaged depths".into()))?;
