@@ -548,13 +548,15 @@ impl Hosts {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/lib/netns-hosts")
     }
 
-    /// `n` hosts named `name`-h0.., their links shaped to `rate` (tc's token bucket).
+    /// `n` hosts named `name` and this test process's pid, -h0.., their links shaped to `rate`
+    /// (tc's token bucket): two suites at once (two clones) make hosts of their own.
     fn up(name: &str, n: u32, rate: &str) -> Hosts {
-        // Left over from a run that was killed: gone first.
-        let _ = Command::new(Self::script()).args(["down", name]).status();
-        let hosts = Hosts { name: name.to_string() };
+        let name = format!("{name}{}", std::process::id() % 100_000);
+        // Left over from a run of this pid that was killed: gone first.
+        let _ = Command::new(Self::script()).args(["down", &name]).status();
+        let hosts = Hosts { name: name.clone() };
         run_ok(
-            Command::new(Self::script()).args(["up", name, &n.to_string(), rate]),
+            Command::new(Self::script()).args(["up", &name, &n.to_string(), rate]),
             "network namespaces for test hosts (ip netns: root is needed)",
         );
         hosts
@@ -572,7 +574,7 @@ impl Hosts {
         let mut cmd = Command::new(Self::script());
         cmd.args(["run", &self.name, "0", "timeout", "-k", "5", "120", "mpirun", "--allow-run-as-root"]);
         cmd.args(["--host", &addresses, "-np", &addresses.split(',').count().to_string()]);
-        cmd.arg("--mca").arg("plm_rsh_agent").arg(format!("{} rsh", Self::script().display()));
+        cmd.arg("--mca").arg("plm_rsh_agent").arg(format!("{} rsh {}", Self::script().display(), self.name));
         for key in ["oob_tcp_if_include", "btl_tcp_if_include"] {
             cmd.args(["--mca", key, &subnet]);
         }
@@ -640,7 +642,7 @@ fn a_host_whose_link_is_cut_mid_frame_is_named_within_the_timeout() {
     let _job = Stopped(child);
     let watched = Watched(&log);
     let pid = watched.stalled_rank(2, 3);
-    hosts.tool(&["cut", "gc", "2"]);
+    hosts.tool(&["cut", &hosts.name, "2"]);
     let cut = Instant::now();
     // SAFETY: a signal to a process this test started.
     unsafe { libc::kill(pid, libc::SIGCONT) };
