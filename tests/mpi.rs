@@ -81,6 +81,15 @@ fn denoised_ambient_occlusion_is_close_to_the_converged_picture_still_and_moving
     assert!(moving >= 39.0 && moving >= raw + 10.0, "after motion: {moving:.1} dB denoised, {raw:.1} dB raw");
 }
 
+/// The anchors' isosurface of 100K triangles (`glray bench --save-mesh`), written into `dir`.
+fn isosurface_100k(dir: &Path) -> std::path::PathBuf {
+    let mesh = dir.join("iso-100K.bin");
+    let mut bench = Command::new(glray_bin());
+    bench.args(["bench", "--triangles", "100K", "--save-mesh"]).arg(&mesh);
+    run_ok(&mut bench, "glray bench --save-mesh");
+    mesh
+}
+
 #[test]
 fn the_denoisers_history_follows_a_turning_surface() {
     // The anchors' isosurface (100K triangles, `glray bench --save-mesh`) in the example host,
@@ -90,10 +99,7 @@ fn the_denoisers_history_follows_a_turning_surface() {
     // motion (with the history cut to one frame, 45.6: the boxes of the test above cannot tell,
     // their floor's AO changes under the turning boxes and is held to the frame).
     let dir = scratch("denoise-history");
-    let mesh = dir.join("iso-100K.bin");
-    let mut bench = Command::new(glray_bin());
-    bench.args(["bench", "--triangles", "100K", "--save-mesh"]).arg(&mesh);
-    run_ok(&mut bench, "glray bench --save-mesh");
+    let mesh = isosurface_100k(&dir);
     let run = |name: &str, frames: &str, orbit: &str, settings: &[(&str, &str)]| {
         let png = dir.join(format!("{name}.png"));
         let mut cmd = command(Way::Preload, &[], &icet_like(), 300);
@@ -497,10 +503,7 @@ fn a_mesh_drawn_in_pieces_by_the_ranks_is_one_mesh_built_once() {
     // the mesh one process draws (the picture is one process's, byte for byte), its tree built in
     // the first frame and kept (no tree built, no loose triangles, after it).
     let dir = scratch("mpi-pieces");
-    let mesh = dir.join("iso-100K.bin");
-    let mut bench = Command::new(glray_bin());
-    bench.args(["bench", "--triangles", "100K", "--save-mesh"]).arg(&mesh);
-    run_ok(&mut bench, "glray bench --save-mesh");
+    let mesh = isosurface_100k(&dir);
     let args = |png: &Path| -> Vec<String> {
         [png.display().to_string(), "4".into(), "320".into(), "240".into(), "1".into(), mesh.display().to_string()]
             .to_vec()

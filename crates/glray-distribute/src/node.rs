@@ -893,14 +893,7 @@ impl Node {
                     return Err(damaged(format!("rows {first_row}.. of tile {tile}, not for this rank's band")));
                 }
             }
-            Message::Part { rect, rgba, depth, .. } => {
-                self.picture_pixels += u64::from(rect.width) * u64::from(rect.height);
-                let rgba = rgba.unpack().map_err(damaged)?;
-                let depth = unpacked::<f32>(depth).ok_or_else(|| damaged("damaged depths".into()))?;
-                if !state.canvas.paste(rect, &rgba, &depth) {
-                    return Err(damaged(format!("a part {rect:?} of the picture this rank did not ask for")));
-                }
-            }
+            Message::Part { rect, rgba, depth, .. } => self.paste_part(&mut state.canvas, from, rect, rgba, depth)?,
             Message::History { first, rows, held, past, .. } => {
                 let past: Vec<Past> = unpacked(past).ok_or_else(|| damaged("damaged history rows".into()))?;
                 if !held {
@@ -1072,18 +1065,31 @@ impl Node {
 
     /// A rank other than 0, in a frame rank 0 renders alone: its part of the picture, and the
     /// time waited for it (bounded).
+    /// A part of the picture rank `from` sent, put in place (and counted).
+    fn paste_part(
+        &mut self,
+        canvas: &mut Canvas,
+        from: usize,
+        rect: Rect,
+        rgba: Packed,
+        depth: Packed,
+    ) -> Result<(), Fault> {
+        self.picture_pixels += u64::from(rect.width) * u64::from(rect.height);
+        let damaged = |why: String| Fault::Damaged { rank: from, why };
+        let rgba = rgba.unpack().map_err(damaged)?;
+        let depth = unpacked::<f32>(depth).ok_or_else(|| damaged("damaged depths".into()))?;
+        if !canvas.paste(rect, &rgba, &depth) {
+            return Err(damaged(format!("a part {rect:?} of the picture this rank did not ask for")));
+        }
+        Ok(())
+    }
+
     fn await_parts(&mut self, frame: u64, canvas: &mut Canvas) -> Result<Duration, Fault> {
         let start = Instant::now();
         while !canvas.complete() {
             match self.message(frame, WAKE)? {
                 Some((from, Message::Part { rect, rgba, depth, .. })) => {
-                    self.picture_pixels += u64::from(rect.width) * u64::from(rect.height);
-                    let damaged = |why: String| Fault::Damaged { rank: from, why };
-                    let rgba = rgba.unpack().map_err(damaged)?;
-                    let depth = unpacked::<f32>(depth).ok_or_else(|| damaged("damaged depths".into()))?;
-                    if !canvas.paste(rect, &rgba, &depth) {
-                        return Err(damaged(format!("a part {rect:?} of the picture this rank did not ask for")));
-                    }
+                    self.paste_part(canvas, from, rect, rgba, depth)?;
                 }
                 Some((from, other)) => {
                     return Err(Fault::Damaged { rank: from, why: format!("{other:?} out of turn") });

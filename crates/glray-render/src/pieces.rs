@@ -45,23 +45,12 @@ impl Piece<'_> {
     }
 }
 
-/// A `width`-pixel-wide image's rows split into pieces: bands of `TILE` rows and segments of
-/// `SEGMENT` columns with secondary rays (`tiled`), else whole pairs of rows.
+/// A `width`-pixel-wide image's rows split into pieces: with secondary rays, bands of `TILE`
+/// rows and segments of `segment` columns (a multiple of `TILE`, at most `SEGMENT`: `SEGMENT`
+/// for a whole frame, the side of the tiles image-parallel ranks are handed, so that a piece
+/// lies in one tile); without (None), whole pairs of rows. A pixel comes out the same whatever
+/// piece it is traced in.
 pub(crate) fn split<'a>(
-    rgba: &'a mut [u8],
-    depth: &'a mut [f32],
-    colors: Option<&'a mut [Vec4]>,
-    ao: Option<&'a mut [AoPixel]>,
-    width: usize,
-    tiled: bool,
-) -> Vec<Piece<'a>> {
-    split_in(rgba, depth, colors, ao, width, if tiled { Some(SEGMENT) } else { None })
-}
-
-/// `split`, tiled pieces `segment` columns wide (a multiple of `TILE`, at most `SEGMENT`: the
-/// side of the tiles image-parallel ranks are handed, so that a piece lies in one tile). A
-/// pixel comes out the same whatever piece it is traced in.
-pub(crate) fn split_in<'a>(
     rgba: &'a mut [u8],
     depth: &'a mut [f32],
     colors: Option<&'a mut [Vec4]>,
@@ -179,7 +168,7 @@ mod tests {
             let mut rgba: Vec<u8> = (0..w * h).flat_map(|i| (i as u32).to_le_bytes()).collect();
             let mut depth: Vec<f32> = (0..w * h).map(|i| i as f32).collect();
             let mut colors: Vec<Vec4> = (0..w * h).map(|i| Vec4::splat(i as f32)).collect();
-            let pieces = split(&mut rgba, &mut depth, Some(&mut colors), None, w, tiled);
+            let pieces = split(&mut rgba, &mut depth, Some(&mut colors), None, w, tiled.then_some(SEGMENT));
             let mut seen = vec![0u8; w * h];
             for p in &pieces {
                 let (rows, columns) = (p.rows(), p.columns());
@@ -205,6 +194,7 @@ mod tests {
             }
         }
         for tiled in [true, false] {
+            let tiled = tiled.then_some(SEGMENT);
             assert!(split(&mut [], &mut [], None, None, 0, tiled).is_empty(), "a window without columns has no pieces");
         }
     }

@@ -783,9 +783,12 @@ impl Job<'_> {
         // and a piece's work is one frame of a profile.
         let process: &(dyn Fn(Piece) + Sync) = &process;
         match self.work {
-            None => pieces::split(&mut rgba, &mut depth, colors.as_deref_mut(), ao.as_deref_mut(), w, secondary)
-                .into_par_iter()
-                .for_each(process),
+            None => {
+                let (c, a) = (colors.as_deref_mut(), ao.as_deref_mut());
+                pieces::split(&mut rgba, &mut depth, c, a, w, secondary.then_some(pieces::SEGMENT))
+                    .into_par_iter()
+                    .for_each(process)
+            }
             Some(work) => {
                 // Chunk by chunk as they are handed out: each chunk's pieces on every thread,
                 // then its tiles cut out and handed back.
@@ -795,7 +798,7 @@ impl Job<'_> {
                     let chunk: Vec<u32> = chunk.into_iter().filter(|&t| t < grid.count()).collect();
                     chunk.iter().for_each(|&t| wanted[t as usize] = true);
                     let (c, a) = (colors.as_deref_mut(), ao.as_deref_mut());
-                    pieces::split_in(&mut rgba, &mut depth, c, a, w, Some(grid.side()))
+                    pieces::split(&mut rgba, &mut depth, c, a, w, Some(grid.side()))
                         .into_par_iter()
                         .filter(|p| wanted[grid.tile_at(p.x0, p.y0) as usize])
                         .for_each(process);
