@@ -21,6 +21,7 @@ use std::time::Duration;
 use glray_core::config::Config;
 use glray_distribute::node::{Announced, PictureParts, Roles, Setup};
 use glray_distribute::pack::Compression;
+use glray_distribute::paging::{Budget, PagingSetup, Resident};
 use glray_distribute::{Agreement, FrameReport, Limits, Node, Transport};
 use glray_render::{Rendered, Renderer};
 use glray_scene::frame::Frame;
@@ -105,7 +106,7 @@ pub struct Shared {
 impl Distribution {
     pub fn configure(config: &Config) -> Distribution {
         Distribution {
-            replicated: config.distribute(in_mpi()) == "replicated",
+            replicated: matches!(config.distribute(in_mpi()), "replicated" | "paged"),
             settings: config.picture_settings(),
             setup: Setup {
                 limits: Limits { fixed: config.mpi_timeout().map(Duration::from_secs_f64) },
@@ -118,6 +119,14 @@ impl Distribution {
                 poll: Duration::from_micros(config.mpi_poll()),
                 compression: Compression::from_setting(config.mpi_compression()).unwrap_or_default(),
                 parts: if config.mpi_whole_picture() { PictureParts::Whole } else { PictureParts::Own },
+                paging: (config.distribute(in_mpi()) == "paged").then(|| PagingSetup {
+                    resident: if config.all_resident() { Resident::All } else { Resident::Fetch },
+                    budget: match config.cache_mb() {
+                        Some(mb) => Budget::Bytes(mb << 20),
+                        None => Budget::Fraction(config.cache_fraction()),
+                    },
+                    block_bytes: config.block_bytes(),
+                }),
             },
             node: None,
             stopped: false,

@@ -50,7 +50,7 @@ impl RankStats {
         let r = &self.report;
         format!(
             "; rank {} of {}: {} of {} tiles, {:.2} MB sent, {:.2} MB received ({:.2} MB before compression, {:.1} \
-             bytes a pixel traced elsewhere), waited {:.2} ms, band {:.2} ms{}",
+             bytes a pixel traced elsewhere), waited {:.2} ms, band {:.2} ms{}{}",
             self.rank,
             self.ranks,
             r.tiles,
@@ -61,7 +61,30 @@ impl RankStats {
             self.per_pixel(),
             ms(r.wait),
             ms(r.band),
-            r.imbalance.map_or(String::new(), |i| format!(", imbalance {i:.2} (slowest / mean)"))
+            r.imbalance.map_or(String::new(), |i| format!(", imbalance {i:.2} (slowest / mean)")),
+            r.paging.map_or(String::new(), |p| format!(
+                "; paging: {} block accesses ({} own, {} cached, {} fetched: {:.2}% missed), {} evicted, {:.2} MB \
+                 fetched ({:.2} ms mean, {:.2} ms p99, {:.2} ms max), stalled {:.2} ms, served {} blocks ({:.2} MB), \
+                 cache {:.1} of {:.1} MB, own {:.1} of {:.1} MB, peak memory {:.1} MB",
+                p.accesses,
+                p.resident,
+                p.cached,
+                p.misses,
+                p.miss_percent(),
+                p.evictions,
+                mb(p.bytes_fetched),
+                p.fetch_mean_ms,
+                p.fetch_p99_ms,
+                p.fetch_max_ms,
+                ms(p.stall),
+                p.served,
+                mb(p.served_bytes),
+                mb(p.cache_bytes),
+                mb(p.cache_capacity.min(p.scene_bytes)),
+                mb(p.own_bytes),
+                mb(p.scene_bytes),
+                mb(p.peak_memory)
+            ))
         )
     }
 
@@ -71,7 +94,7 @@ impl RankStats {
             ",\"rank\":{},\"ranks\":{},\"tiles\":{},\"tiles_total\":{},\"bytes_sent\":{},\"bytes_received\":{},\
              \"raw_sent\":{},\"raw_received\":{},\"pixels_elsewhere\":{},\"received_per_pixel\":{:.3},\
              \"wait_ms\":{:.3},\"exchange_ms\":{:.3},\"rank_trace_ms\":{:.3},\"band_wait_ms\":{:.3},\"band_ms\":{:.3},\
-             \"pack_ms\":{:.3},\"unpack_ms\":{:.3},\"picture_pixels\":{},\"imbalance\":{}",
+             \"pack_ms\":{:.3},\"unpack_ms\":{:.3},\"picture_pixels\":{},\"imbalance\":{}{}",
             self.rank,
             self.ranks,
             r.tiles,
@@ -90,7 +113,34 @@ impl RankStats {
             ms(r.pack),
             ms(r.unpack),
             r.picture_pixels,
-            r.imbalance.map_or("null".to_string(), |i| format!("{i:.3}"))
+            r.imbalance.map_or("null".to_string(), |i| format!("{i:.3}")),
+            r.paging.map_or(String::new(), |p| format!(
+                ",\"paging\":{{\"accesses\":{},\"resident\":{},\"cached\":{},\"misses\":{},\"waits\":{},\
+                 \"miss_percent\":{:.4},\"evictions\":{},\"bytes_fetched\":{},\"fetch_mean_ms\":{:.3},\
+                 \"fetch_p99_ms\":{:.3},\"fetch_max_ms\":{:.3},\"stall_ms\":{:.3},\"served\":{},\"served_bytes\":{},\
+                 \"cache_bytes\":{},\"cache_capacity\":{},\"over\":{},\"own_bytes\":{},\"scene_bytes\":{},\
+                 \"peak_memory\":{}}}",
+                p.accesses,
+                p.resident,
+                p.cached,
+                p.misses,
+                p.waits,
+                p.miss_percent(),
+                p.evictions,
+                p.bytes_fetched,
+                p.fetch_mean_ms,
+                p.fetch_p99_ms,
+                p.fetch_max_ms,
+                ms(p.stall),
+                p.served,
+                p.served_bytes,
+                p.cache_bytes,
+                p.cache_capacity.min(p.scene_bytes),
+                p.over,
+                p.own_bytes,
+                p.scene_bytes,
+                p.peak_memory
+            ))
         )
     }
 }

@@ -24,6 +24,8 @@ pub enum Kind {
     Float(f64, f64),
     /// true or false; empty means "the preset's".
     OptionalBool,
+    /// A share in (0, 1], as a fraction (1/8) or a number (0.125).
+    Fraction,
 }
 
 /// One setting: its key in the TOML file; its environment variable is GLRAY_ + KEY uppercased.
@@ -40,7 +42,8 @@ pub const PRESETS: &[&str] = &["off", "gl", "ao", "full"];
 pub const TRIGGERS: &[&str] = &["auto", "swap", "finish", "flush", "readpixels"];
 pub const LIGHTING: &[&str] = &["vertex", "pixel"];
 pub const PRESENTS: &[&str] = &["auto", "pixels", "shader"];
-pub const DISTRIBUTIONS: &[&str] = &["auto", "local", "replicated", "data-parallel"];
+pub const DISTRIBUTIONS: &[&str] = &["auto", "local", "replicated", "paged", "data-parallel"];
+pub const PAGING: &[&str] = &["fetch", "all-resident"];
 pub const MPI_ROLES: &[&str] = &["shared", "dedicated", "paper"];
 pub const MPI_COMPRESSIONS: &[&str] = &["lz4", "zstd", "none"];
 pub const MPI_PICTURES: &[&str] = &["own", "whole"];
@@ -232,8 +235,40 @@ pub const SETTINGS: &[Setting] = &[
         default: "auto",
         doc: "How the ranks of an MPI job share frames (docs/distributed.md): `replicated`, every rank traces \
               tiles of the whole image against every rank's scene (image-parallel: shadows, AO and reflections \
-              see all the data); `data-parallel`, each rank traces only what it drew, for the host's \
+              see all the data); `paged`, the same pictures, but each rank keeps only the big meshes its host \
+              drew (in blocks) and fetches the blocks of other ranks' its rays reach into a cache \
+              (`cache_fraction`); `data-parallel`, each rank traces only what it drew, for the host's \
               compositor; `local`, no MPI at all. `auto`: `replicated` in an MPI rank, `local` otherwise.",
+    },
+    Setting {
+        key: "cache_fraction",
+        kind: Kind::Fraction,
+        default: "1/8",
+        doc: "With `distribute = paged`: each rank's cache of other ranks' blocks, as a share of all the \
+              ranks' paged meshes together (the paper's 1/F: 1/2, 1/4, 1/8), e.g. `1/8` or `0.125`.",
+    },
+    Setting {
+        key: "cache_mb",
+        kind: Kind::Int(0, 1 << 30),
+        default: "0",
+        doc: "With `distribute = paged`: each rank's cache of other ranks' blocks in megabytes, in place of \
+              `cache_fraction`. 0: `cache_fraction` decides.",
+    },
+    Setting {
+        key: "paging",
+        kind: Kind::Choice(PAGING),
+        default: "fetch",
+        doc: "With `distribute = paged`: `fetch`, other ranks' blocks are fetched as rays reach them; \
+              `all-resident` (for checking), every block of the frame is fetched before it is traced and kept: \
+              the same blocks and trees with nothing remote while tracing, the reference paging's pictures \
+              equal.",
+    },
+    Setting {
+        key: "block_kb",
+        kind: Kind::Int(1, 1 << 20),
+        default: "64",
+        doc: "With `distribute = paged`: about how many kilobytes of triangles and tree a block holds (meshes \
+              of more than 8,192 triangles are paged, in blocks of their triangles close in space).",
     },
     Setting {
         key: "mpi_roles",
@@ -384,6 +419,7 @@ fn allowed(kind: Kind) -> String {
         Kind::Int(lo, hi) => format!("a whole number from {lo} to {hi}, or empty for the preset's"),
         Kind::Float(lo, hi) => format!("a number from {lo} to {hi}, or empty for the preset's"),
         Kind::OptionalBool => "true, false (also 1, 0, yes, no, on, off), or empty for the preset's".into(),
+        Kind::Fraction => "a share from 0 (not included) to 1, as a fraction (1/8) or a number (0.125)".into(),
     }
 }
 
@@ -393,6 +429,16 @@ fn parse_bool(v: &str) -> Option<bool> {
         "0" | "false" | "no" | "off" => Some(false),
         _ => None,
     }
+}
+
+/// A share written `a/b` or as a number, if it is in (0, 1].
+pub fn fraction(value: &str) -> Option<f64> {
+    let v = value.trim();
+    let share = match v.split_once('/') {
+        Some((a, b)) => a.trim().parse::<f64>().ok()? / b.trim().parse::<f64>().ok()?,
+        None => v.parse::<f64>().ok()?,
+    };
+    (share.is_finite() && share > 0.0 && share <= 1.0).then_some(share)
 }
 
 /// Checks `value` for `s` and returns its canonical spelling.
@@ -410,6 +456,7 @@ fn validate(s: &Setting, value: &str, place: &dyn Fn() -> String) -> Result<Stri
         Kind::Float(lo, hi) => {
             value.trim().parse::<f64>().ok().filter(|v| v.is_finite() && (lo..=hi).contains(v)).map(|v| v.to_string())
         }
+        Kind::Fraction => fraction(value).map(|_| value.trim().to_string()),
     };
     ok.ok_or_else(|| {
         ConfigError(format!("bad value {value:?} for setting `{}` ({}); allowed: {}", s.key, place(), allowed(s.kind)))
@@ -672,6 +719,26 @@ impl Config {
             "auto" => "local",
             other => other,
         }
+    }
+
+    /// `cache_fraction` as a number.
+    pub fn cache_fraction(&self) -> f64 {
+        fraction(self.get("cache_fraction")).unwrap_or(0.125)
+    }
+
+    /// `cache_mb`, when set (not 0).
+    pub fn cache_mb(&self) -> Option<u64> {
+        self.get("cache_mb").parse().ok().filter(|&m| m > 0)
+    }
+
+    /// Whether `paging` is `all-resident`.
+    pub fn all_resident(&self) -> bool {
+        self.get("paging") == "all-resident"
+    }
+
+    /// `block_kb` in bytes.
+    pub fn block_bytes(&self) -> usize {
+        self.get("block_kb").parse::<usize>().unwrap_or(64).max(1) * 1024
     }
 
     /// `mpi_roles`: "shared", "dedicated" or "paper".

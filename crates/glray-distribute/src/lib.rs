@@ -13,6 +13,7 @@ pub mod link;
 pub mod master;
 pub mod node;
 pub mod pack;
+pub mod paging;
 pub mod protocol;
 pub mod transport;
 

@@ -23,7 +23,8 @@ use glray_render::denoise::HeldRows;
 use glray_render::tiles::{TileGrid, TilePixels, TileWork};
 
 use crate::master::Master;
-use crate::pack::Compression;
+use crate::pack::{Compression, Packed};
+use crate::paging::{Asks, Paging};
 use crate::protocol::{packed, Message};
 use crate::transport::Transport;
 
@@ -63,6 +64,22 @@ enum Command {
         generation: u64,
         rows: HeldRows,
     },
+    /// Paging: the rank's pager, whose blocks the loop serves and whose fetches it delivers.
+    Paging(Arc<Paging>),
+    /// Paging: the tracer asks for block `key` of rank `owner`'s.
+    Fetch {
+        owner: usize,
+        key: u64,
+    },
+}
+
+/// The pager's way to its link (`Asks`).
+struct LinkAsks(Mutex<Sender<Command>>);
+
+impl Asks for LinkAsks {
+    fn ask(&self, owner: usize, key: u64) -> bool {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).send(Command::Fetch { owner, key }).is_ok()
+    }
 }
 
 /// What reaches the rank's frame: a message from another rank (or the link's fault), a tile
@@ -146,6 +163,9 @@ impl Link {
             frame_begun: None,
             compression,
             failed: false,
+            paging: None,
+            fetches: std::collections::BTreeMap::new(),
+            hurry_until: None,
         };
         let mut link = Link {
             rank,
@@ -230,6 +250,12 @@ impl Link {
 
     pub fn publish(&mut self, generation: u64, rows: HeldRows) -> Result<(), String> {
         self.command(Command::Held { generation, rows })
+    }
+
+    /// Serves `paging`'s blocks to the other ranks and carries its requests from now on.
+    pub fn page(&mut self, paging: Arc<Paging>) -> Result<(), String> {
+        paging.connect(Box::new(LinkAsks(Mutex::new(self.commands.clone()))));
+        self.command(Command::Paging(paging))
     }
 
     /// The next event, waiting at most `wait` for it.
@@ -388,7 +414,17 @@ struct Core {
     compression: Compression,
     /// The transport failed: the frame was told, nothing more moves.
     failed: bool,
+    /// Paging: the rank's pager, and the blocks its tracer asked for this round, by owner.
+    paging: Option<Arc<Paging>>,
+    fetches: std::collections::BTreeMap<usize, Vec<u64>>,
+    /// Until when the loop polls every `BLOCK_POLL` (blocks moved lately).
+    hurry_until: Option<Instant>,
 }
+
+/// The wait between polls while blocks are moving (`Core::hurry_until`), and for how long
+/// after the last one moved.
+const BLOCK_POLL: Duration = Duration::from_micros(20);
+const BLOCK_HURRY: Duration = Duration::from_millis(50);
 
 impl Core {
     /// One round: the rank's own work, then every message that has arrived. Whether there
@@ -402,6 +438,7 @@ impl Core {
             busy = true;
             self.command(c);
         }
+        self.ask_blocks();
         loop {
             match self.transport.poll() {
                 Ok(Some((from, bytes))) => {
@@ -438,12 +475,30 @@ impl Core {
 
     /// Nothing to do: waits up to `poll` for the rank's own work (a spin when 0).
     fn idle(&mut self, poll: Duration) {
+        // Blocks are asked for and answered one after another while a frame is traced: each
+        // poll's wait would add to every fetch.
+        let poll = match self.hurry_until {
+            Some(until) if Instant::now() < until => poll.min(BLOCK_POLL),
+            _ => poll,
+        };
         if poll.is_zero() {
             std::hint::spin_loop();
             return;
         }
         if let Ok(c) = self.commands.recv_timeout(poll) {
             self.command(c);
+            self.ask_blocks();
+        }
+    }
+
+    /// The blocks asked for since the last round, one request to each owner.
+    fn ask_blocks(&mut self) {
+        let frame = self.tiles.frame;
+        if !self.fetches.is_empty() {
+            self.hurry_until = Some(Instant::now() + BLOCK_HURRY);
+        }
+        for (owner, keys) in std::mem::take(&mut self.fetches) {
+            self.send(owner, Message::BlockAsk { frame, keys });
         }
     }
 
@@ -506,6 +561,8 @@ impl Core {
                     self.history.pop_front();
                 }
             }
+            Command::Paging(p) => self.paging = Some(p),
+            Command::Fetch { owner, key } => self.fetches.entry(owner).or_default().push(key),
         }
     }
 
@@ -602,6 +659,29 @@ impl Core {
                         past: packed(past.as_deref().unwrap_or(&[]), self.compression),
                     };
                     self.send(from, reply);
+                }
+            }
+            Message::Layouts { frame, layouts } if self.paging.is_some() => {
+                if let Some(p) = &self.paging {
+                    p.add_layouts(from, frame, layouts);
+                }
+            }
+            Message::BlockAsk { frame, keys } if self.paging.is_some() => {
+                self.hurry_until = Some(Instant::now() + BLOCK_HURRY);
+                let served = self.paging.as_ref().map(|p| p.serve(&keys)).unwrap_or_default();
+                let how = self.compression;
+                let blocks = served.into_iter().map(|(k, b)| (k, b.map(|b| Packed::new(&b, 1, how)))).collect();
+                self.send(from, Message::BlockData { frame, blocks });
+            }
+            Message::BlockData { blocks, .. } if self.paging.is_some() => {
+                let paging = self.paging.clone().expect("paging");
+                for (key, b) in blocks {
+                    match b.map(Packed::unpack).transpose() {
+                        Ok(bytes) => paging.arrived(key, bytes),
+                        Err(why) => {
+                            let _ = self.inbox.send(Event::Failed(format!("rank {from} sent a damaged block: {why}")));
+                        }
+                    }
                 }
             }
             other => {

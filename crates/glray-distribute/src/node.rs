@@ -21,7 +21,7 @@
 
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use glray_render::denoise::{AoPixel, Past};
@@ -35,6 +35,7 @@ use crate::bands::Bands;
 use crate::link::{Event, Link};
 use crate::master::{imbalance, Master};
 use crate::pack::{Compression, Packed};
+use crate::paging::{Paging, PagingReport, PagingSetup, Resident};
 use crate::protocol::{packed, unpacked, Message, RankReport, Rect};
 use crate::transport::Transport;
 
@@ -113,6 +114,8 @@ pub struct FrameReport {
     pub imbalance: Option<f64>,
     /// The picture was the last one's again (converged), or traced by rank 0 alone.
     pub untraced: bool,
+    /// What paging did (`distribute = paged`).
+    pub paging: Option<PagingReport>,
 }
 
 impl FrameReport {
@@ -188,6 +191,8 @@ pub struct Setup {
     pub poll: Duration,
     pub compression: Compression,
     pub parts: PictureParts,
+    /// Paged meshes (`distribute = paged`), else every rank holds every mesh.
+    pub paging: Option<PagingSetup>,
 }
 
 impl Default for Setup {
@@ -199,6 +204,7 @@ impl Default for Setup {
             poll: DEFAULT_POLL,
             compression: Compression::default(),
             parts: PictureParts::Own,
+            paging: None,
         }
     }
 }
@@ -237,6 +243,8 @@ pub struct Node {
     /// Whether the last frame that changed a renderer was traced by all (bands) or by rank 0
     /// alone: the passes and AO history of the one do not carry over to the other.
     last_kind: Option<Kind>,
+    /// Its pager, paging (`Setup::paging`).
+    paging: Option<Arc<Paging>>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -302,8 +310,14 @@ impl Node {
         // roles (with three ranks or more), else rank 0.
         let master_rank = if setup.roles == Roles::Paper && size > 2 { 1 } else { 0 };
         let own_master = (transport.rank() == master_rank).then_some(master);
-        let link =
+        let rank = transport.rank();
+        let mut link =
             Link::start(Box::new(transport), own_master, master_rank, setup.threaded, setup.poll, setup.compression);
+        let paging = setup.paging.map(|p| Arc::new(Paging::new(rank, p)));
+        if let Some(p) = &paging {
+            // (A link that has ended fails the first frame's sends as well.)
+            let _ = link.page(p.clone());
+        }
         Node {
             link,
             frame: 0,
@@ -321,7 +335,13 @@ impl Node {
             hook: None,
             last_picture: None,
             last_kind: None,
+            paging,
         }
+    }
+
+    /// The rank's pager, when it pages.
+    pub fn paging(&self) -> Option<&Arc<Paging>> {
+        self.paging.as_ref()
     }
 
     /// Rank 0: its settings changed (already made here, `settings` their new agreement
@@ -417,6 +437,11 @@ impl Node {
         let packing = crate::pack::spent();
         let pictured = self.picture_pixels;
         let mut report = FrameReport { frame, ..FrameReport::default() };
+        if let Some(p) = &self.paging {
+            let pager: Arc<dyn glray_render::paged::Pager> = p.clone();
+            renderer.set_pager(Some(pager));
+            p.set_limit(self.limit());
+        }
         let want = if self.rank() == 0 || self.setup.parts == PictureParts::Whole {
             let (w, h) = mine.size();
             (w > 0 && h > 0).then_some(Rect { x: 0, y: 0, width: w, height: h })
@@ -481,6 +506,21 @@ impl Node {
             let canvas = Canvas::new(background(mine, &renderer.options), wants[me]);
             Some(self.trace(&shared, &wants, canvas, renderer, pool, &mut report)?)
         };
+        if let Some(p) = &self.paging {
+            report.paging = Some(p.take_report());
+            if let Some((owner, why)) = p.take_failure() {
+                return Err(if why.contains("did not come") {
+                    Fault::Silent {
+                        ranks: vec![owner],
+                        waited: self.limit(),
+                        frame,
+                        waiting_for: "a block of its data",
+                    }
+                } else {
+                    Fault::Damaged { rank: owner, why }
+                });
+            }
+        }
         if !report.untraced {
             self.last_frame = Some(started.elapsed());
         }
@@ -532,6 +572,22 @@ impl Node {
         }
         let mut wants = vec![None; size];
         wants[me] = want;
+        // Paging: the meshes it pages go as stand-ins, their layouts first.
+        let paged_mine;
+        let mine = match &self.paging {
+            Some(p) => {
+                let (f, layouts) = p.own_frame(mine, frame);
+                if !layouts.is_empty() {
+                    let m = Message::Layouts { frame, layouts };
+                    for r in (0..size).filter(|&r| r != me) {
+                        self.send(r, m.clone())?;
+                    }
+                }
+                paged_mine = f;
+                &paged_mine
+            }
+            None => mine,
+        };
         if size > 1 {
             let scene = encode(mine, &mut self.sent);
             // Packed once for every rank (the first frame's may be hundreds of megabytes).
@@ -625,7 +681,16 @@ impl Node {
         let ranks: Vec<usize> =
             frames.iter().enumerate().flat_map(|(r, f)| std::iter::repeat_n(r, f.instances.len())).collect();
         let mut merged = glray_scene::merge::merge(frames);
-        self.joined.join(&mut merged.instances, &ranks);
+        match &self.paging {
+            Some(p) => {
+                self.joined.join_with(&mut merged.instances, &ranks, |pieces| p.join(pieces, frame));
+                p.retain(&merged, frame);
+                if p.setup().resident == Resident::All {
+                    p.fetch_all(&merged);
+                }
+            }
+            None => self.joined.join(&mut merged.instances, &ranks),
+        }
         Ok((merged, wants, waited))
     }
 
@@ -951,11 +1016,12 @@ impl Node {
             let reports_due = me == self.master_rank() && self.tracing.iter().any(|&r| state.reports[r].is_none());
             let parts_due = shared.present && !state.canvas.complete();
             if band_done && !reports_due && !parts_due {
-                if !self.link.is_inline() {
+                if !self.link.is_inline() && self.paging.is_none() {
                     return Ok(());
                 }
-                // Glray's messages move only inside the host's GL calls here: every rank stays
-                // until every other has done its part, so that each is there to answer.
+                // Glray's messages move only inside the host's GL calls here, or ranks fetch
+                // each other's blocks: every rank stays until every other has done its part, so
+                // that each is there to answer.
                 if !said_finished {
                     said_finished = true;
                     state.finished[me] = true;

@@ -4,9 +4,45 @@
 //! rank of a job is the same kind of machine; the scene encoding checks the byte order of the
 //! first message).
 
+use glray_render::paged::BlockRef;
 use serde::{Deserialize, Serialize};
 
 use crate::pack::{Compression, Packed};
+
+/// A paged mesh's layout as it travels: its stand-in's id and its blocks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LayoutEntry {
+    pub mesh: u64,
+    pub blocks: Vec<BlockEntry>,
+}
+
+/// A block of a layout (`BlockRef`) as it travels.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BlockEntry {
+    pub key: u64,
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+    pub triangles: u32,
+    pub bytes: u64,
+}
+
+impl From<&BlockRef> for BlockEntry {
+    fn from(r: &BlockRef) -> BlockEntry {
+        BlockEntry { key: r.key, min: r.min.to_array(), max: r.max.to_array(), triangles: r.triangles, bytes: r.bytes }
+    }
+}
+
+impl BlockEntry {
+    pub fn to_ref(&self) -> BlockRef {
+        BlockRef {
+            key: self.key,
+            min: self.min.into(),
+            max: self.max.into(),
+            triangles: self.triangles,
+            bytes: self.bytes,
+        }
+    }
+}
 
 /// What a rank says of its frame to rank 0 when its share is traced.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -79,6 +115,12 @@ pub enum Message {
     /// host's thread: every rank waits for every other's before it leaves the frame, so that
     /// each is there to answer the others' asks).
     Finished { frame: u64 },
+    /// Paging: the layouts of the sender's meshes new in `frame` (sent before its scene).
+    Layouts { frame: u64, layouts: Vec<LayoutEntry> },
+    /// Paging: blocks of the receiver's it asks for.
+    BlockAsk { frame: u64, keys: Vec<u64> },
+    /// Paging: the blocks asked for (None: the sender does not hold it).
+    BlockData { frame: u64, blocks: Vec<(u64, Option<Packed>)> },
 }
 
 impl Message {
@@ -93,7 +135,10 @@ impl Message {
             | Message::History { frame, .. }
             | Message::Part { frame, .. }
             | Message::Done { frame, .. }
-            | Message::Finished { frame } => *frame,
+            | Message::Finished { frame }
+            | Message::Layouts { frame, .. }
+            | Message::BlockAsk { frame, .. }
+            | Message::BlockData { frame, .. } => *frame,
         }
     }
 
@@ -104,6 +149,7 @@ impl Message {
             Message::Rows { rgba, depth, colors, ao, .. } => vec![rgba, depth, colors, ao],
             Message::History { past, .. } => vec![past],
             Message::Part { rgba, depth, .. } => vec![rgba, depth],
+            Message::BlockData { blocks, .. } => blocks.iter().filter_map(|(_, b)| b.as_ref()).collect(),
             _ => vec![],
         };
         fields.iter().map(|p| p.sizes()).fold((0, 0), |(r, s), (a, b)| (r + a, s + b))

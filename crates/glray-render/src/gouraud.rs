@@ -16,7 +16,7 @@ use glray_scene::frame::{Frame, TriangleId};
 use crate::fragment::{mixed, own_camera, Fragment};
 use crate::options::Options;
 use crate::recent::Recent;
-use crate::scene::Hit;
+use crate::scene::{Hit, Scene};
 
 /// The corners' colours of a triangle, primary and secondary (`Instance::corner_colors`).
 pub(crate) type Corners = ([glam::Vec4; 3], [Vec3; 3]);
@@ -74,25 +74,28 @@ impl Gouraud {
     /// corners' colours from `recent` when a neighbouring pixel hit the triangle already.
     pub fn fragment(
         &self,
-        frame: &Frame,
+        scene: &Scene,
         camera: &Camera,
         hit: &Hit,
         p: DVec3,
         dir: DVec3,
         recent: &mut Recent<Corners>,
     ) -> Option<Fragment> {
+        let frame = scene.frame();
         let instance = frame.instances.get(hit.id.instance as usize)?;
-        if hit.id.index as usize >= instance.mesh.triangles.len() {
+        // (A paged mesh's triangle is in one of its blocks.)
+        let part = scene.part(hit.id)?;
+        if part.index() >= part.mesh().triangles.len() {
             return None;
         }
         let corners = recent.get(hit.id, || {
             // The walk kept only the faces the instance draws; which one this is matters to
             // two-sided lighting.
             let front = instance.front_seen(hit.normal.dot(dir.as_vec3()), self.projection_flips);
-            Some(instance.corner_colors(hit.id.index as usize, &frame.lightings, front))
+            Some(instance.corner_colors_of(part.mesh(), part.index(), &frame.lightings, front))
         })?;
         let b = Vec3::new(1.0 - hit.uv.x - hit.uv.y, hit.uv.x, hit.uv.y);
-        let corner_z = || instance.corner_depths(hit.id.index as usize);
+        let corner_z = || instance.corner_depths_of(part.mesh(), part.index());
         Some(mixed(frame, camera, instance.surface, corners, b, p, corner_z))
     }
 }

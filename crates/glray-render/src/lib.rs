@@ -31,6 +31,7 @@ mod gouraud;
 pub mod meshes;
 pub mod offset;
 pub mod options;
+pub mod paged;
 pub mod pieces;
 mod progress;
 mod recent;

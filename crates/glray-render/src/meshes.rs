@@ -107,11 +107,18 @@ impl Meshes {
     /// The BVH of each of the frame's instances' meshes: built (in parallel) for meshes not
     /// seen before, as `choice` says for a tree the next frame builds again when the program
     /// replaces its meshes (`replacing`); those of meshes capture no longer holds are dropped,
-    /// each handed first to a new mesh of as many triangles to refit (`TreesMade`).
-    pub(crate) fn prepare(&mut self, frame: &Frame, choice: BvhBuild, ray_work: f64) -> (Vec<Arc<MeshBvh>>, TreesMade) {
+    /// each handed first to a new mesh of as many triangles to refit (`TreesMade`). Meshes
+    /// `paged` says are paged (stand-ins, whose blocks have trees of their own) get none.
+    pub(crate) fn prepare(
+        &mut self,
+        frame: &Frame,
+        choice: BvhBuild,
+        ray_work: f64,
+        paged: impl Fn(&Mesh) -> bool,
+    ) -> (Vec<Option<Arc<MeshBvh>>>, TreesMade) {
         self.prune();
         let mut new: Vec<&Arc<Mesh>> =
-            frame.instances.iter().map(|i| &i.mesh).filter(|m| !self.built.contains_key(&m.id)).collect();
+            frame.instances.iter().map(|i| &i.mesh).filter(|m| !self.built.contains_key(&m.id) && !paged(m)).collect();
         new.sort_by_key(|m| m.id);
         new.dedup_by_key(|m| m.id);
         // Under `auto`, each new mesh the oldest gone tree of its size that nothing else holds
@@ -166,7 +173,7 @@ impl Meshes {
             let kept = KeptTree { mesh: Arc::downgrade(m), bvh, quality, triangles, frames: 0, built_cost, shape };
             self.built.insert(m.id, kept);
         }
-        let mut drawn: Vec<&Arc<Mesh>> = frame.instances.iter().map(|i| &i.mesh).collect();
+        let mut drawn: Vec<&Arc<Mesh>> = frame.instances.iter().map(|i| &i.mesh).filter(|m| !paged(m)).collect();
         drawn.sort_by_key(|m| m.id);
         drawn.dedup_by_key(|m| m.id);
         let mut kept_now = Vec::new();
@@ -189,7 +196,7 @@ impl Meshes {
             let kept = self.built.get_mut(&id).expect("drawn above");
             (kept.bvh, kept.quality, kept.built_cost) = (bvh, Quality::Sah, None);
         }
-        (frame.instances.iter().map(|i| self.built[&i.mesh.id].bvh.clone()).collect(), made)
+        (frame.instances.iter().map(|i| self.built.get(&i.mesh.id).map(|k| k.bvh.clone())).collect(), made)
     }
 
     /// Sets aside the BVHs of meshes capture no longer holds (`gone`, until the next frame is

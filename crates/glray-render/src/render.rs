@@ -4,6 +4,7 @@
 //! where it is taken, so the image is the same for any number of threads.
 
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::Vec4;
@@ -16,6 +17,7 @@ use crate::denoise::{AoPixel, Band, Denoiser, HeldRows, Motion, Past};
 use crate::gouraud::Gouraud;
 use crate::meshes::Meshes;
 use crate::options::{Options, MAX_PASSES};
+use crate::paged::Pager;
 use crate::pieces::{self, for_each_block, Piece};
 use crate::progress::Progress;
 use crate::resolve::closest_hit_suffices;
@@ -133,6 +135,8 @@ pub struct Renderer {
     /// sharing a frame (each counting every frame) trace with the same seed.
     frames: u32,
     stats: Stats,
+    /// Where paged meshes' blocks come from (`set_pager`).
+    pager: Option<Arc<dyn Pager>>,
 }
 
 /// A pass's AO kept apart (of its band's `layer_rows`), and what the denoiser needs of its
@@ -180,7 +184,13 @@ impl Renderer {
             denoiser: Denoiser::default(),
             frames: 0,
             stats: Stats::default(),
+            pager: None,
         }
+    }
+
+    /// Traces the meshes `pager` has layouts for as paged meshes (`paged`), from now on.
+    pub fn set_pager(&mut self, pager: Option<Arc<dyn Pager>>) {
+        self.pager = pager;
     }
 
     /// Renders `frame` into a `width` x `height` image. A frame that did not clear the colour
@@ -207,6 +217,7 @@ impl Renderer {
             flatten_below: self.flatten_below,
             work: None,
             seed,
+            pager: self.pager.as_ref(),
         };
         let linear = self.linear(key);
         let (rendered, linear, stats, ao) = job.run(&mut self.meshes, linear);
@@ -297,6 +308,7 @@ impl Renderer {
             flatten_below: self.flatten_below,
             work: Some(work),
             seed,
+            pager: self.pager.as_ref(),
         };
         let (_, _, stats, _) = job.run(&mut self.meshes, linear);
         self.meshes.forget_gone();
@@ -614,6 +626,8 @@ struct Job<'a> {
     work: Option<&'a dyn TileWork>,
     /// Which frame of a denoised sequence (0: not denoised): the AO rays' seed.
     seed: u32,
+    /// Where paged meshes' blocks come from (`distribute = paged`).
+    pager: Option<&'a Arc<dyn Pager>>,
 }
 
 /// What `Job::run` gives: the image, its colours before rounding (when asked), what it took,
@@ -641,7 +655,9 @@ impl Job<'_> {
         let flat;
         let instanced = frame.triangle_count() - frame.triangles.len();
         let secondary = self.options.effects.secondary_rays();
-        let frame = if !secondary && instanced > 0 && instanced <= self.flatten_below {
+        // (A paged mesh's triangles are not here to be made flat.)
+        let paged = self.pager.is_some_and(|p| frame.instances.iter().any(|i| p.layout(i.mesh.id).is_some()));
+        let frame = if !secondary && !paged && instanced > 0 && instanced <= self.flatten_below {
             flat = Frame { triangles: frame.all_triangles(), instances: Vec::new(), ..frame.clone() };
             &flat
         } else {
@@ -672,7 +688,8 @@ impl Job<'_> {
         };
         let start = Instant::now();
         let pixels = u64::from(width) * u64::from(height);
-        let scene = Scene::build(frame, meshes, self.options.bvh, ray_work(pixels, &self.options.effects));
+        let work = ray_work(pixels, &self.options.effects);
+        let scene = Scene::build_paged(frame, meshes, self.options.bvh, work, self.pager);
         stats.builds = scene.builds;
         stats.fast_builds = scene.fast_builds;
         stats.loose = frame.triangles.len() as u64;

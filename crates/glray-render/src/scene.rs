@@ -14,6 +14,7 @@ use glam::{Affine3A, DMat4, Mat3, Vec2, Vec3, Vec3A};
 use glray_scene::frame::{Frame, Solid, TriangleId};
 use glray_scene::instance::Instance;
 use glray_scene::mesh::Mesh;
+use glray_scene::triangle::Triangle;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
@@ -25,6 +26,7 @@ use crate::bvh::{Quality, TriBvh, TriHit, BUNDLE};
 use crate::meshes::{MeshBvh, Meshes};
 use crate::offset::{leaving, Origin};
 use crate::options::BvhBuild;
+use crate::paged::{Block, PagedMesh, Pager};
 use crate::sampling::Hemisphere;
 
 /// Where a ray (unit direction) enters a capsule around the segment from `a` to `b` (a ball when
@@ -85,10 +87,86 @@ pub struct Hit {
     pub uv: Vec2,
 }
 
+/// What an instance's rays walk: its mesh's BVH, or the blocks of a paged mesh.
+enum Tree {
+    Whole(Arc<MeshBvh>),
+    Paged(PagedMesh),
+}
+
+impl Tree {
+    #[inline]
+    fn closest(&self, ray: &Ray, accept: impl FnMut(u32, f32) -> bool) -> Option<TriHit> {
+        match self {
+            Tree::Whole(m) => m.bvh.closest(ray, accept),
+            Tree::Paged(p) => p.closest(ray, accept),
+        }
+    }
+
+    #[inline]
+    fn occluded(&self, ray: &Ray) -> bool {
+        match self {
+            Tree::Whole(m) => m.bvh.occluded(ray),
+            Tree::Paged(p) => p.occluded(ray),
+        }
+    }
+
+    #[inline]
+    fn each_hit(&self, ray: &Ray, visit: impl FnMut(TriHit, f32)) {
+        match self {
+            Tree::Whole(m) => m.bvh.each_hit(ray, visit),
+            Tree::Paged(p) => p.each_hit(ray, visit),
+        }
+    }
+
+    #[inline]
+    fn closest_packet<const N: usize>(
+        &self,
+        rays: &[Ray; N],
+        best: &mut [Option<TriHit>; N],
+        frustum: bool,
+        accept: impl FnMut(u32, f32) -> bool,
+    ) {
+        match self {
+            Tree::Whole(m) => m.bvh.closest_packet(rays, best, frustum, accept),
+            Tree::Paged(p) => p.closest_packet(rays, best, accept),
+        }
+    }
+
+    #[inline]
+    fn occluded_from(&self, origin: Vec3A, directions: &[Vec3A; BUNDLE], tmax: f32, known: u32) -> u32 {
+        match self {
+            Tree::Whole(m) => m.bvh.occluded_from(origin, directions, tmax, known),
+            Tree::Paged(p) => p.occluded_from(origin, directions, tmax, known),
+        }
+    }
+}
+
+/// The mesh a hit's triangle is in, and its index there: the instance's mesh, or the block of
+/// a paged mesh that holds it.
+pub enum Part<'f> {
+    Whole(&'f Mesh, usize),
+    Block(Arc<Block>, usize),
+}
+
+impl Part<'_> {
+    pub fn mesh(&self) -> &Mesh {
+        match self {
+            Part::Whole(m, _) => m,
+            Part::Block(b, _) => &b.mesh,
+        }
+    }
+
+    pub fn index(&self) -> usize {
+        match self {
+            Part::Whole(_, i) | Part::Block(_, i) => *i,
+        }
+    }
+}
+
 /// An instance ready to trace: its mesh's BVH and the way into its object space.
 struct Placed<'f> {
     instance: &'f Instance,
-    bvh: Arc<MeshBvh>,
+    tree: Tree,
     to_object: Affine3A,
     /// Whether its mesh's packets test a node once for all their rays (see `FINE`).
     frustum: bool,
@@ -170,9 +248,21 @@ impl<'f> Scene<'f> {
     /// The scene of `frame`, its trees built as `choice` says for a frame tracing `ray_work`
     /// rays (`bvh_choice`); the frame's own triangles' tree is built again next frame.
     pub fn build(frame: &'f Frame, meshes: &mut Meshes, choice: BvhBuild, ray_work: f64) -> Scene<'f> {
+        Scene::build_paged(frame, meshes, choice, ray_work, None)
+    }
+
+    /// `build`, the meshes `pager` has layouts for walked as paged meshes.
+    pub fn build_paged(
+        frame: &'f Frame,
+        meshes: &mut Meshes,
+        choice: BvhBuild,
+        ray_work: f64,
+        pager: Option<&Arc<dyn Pager>>,
+    ) -> Scene<'f> {
         let quality = choice.quality(frame.triangles.len(), true, ray_work);
         let bvh = TriBvh::build_as(frame.triangles.len(), |i| frame.triangles[i].positions, quality);
-        let (bvhs, made) = meshes.prepare(frame, choice, ray_work);
+        let layout = |m: &Mesh| pager.and_then(|p| p.layout(m.id));
+        let (bvhs, made) = meshes.prepare(frame, choice, ray_work, |m| layout(m).is_some());
         let fast_builds = made.fast_builds + u32::from(quality == Quality::Fast && !frame.triangles.is_empty());
         let placed: Vec<Placed> = frame
             .instances
@@ -181,10 +271,18 @@ impl<'f> Scene<'f> {
             .map(|(instance, bvh)| {
                 let m = instance.modelview.as_mat4();
                 let (a, b, c) = (m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate());
+                let (tree, triangles) = match (bvh, layout(&instance.mesh), pager) {
+                    (Some(bvh), _, _) => (Tree::Whole(bvh), instance.mesh.triangles.len()),
+                    (None, Some(layout), Some(pager)) => {
+                        let n = layout.triangles() as usize;
+                        (Tree::Paged(PagedMesh { layout, pager: pager.clone() }), n)
+                    }
+                    _ => unreachable!("a mesh without a tree is paged"),
+                };
                 Placed {
                     instance,
-                    frustum: coarse(instance.mesh.triangles.len(), frame),
-                    bvh,
+                    frustum: coarse(triangles, frame),
+                    tree,
                     to_object: Affine3A::from_mat4(instance.modelview.inverse().as_mat4()),
                     normal_to_eye: Mat3::from_cols(b.cross(c), c.cross(a), a.cross(b)),
                 }
@@ -224,6 +322,11 @@ impl<'f> Scene<'f> {
             line_draws: line_draws(frame),
             translucent,
         }
+    }
+
+    /// The frame it is the scene of.
+    pub fn frame(&self) -> &'f Frame {
+        self.frame
     }
 
     /// Whether draw `sequence` drew lines or points (as quads, with solids).
@@ -293,7 +396,7 @@ impl<'f> Scene<'f> {
         }
         self.visit_instances(ray, true, |r, k| {
             let p = &self.placed[k];
-            if p.bvh.bvh.occluded(&p.ray(r)) {
+            if p.tree.occluded(&p.ray(r)) {
                 r.tmin
             } else {
                 f32::INFINITY
@@ -365,18 +468,16 @@ impl<'f> Scene<'f> {
             let along = |h: &Hemisphere| dirs.map(|l| Vec3A::from(h.at(l)));
             let mut blocked = if flat { self.bvh.occluded_from(start, &along(around), distance, 0) } else { 0 };
             for (k, o, h) in &near[..n] {
-                blocked = self.placed[*k].bvh.bvh.occluded_from(*o, &along(h), distance, blocked);
+                blocked = self.placed[*k].tree.occluded_from(*o, &along(h), distance, blocked);
             }
             hidden += blocked.count_ones();
             left -= BUNDLE as u32;
         }
         for _ in 0..left {
             let l = local();
-            let walk = |bvh: &TriBvh, o: Vec3A, h: &Hemisphere| {
-                bvh.occluded(&crate::bvh::ray(o, h.at(l).into(), 0.0, distance))
-            };
-            let blocked = (flat && walk(&self.bvh, start, around))
-                || near[..n].iter().any(|(k, o, h)| walk(&self.placed[*k].bvh.bvh, *o, h));
+            let ray = |o: Vec3A, h: &Hemisphere| crate::bvh::ray(o, h.at(l).into(), 0.0, distance);
+            let blocked = (flat && self.bvh.occluded(&ray(start, around)))
+                || near[..n].iter().any(|(k, o, h)| self.placed[*k].tree.occluded(&ray(*o, h)));
             hidden += blocked as u32;
         }
         hidden as f32
@@ -398,7 +499,7 @@ impl<'f> Scene<'f> {
             self.all(ray, hits);
             let mut through = 1.0f32;
             for &h in hits.iter().filter(|h| !self.is_line(h.sequence)) {
-                let Some(t) = self.frame.triangle(h.id) else { continue };
+                let Some(t) = self.triangle(h.id) else { continue };
                 let s = &self.frame.surfaces[t.surface as usize];
                 if s.blend.is_none() && s.alpha_test.is_none() {
                     return 0.0;
@@ -434,7 +535,7 @@ impl<'f> Scene<'f> {
         }
         self.visit_instances(ray, false, |r, k| {
             let p = &self.placed[k];
-            match p.bvh.bvh.closest(&p.ray(r), |_, det| p.drawn(det)) {
+            match p.tree.closest(&p.ray(r), |_, det| p.drawn(det)) {
                 Some(h) => {
                     best = Some(p.hit(k, h));
                     h.t
@@ -469,7 +570,7 @@ impl<'f> Scene<'f> {
             }
             let p = &self.placed[k];
             let object = std::array::from_fn(|j| p.ray(&Ray { tmax: reach(best, j), ..rays[j] }));
-            p.bvh.bvh.closest_packet(&object, &mut found, p.frustum, |_, det| p.drawn(det));
+            p.tree.closest_packet(&object, &mut found, p.frustum, |_, det| p.drawn(det));
             for (b, h) in best.iter_mut().zip(&found) {
                 if let Some(h) = h {
                     *b = Some(p.hit(k, *h));
@@ -484,13 +585,51 @@ impl<'f> Scene<'f> {
         self.bvh.each_hit(&ray, |h, _| out.push(self.flat(h)));
         self.visit_instances(ray, false, |r, k| {
             let p = &self.placed[k];
-            p.bvh.bvh.each_hit(&p.ray(r), |h, det| {
+            p.tree.each_hit(&p.ray(r), |h, det| {
                 if p.drawn(det) {
                     out.push(p.hit(k, h));
                 }
             });
             f32::INFINITY
         });
+    }
+
+    /// The mesh triangle `id` of an instance is in, and its index there (None for the frame's
+    /// own triangles, and for a block that could not be had).
+    pub fn part(&self, id: TriangleId) -> Option<Part<'_>> {
+        let p = self.placed.get(id.instance as usize)?;
+        match &p.tree {
+            Tree::Whole(_) => Some(Part::Whole(&p.instance.mesh, id.index as usize)),
+            Tree::Paged(paged) => {
+                let (b, local) = paged.layout.locate(id.index)?;
+                Some(Part::Block(paged.pager.block(paged.layout.blocks[b].key)?, local as usize))
+            }
+        }
+    }
+
+    /// Whether instance `instance`'s mesh is paged.
+    pub fn is_paged(&self, instance: u32) -> bool {
+        self.placed.get(instance as usize).is_some_and(|p| matches!(p.tree, Tree::Paged(_)))
+    }
+
+    /// `Frame::triangle`, a paged mesh's triangles taken from their blocks.
+    #[inline]
+    pub fn triangle(&self, id: TriangleId) -> Option<Triangle> {
+        if id.instance == TriangleId::FLAT || !self.is_paged(id.instance) {
+            return self.frame.triangle(id);
+        }
+        let instance = &self.frame.instances[id.instance as usize];
+        let textured = self.frame.surfaces.get(instance.surface as usize).is_none_or(|s| s.texturing.is_some());
+        let part = self.part(id)?;
+        instance.triangle_of(part.mesh(), part.index(), &self.frame.lightings, textured)
+    }
+
+    /// `Frame::prefetch_triangle` (nothing for a paged mesh's: its block is looked up anyway).
+    #[inline]
+    pub fn prefetch_triangle(&self, id: TriangleId, vertices: bool, positions: bool) {
+        if id.instance == TriangleId::FLAT || !self.is_paged(id.instance) {
+            self.frame.prefetch_triangle(id, vertices, positions);
+        }
     }
 
     fn sequence(&self, id: TriangleId) -> u32 {

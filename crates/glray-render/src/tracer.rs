@@ -168,7 +168,7 @@ impl Tracer<'_> {
     #[inline]
     pub fn prefetch(&self, id: TriangleId, vertices: bool) {
         let positions = self.gouraud.as_ref().is_none_or(|g| g.reads_positions(id));
-        self.frame.prefetch_triangle(id, vertices, positions);
+        self.scene.prefetch_triangle(id, vertices, positions);
     }
 
     /// The closest hits of the rays through the centres of `N` neighbouring pixels (a
@@ -212,10 +212,10 @@ impl Tracer<'_> {
             }?;
             let f = match &self.gouraud {
                 Some(g) if g.takes(hit.id) => {
-                    g.fragment(self.frame, self.camera, &hit, at(&hit), r.direction, &mut s.corners)?
+                    g.fragment(self.scene, self.camera, &hit, at(&hit), r.direction, &mut s.corners)?
                 }
                 _ => {
-                    let t = s.triangles.get(hit.id, || self.frame.triangle(hit.id))?;
+                    let t = s.triangles.get(hit.id, || self.scene.triangle(hit.id))?;
                     let split = self.split_ao.then_some(&s.ao);
                     let f = self.surface(t, at(&hit), r.direction, sampler, &s.rays, split, 0);
                     if let Some(a) = s.ao.get() {
@@ -247,7 +247,7 @@ impl Tracer<'_> {
         let split = self.split_ao;
         let mut last: Option<(Hit, [Vec3; 3])> = None;
         for hit in &s.hits {
-            let Some(t) = self.frame.triangle(hit.id) else { continue };
+            let Some(t) = self.scene.triangle(hit.id) else { continue };
             // A ray through an edge two triangles of a draw share hits both; the rasterizer's
             // fill rule gives the pixel to one of them.
             if last.is_some_and(|(a, corners)| edge_twin(&a, &corners, hit, &t.positions)) {
@@ -341,7 +341,7 @@ impl Tracer<'_> {
             .iter()
             .filter(|h| !self.scene.is_line(h.sequence))
             .min_by(|a, b| (a.t as f64 - reach).abs().total_cmp(&(b.t as f64 - reach).abs()))?;
-        let t = self.frame.triangle(hit.id)?;
+        let t = self.scene.triangle(hit.id)?;
         let n = facet_facing(&t, d.as_vec3());
         let at = (start + d * hit.t as f64).as_vec3();
         // The AO rays start as from the line's own draw: its solids (a hair above the surface,
@@ -402,7 +402,7 @@ impl Tracer<'_> {
             let reflected = mirror(d, n, smooth.as_ref().and_then(Smooth::normal));
             let ray = leaving(leave.p, n, reflected, self.eps, f32::INFINITY);
             count(rays, 1);
-            let seen = match self.scene.closest(ray).and_then(|h| Some((h, self.frame.triangle(h.id)?))) {
+            let seen = match self.scene.closest(ray).and_then(|h| Some((h, self.scene.triangle(h.id)?))) {
                 Some((hit, t2)) => {
                     let p2 = (Vec3::from(ray.origin) + reflected * hit.t).as_dvec3();
                     self.surface(&t2, p2, reflected.as_dvec3(), sampler, rays, None, bounce + 1).color

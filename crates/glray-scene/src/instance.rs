@@ -94,8 +94,7 @@ impl Instance {
 
     /// Clip coordinates of triangle `index`'s corners.
     #[inline]
-    fn clip(&self, index: usize) -> [DVec4; 3] {
-        let m = &self.mesh;
+    fn clip(&self, m: &Mesh, index: usize) -> [DVec4; 3] {
         m.corner_indices(index).map(|i| self.object_to_clip * m.position(i))
     }
 
@@ -126,11 +125,15 @@ impl Instance {
     #[inline]
     /// The eye-space z of triangle `index`'s corners (what fog is worked out from).
     pub fn corner_depths(&self, index: usize) -> [f32; 3] {
-        self.mesh.corner_indices(index).map(|i| self.eye(i).z as f32)
+        self.corner_depths_of(&self.mesh, index)
     }
 
-    fn eye(&self, i: u32) -> DVec3 {
-        let m = &self.mesh;
+    /// `corner_depths` of triangle `index` of `m`, a part of the instance's mesh (paging).
+    pub fn corner_depths_of(&self, m: &Mesh, index: usize) -> [f32; 3] {
+        m.corner_indices(index).map(|i| self.eye(m, i).z as f32)
+    }
+
+    fn eye(&self, m: &Mesh, i: u32) -> DVec3 {
         // Affine: the division by eye w (exactly 1) can go; glam's affine transform adds the
         // same products, so the numbers are the same.
         if self.is_affine() {
@@ -145,8 +148,7 @@ impl Instance {
     /// for `face` when `lit` (flat shading lights only the provoking vertex), its eye normal
     /// and its colour before lighting.
     #[inline]
-    fn vertex(&self, i: u32, eye: DVec3, lighting: Option<&Lighting>, lit: bool, face: usize) -> Vertex {
-        let m = &self.mesh;
+    fn vertex(&self, m: &Mesh, i: u32, eye: DVec3, lighting: Option<&Lighting>, lit: bool, face: usize) -> Vertex {
         let color = m.colors.at(i).map_or(self.color, |c| c.as_dvec4());
         let (primary, secondary, normal) = match lighting {
             Some(l) => {
@@ -170,7 +172,18 @@ impl Instance {
     /// is not read otherwise).
     #[inline]
     pub fn corner_colors(&self, index: usize, lightings: &[Lighting], front: bool) -> ([Vec4; 3], [Vec3; 3]) {
-        let m = &self.mesh;
+        self.corner_colors_of(&self.mesh, index, lightings, front)
+    }
+
+    /// `corner_colors` of triangle `index` of `m`, a part of the instance's mesh (paging).
+    #[inline]
+    pub fn corner_colors_of(
+        &self,
+        m: &Mesh,
+        index: usize,
+        lightings: &[Lighting],
+        front: bool,
+    ) -> ([Vec4; 3], [Vec3; 3]) {
         let lighting = self.lighting(lightings);
         let face = usize::from(!front);
         if let Some(sunlit) = lighting.and_then(Lighting::sunlit) {
@@ -191,8 +204,8 @@ impl Instance {
         }
         let positional = lighting.is_some_and(Lighting::reads_position);
         let vertex = |i: u32| {
-            let eye = if positional { self.eye(i) } else { DVec3::ZERO };
-            self.vertex(i, eye, lighting, true, face)
+            let eye = if positional { self.eye(m, i) } else { DVec3::ZERO };
+            self.vertex(m, i, eye, lighting, true, face)
         };
         if self.flat {
             let v = vertex(m.provoking[index]);
@@ -217,8 +230,14 @@ impl Instance {
     /// corners through the texture matrix that nothing would read, for every hit.
     #[inline]
     pub fn triangle(&self, index: usize, lightings: &[Lighting], texcoords: bool) -> Option<Triangle> {
-        let m = &self.mesh;
-        let clip = self.clip(index);
+        self.triangle_of(&self.mesh, index, lightings, texcoords)
+    }
+
+    /// `triangle` for triangle `index` of `m`, a part of the instance's mesh (a block of a paged
+    /// mesh, drawn with the instance's transform and state).
+    #[inline]
+    pub fn triangle_of(&self, m: &Mesh, index: usize, lightings: &[Lighting], texcoords: bool) -> Option<Triangle> {
+        let clip = self.clip(m, index);
         let front = window_facing(clip, self.front_ccw).unwrap_or(true);
         if culled(self.cull, front) {
             return None;
@@ -226,11 +245,11 @@ impl Instance {
         let face = usize::from(!front);
         let corners = m.corner_indices(index);
         let lighting = self.lighting(lightings);
-        let eyes = corners.map(|i| self.eye(i));
-        let vs = [0, 1, 2].map(|k| self.vertex(corners[k], eyes[k], lighting, !self.flat, face));
+        let eyes = corners.map(|i| self.eye(m, i));
+        let vs = [0, 1, 2].map(|k| self.vertex(m, corners[k], eyes[k], lighting, !self.flat, face));
         let pv = if self.flat {
             let i = m.provoking[index];
-            Some(self.vertex(i, self.eye(i), lighting, true, face))
+            Some(self.vertex(m, i, self.eye(m, i), lighting, true, face))
         } else {
             None
         };

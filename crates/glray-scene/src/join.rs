@@ -29,6 +29,18 @@ impl Joined {
     /// drew instance k), the draws of different ranks that are pieces of one mesh: each group
     /// becomes one instance, at its first piece's place, of the pieces' meshes joined in order.
     pub fn join(&mut self, instances: &mut Vec<Instance>, ranks: &[usize]) {
+        self.join_with(instances, ranks, |pieces| Some(joined(pieces.iter().copied())));
+    }
+
+    /// `join`, with the joined mesh of a group's pieces made by `make` (once while the pieces
+    /// are the same; None: they stay pieces): paging joins stand-ins (`Mesh::stand_in`) whose
+    /// blocks its pager lists.
+    pub fn join_with(
+        &mut self,
+        instances: &mut Vec<Instance>,
+        ranks: &[usize],
+        mut make: impl FnMut(&[&Instance]) -> Option<Mesh>,
+    ) {
         let mut groups: Vec<Vec<usize>> = Vec::new();
         let mut by_key: HashMap<u64, Vec<usize>> = HashMap::new();
         for (k, i) in instances.iter().enumerate() {
@@ -56,9 +68,13 @@ impl Joined {
                 continue;
             }
             let ids: Vec<u64> = members.iter().map(|&m| instances[m].mesh.id).collect();
-            let mesh = match self.meshes.remove(&ids) {
-                Some(m) => m,
-                None => Arc::new(joined(members.iter().map(|&m| &instances[m]))),
+            let made = match self.meshes.remove(&ids) {
+                Some(m) => Some(m),
+                None => make(&members.iter().map(|&m| &instances[m]).collect::<Vec<_>>()).map(Arc::new),
+            };
+            let Some(mesh) = made else {
+                out.extend(members.iter().map(|&m| instances[m].clone()));
+                continue;
             };
             kept.insert(ids, mesh.clone());
             let sequence = members.iter().map(|&m| instances[m].sequence).min().unwrap_or(i.sequence);

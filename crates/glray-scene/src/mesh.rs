@@ -191,6 +191,40 @@ impl Mesh {
         self
     }
 
+    /// A mesh standing in for one that is not here (a paged mesh, whose triangles other ranks
+    /// hold in blocks): its id, its bounds, nothing else. What a frame names it by and sizes it
+    /// with; the tracer finds its triangles through its pager.
+    pub fn stand_in(id: u64, min: Vec3, max: Vec3) -> Mesh {
+        Mesh { id, min, max, sequential: true, ..Mesh::default() }
+    }
+
+    /// The triangles `triangles` of this mesh (in that order) as a mesh of their own, a new id:
+    /// only the vertices they use, in the order of this mesh's, with every attribute they have
+    /// here (a vertex without a value of its own keeps none, so that it takes the draw's
+    /// current one as here). A block of a paged mesh.
+    pub fn part(&self, triangles: &[u32]) -> Mesh {
+        let mut used: Vec<u32> = triangles.iter().flat_map(|&t| self.corner_indices(t as usize)).collect();
+        used.sort_unstable();
+        used.dedup();
+        let new = |v: u32| used.binary_search(&v).expect("a used vertex") as u32;
+        fn part_of<T: Copy>(a: &Attribute<T>, used: &[u32]) -> Attribute<T> {
+            let first = used.partition_point(|&v| v < a.first) as u32;
+            Attribute { first, values: used.iter().filter_map(|&v| a.at(v)).collect() }
+        }
+        let mesh = Mesh {
+            id: 0,
+            positions: used.iter().map(|&v| self.positions[v as usize]).collect(),
+            ws: self.ws.as_ref().map(|ws| used.iter().map(|&v| ws[v as usize]).collect()),
+            normals: part_of(&self.normals, &used),
+            colors: part_of(&self.colors, &used),
+            texcoords: part_of(&self.texcoords, &used),
+            triangles: triangles.iter().map(|&t| self.corner_indices(t as usize).map(new)).collect(),
+            provoking: triangles.iter().map(|&t| new(self.provoking[t as usize])).collect(),
+            ..Mesh::default()
+        };
+        mesh.seal()
+    }
+
     /// The bytes its vertices and triangles take (what shading a hit on it reads from).
     pub fn bytes(&self) -> usize {
         use std::mem::size_of;

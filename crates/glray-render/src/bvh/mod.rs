@@ -355,6 +355,11 @@ impl TriBvh {
         TriBvh { nodes, leaves, root, shallow: most_pending <= stack::FIXED, far: bytes > FAR }
     }
 
+    /// The bytes its nodes and leaves take.
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * size_of::<Node>() + self.leaves.len() * size_of::<Tri4>()
+    }
+
     /// Whether the tree holds no triangle.
     #[inline]
     pub fn is_empty(&self) -> bool {
