@@ -656,3 +656,57 @@ fn a_host_whose_link_is_cut_mid_frame_is_named_within_the_timeout() {
     assert!(took < Duration::from_secs(3 + 8), "named {took:?} after the cut");
     assert!(said.contains("this rank traces its own data from here on"), "{said}");
 }
+
+#[test]
+fn paged_ranks_trace_the_replicated_picture_holding_a_fraction_of_the_scene() {
+    // The anchors' isosurface (1M triangles) split over 4 ranks of the example host, AO: paged
+    // with a cache of 1/8 (`glray run --np 4 --set distribute=paged --set cache_fraction=1/8`),
+    // each rank keeps its piece in blocks and fetches the others' its rays reach, and the
+    // pictures are the replicated ones byte for byte; the largest rank's peak memory (VmHWM) is
+    // at most 0.6 of replicated mode's, where every rank holds every piece, the joined mesh and
+    // its tree. With the ranks' memory capped at 300 MB (`memory_mb`, as a cgroup would),
+    // replicated mode stops sharing frames with a message naming paging; paged runs within it.
+    let dir = scratch("mpi-paged");
+    let mesh = dir.join("iso-1M.bin");
+    run_ok(
+        Command::new(glray_bin()).args(["bench", "--triangles", "1M", "--save-mesh"]).arg(&mesh),
+        "glray bench --save-mesh",
+    );
+    let run = |name: &str, settings: &[&str]| {
+        let (png, stats) = (dir.join(format!("{name}.png")), dir.join(format!("{name}.jsonl")));
+        let mut cmd = Command::new("timeout");
+        cmd.args(["-k", "5", "300"]).arg(glray_bin()).args(["run", "--np", "4"]);
+        for s in settings.iter().chain(&["preset=ao"]) {
+            cmd.args(["--set", s]);
+        }
+        cmd.arg("--set").arg(format!("stats={}", stats.display()));
+        cmd.args(["--mpirun-arg=-x", "--mpirun-arg=ICET_LIKE_ORBIT=4"]);
+        cmd.args(["--mpirun-arg=--mca", "--mpirun-arg=btl", "--mpirun-arg=self,tcp", "--"]);
+        cmd.arg(icet_like()).arg(&png).args(["3", "320", "240", "1"]).arg(&mesh);
+        without_glray(&mut cmd);
+        let out = run_ok(&mut cmd, &format!("glray run --np 4, {name}"));
+        (pixels(&png), std::fs::read_to_string(&stats).unwrap(), stderr(&out))
+    };
+    let field = |l: &str, k: &str| -> Option<f64> {
+        l.split(&format!("\"{k}\":")).nth(1).and_then(|v| v.split([',', '}']).next()?.parse().ok())
+    };
+    let peak = |lines: &str| lines.lines().filter_map(|l| field(l, "peak_memory")).fold(0.0, f64::max);
+    let (replicated, replicated_stats, _) = run("replicated", &["distribute=replicated"]);
+    let (paged, paged_stats, said) = run("paged", &["distribute=paged", "cache_fraction=1/8", "memory_mb=300"]);
+    assert!(paged == replicated, "paged: not the replicated picture\n{said}");
+    assert!(!said.contains("stopped"), "{said}");
+    let (_, _, capped) = run("capped", &["distribute=replicated", "memory_mb=300"]);
+    assert!(
+        capped.contains("over this rank's memory limit of 300 MB") && capped.contains("distribute = paged"),
+        "replicated under a 300 MB cap: {capped}"
+    );
+    // Every rank's every frame says what paging did; ranks fetched blocks of the others'.
+    assert_eq!(paged_stats.lines().filter(|l| l.contains("\"paging\":")).count(), 12, "{paged_stats}");
+    let fetched: f64 = paged_stats.lines().filter_map(|l| field(l, "bytes_fetched")).sum();
+    let own = paged_stats.lines().filter_map(|l| field(l, "own_bytes")).fold(0.0, f64::max);
+    let scene = paged_stats.lines().filter_map(|l| field(l, "scene_bytes")).fold(0.0, f64::max);
+    assert!(fetched > 0.0 && own > 0.0 && own < 0.5 * scene, "{paged_stats}");
+    let (p, r) = (peak(&paged_stats), peak(&replicated_stats));
+    assert!(p > 0.0 && p <= 0.6 * r, "the largest paged rank's peak memory {p} against replicated {r}");
+    assert!(p < 300.0 * 1024.0 * 1024.0, "paged within the cap: {p}");
+}

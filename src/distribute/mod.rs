@@ -127,6 +127,7 @@ impl Distribution {
                     },
                     block_bytes: config.block_bytes(),
                 }),
+                memory_limit: config.memory_limit().or_else(glray_distribute::paging::cgroup_memory_limit),
             },
             node: None,
             stopped: false,

@@ -94,7 +94,7 @@ impl RankStats {
             ",\"rank\":{},\"ranks\":{},\"tiles\":{},\"tiles_total\":{},\"bytes_sent\":{},\"bytes_received\":{},\
              \"raw_sent\":{},\"raw_received\":{},\"pixels_elsewhere\":{},\"received_per_pixel\":{:.3},\
              \"wait_ms\":{:.3},\"exchange_ms\":{:.3},\"rank_trace_ms\":{:.3},\"band_wait_ms\":{:.3},\"band_ms\":{:.3},\
-             \"pack_ms\":{:.3},\"unpack_ms\":{:.3},\"picture_pixels\":{},\"imbalance\":{}{}",
+             \"pack_ms\":{:.3},\"unpack_ms\":{:.3},\"picture_pixels\":{},\"peak_memory\":{},\"imbalance\":{}{}",
             self.rank,
             self.ranks,
             r.tiles,
@@ -113,6 +113,7 @@ impl RankStats {
             ms(r.pack),
             ms(r.unpack),
             r.picture_pixels,
+            glray_distribute::paging::peak_memory(),
             r.imbalance.map_or("null".to_string(), |i| format!("{i:.3}")),
             r.paging.map_or(String::new(), |p| format!(
                 ",\"paging\":{{\"accesses\":{},\"resident\":{},\"cached\":{},\"misses\":{},\"waits\":{},\

@@ -264,6 +264,14 @@ pub const SETTINGS: &[Setting] = &[
               equal.",
     },
     Setting {
+        key: "memory_mb",
+        kind: Kind::Int(0, 1 << 30),
+        default: "0",
+        doc: "The memory a rank may use, in megabytes (0: its cgroup's limit, if it has one). Replicated, \
+              a rank whose scene would not fit stops sharing frames with a message naming `distribute = \
+              paged` (each rank then traces its own data) rather than be killed for its memory.",
+    },
+    Setting {
         key: "block_kb",
         kind: Kind::Int(1, 1 << 20),
         default: "64",
@@ -734,6 +742,11 @@ impl Config {
     /// Whether `paging` is `all-resident`.
     pub fn all_resident(&self) -> bool {
         self.get("paging") == "all-resident"
+    }
+
+    /// `memory_mb` in bytes, when set (not 0).
+    pub fn memory_limit(&self) -> Option<u64> {
+        self.get("memory_mb").parse::<u64>().ok().filter(|&m| m > 0).map(|m| m << 20)
     }
 
     /// `block_kb` in bytes.

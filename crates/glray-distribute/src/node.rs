@@ -193,6 +193,9 @@ pub struct Setup {
     pub parts: PictureParts,
     /// Paged meshes (`distribute = paged`), else every rank holds every mesh.
     pub paging: Option<PagingSetup>,
+    /// The memory a rank may use (`memory_mb`, or its cgroup's limit): replicated, a scene that
+    /// would not fit stops the sharing with a message naming paging.
+    pub memory_limit: Option<u64>,
 }
 
 impl Default for Setup {
@@ -205,6 +208,7 @@ impl Default for Setup {
             compression: Compression::default(),
             parts: PictureParts::Own,
             paging: None,
+            memory_limit: None,
         }
     }
 }
@@ -277,6 +281,11 @@ impl Announced {
 /// Makes rank 0's settings changes (setting, value) on this rank: to its renderer and wherever
 /// else they matter; the new settings' agreement number, or why they cannot be made.
 pub type SettingsHook = Box<dyn FnMut(&[(String, String)], &mut Renderer) -> Result<u64, String> + Send>;
+
+/// What a byte of a scene message takes on a replicated rank: the decoded meshes, the meshes
+/// the ranks' pieces join into, and their tree (the 1M isosurface: ~6, less the rank's memory
+/// before it).
+const REPLICATED_BYTES_A_SCENE_BYTE: u64 = 4;
 
 /// How long a wait for the next message lasts before the limits are looked at again.
 const WAKE: Duration = Duration::from_millis(2);
@@ -588,8 +597,10 @@ impl Node {
             }
             None => mine,
         };
+        let mut own_raw = 0;
         if size > 1 {
             let scene = encode(mine, &mut self.sent);
+            own_raw = scene.len() as u64;
             // Packed once for every rank (the first frame's may be hundreds of megabytes).
             let scene = Packed::new(&scene, 4, self.link.compression());
             let m = Message::Scene { frame, settings: self.agreement.settings, want, scene };
@@ -661,6 +672,24 @@ impl Node {
             }
         }
         let waited = begun.elapsed();
+        if let (None, Some(limit)) = (&self.paging, self.setup.memory_limit) {
+            // Every rank weighs the same scenes: all stop together, rather than one be killed.
+            let raw: u64 = scenes.iter().flatten().map(|p| p.sizes().0).sum::<u64>() + own_raw;
+            let need = crate::paging::resident_memory() + REPLICATED_BYTES_A_SCENE_BYTE * raw;
+            if need > limit {
+                let mb = |b: u64| b >> 20;
+                return Err(Fault::Refused {
+                    rank: me,
+                    why: format!(
+                        "every rank's scene on every rank (distribute = replicated) would take about {} MB, over \
+                         this rank's memory limit of {} MB (memory_mb, or its cgroup): with distribute = paged \
+                         each rank keeps its own meshes and a cache of a share of the others' (cache_fraction)",
+                        mb(need),
+                        mb(limit)
+                    ),
+                });
+            }
+        }
         for m in early.into_iter().rev() {
             self.ahead.push_front(m);
         }

@@ -8,4 +8,6 @@ pub mod blocks;
 pub mod cache;
 pub mod pager;
 
-pub use pager::{peak_memory, Asks, Budget, Paging, PagingReport, PagingSetup, Resident};
+pub use pager::{
+    cgroup_memory_limit, peak_memory, resident_memory, Asks, Budget, Paging, PagingReport, PagingSetup, Resident,
+};
