@@ -199,7 +199,15 @@ impl Distribution {
                     glray_core::info!("rank {} of {}: image-parallel tracing", transport.rank(), transport.size());
                     // Settings changed before the first frame count from it (rank 0 hands them on).
                     let agreement = Agreement { settings: self.settings };
-                    let setup = Setup { threaded: threading >= THREAD_MULTIPLE, ..self.setup };
+                    let mut setup = Setup { threaded: threading >= THREAD_MULTIPLE, ..self.setup };
+                    if !setup.threaded && setup.paging.is_some() {
+                        // (A rank tracing alone could not serve, nor be served, its blocks.)
+                        glray_core::warn!(
+                            "distribute = paged needs MPI_THREAD_MULTIPLE (glray's MPI thread serves a rank's blocks \
+                             while it traces): every rank holds every mesh (replicated) instead"
+                        );
+                        setup.paging = None;
+                    }
                     let mut node = Node::new(transport, agreement, setup);
                     if let Some((settings, changes)) = self.announced.take() {
                         node.announce(settings, changes);

@@ -844,6 +844,29 @@ mod tests {
     }
 
     #[test]
+    fn paging_settings_take_a_share_a_size_and_a_mode() {
+        let env = |k: &str, v: &str| vars(&[("HOME", "/nonexistent"), (k, v)]);
+        let defaults = Config::resolve(&vars(&[("HOME", "/nonexistent")]), &[]).unwrap();
+        assert_eq!((defaults.cache_fraction(), defaults.cache_mb(), defaults.all_resident()), (0.125, None, false));
+        assert_eq!((defaults.block_bytes(), defaults.memory_limit()), (64 * 1024, None));
+        for (value, share) in [("1/4", 0.25), (" 1 / 2 ", 0.5), ("0.0625", 0.0625), ("1", 1.0)] {
+            let c = Config::resolve(&env("GLRAY_CACHE_FRACTION", value), &[]).unwrap();
+            assert_eq!(c.cache_fraction(), share, "{value}");
+        }
+        for bad in ["0", "2", "1/0", "-1/8", "an eighth", "1/8/2"] {
+            let e = Config::resolve(&env("GLRAY_CACHE_FRACTION", bad), &[]).unwrap_err().0;
+            assert!(e.contains("`cache_fraction`") && e.contains("as a fraction (1/8)"), "{bad}: {e}");
+        }
+        let c = Config::resolve(&env("GLRAY_DISTRIBUTE", "paged"), &[]).unwrap();
+        assert_eq!(c.distribute(true), "paged");
+        let c = Config::resolve(&env("GLRAY_PAGING", "all-resident"), &[]).unwrap();
+        assert!(c.all_resident());
+        let c = Config::resolve(&env("GLRAY_MEMORY_MB", "300"), &[]).unwrap();
+        assert_eq!(c.memory_limit(), Some(300 << 20));
+        assert!(Config::resolve(&env("GLRAY_PAGING", "sometimes"), &[]).is_err());
+    }
+
+    #[test]
     fn defaults_apply_without_anything_set() {
         let c = Config::resolve(&vars(&[("HOME", "/nonexistent")]), &[]).unwrap();
         assert!(c.enable());

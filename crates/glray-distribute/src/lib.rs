@@ -5,7 +5,9 @@
 //! - `protocol`: the messages, each with its frame number;
 //! - `master`: the tile queue: first batches, adaptive chunks, tiles kept where they were;
 //! - `node`: one rank's part in a frame: scenes exchanged and merged, tiles traced and
-//!   gathered, every wait bounded.
+//!   gathered, every wait bounded;
+//! - `paging`: `distribute = paged`: each rank's big meshes in blocks, other ranks' blocks
+//!   fetched into a bounded cache.
 
 pub mod assembly;
 pub mod bands;

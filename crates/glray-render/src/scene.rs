@@ -5,7 +5,9 @@
 //! - display-list meshes: one BVH each, in object coordinates, built the first time a frame
 //!   draws the mesh and kept while the mesh lives (`Meshes`), so that a list drawn every frame
 //!   is built once; a top-level BVH over the frame's instances (their bounds in eye space),
-//!   and rays taken into each instance's object space.
+//!   and rays taken into each instance's object space;
+//! - paged meshes (`distribute = paged`): in place of a mesh's BVH, a tree over its blocks'
+//!   boxes, each block's own tree had from the pager when a ray reaches it (`paged`).
 
 use std::sync::Arc;
 use std::time::Duration;
