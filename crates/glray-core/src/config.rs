@@ -274,7 +274,7 @@ pub const SETTINGS: &[Setting] = &[
     Setting {
         key: "block_kb",
         kind: Kind::Int(1, 1 << 20),
-        default: "64",
+        default: "128",
         doc: "With `distribute = paged`: about how many kilobytes of triangles and tree a block holds (meshes \
               of more than 8,192 triangles are paged, in blocks of their triangles close in space).",
     },
@@ -751,7 +751,7 @@ impl Config {
 
     /// `block_kb` in bytes.
     pub fn block_bytes(&self) -> usize {
-        self.get("block_kb").parse::<usize>().unwrap_or(64).max(1) * 1024
+        self.get("block_kb").parse::<usize>().unwrap_or(128).max(1) * 1024
     }
 
     /// `mpi_roles`: "shared", "dedicated" or "paper".
@@ -848,7 +848,7 @@ mod tests {
         let env = |k: &str, v: &str| vars(&[("HOME", "/nonexistent"), (k, v)]);
         let defaults = Config::resolve(&vars(&[("HOME", "/nonexistent")]), &[]).unwrap();
         assert_eq!((defaults.cache_fraction(), defaults.cache_mb(), defaults.all_resident()), (0.125, None, false));
-        assert_eq!((defaults.block_bytes(), defaults.memory_limit()), (64 * 1024, None));
+        assert_eq!((defaults.block_bytes(), defaults.memory_limit()), (128 * 1024, None));
         for (value, share) in [("1/4", 0.25), (" 1 / 2 ", 0.5), ("0.0625", 0.0625), ("1", 1.0)] {
             let c = Config::resolve(&env("GLRAY_CACHE_FRACTION", value), &[]).unwrap();
             assert_eq!(c.cache_fraction(), share, "{value}");

@@ -52,7 +52,7 @@ pub struct PagingSetup {
 
 impl Default for PagingSetup {
     fn default() -> PagingSetup {
-        PagingSetup { resident: Resident::Fetch, budget: Budget::Fraction(0.125), block_bytes: 64 * 1024 }
+        PagingSetup { resident: Resident::Fetch, budget: Budget::Fraction(0.125), block_bytes: 128 * 1024 }
     }
 }
 
