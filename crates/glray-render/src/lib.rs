@@ -42,6 +42,7 @@ pub mod scene;
 mod signature;
 mod smooth;
 pub mod tiles;
+mod top;
 mod tracer;
 
 pub use options::{Effects, Options};

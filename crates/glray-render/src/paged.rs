@@ -11,17 +11,14 @@
 //! block (`Layout::locate` finds them back for shading).
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use glam::{Vec3, Vec3A};
 use glray_scene::mesh::Mesh;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::builder::build_cwbvh;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
-use obvhs::BvhBuildParams;
+use obvhs::ray::Ray;
 
 use crate::bvh::{Quality, TriBvh, TriHit, BUNDLE};
+use crate::top::Top;
 
 /// A block of a paged mesh: its triangles and their tree.
 pub struct Block {
@@ -58,14 +55,10 @@ pub struct BlockRef {
 pub struct Layout {
     pub blocks: Vec<BlockRef>,
     starts: Vec<u32>,
-    boxes: Vec<Aabb>,
-    top: Option<CwBvh>,
+    top: Top,
     pub min: Vec3,
     pub max: Vec3,
 }
-
-/// Up to this many blocks are tried box after box (as `scene`'s instances).
-const FEW_BLOCKS: usize = 8;
 
 impl Layout {
     pub fn new(blocks: Vec<BlockRef>) -> Layout {
@@ -77,10 +70,8 @@ impl Layout {
             n += b.triangles;
             (min, max) = (min.min(b.min), max.max(b.max));
         }
-        let boxes: Vec<Aabb> = blocks.iter().map(|b| Aabb::new(b.min.into(), b.max.into())).collect();
-        let top = (boxes.len() > FEW_BLOCKS)
-            .then(|| build_cwbvh(&boxes, BvhBuildParams::fast_build(), &mut Duration::default()));
-        Layout { blocks, starts, boxes, top, min, max }
+        let top = Top::new(blocks.iter().map(|b| Aabb::new(b.min.into(), b.max.into())).collect());
+        Layout { blocks, starts, top, min, max }
     }
 
     /// The layouts of the pieces of one mesh (drawn by several ranks) as one, in their order.
@@ -100,33 +91,9 @@ impl Layout {
         (local < self.blocks[b].triangles).then_some((b, local))
     }
 
-    /// Offers `visit` every block whose box the ray meets (as `Scene::visit_instances`).
-    fn visit(&self, ray: Ray, first: bool, mut visit: impl FnMut(&Ray, usize) -> f32) -> bool {
-        match &self.top {
-            Some(top) if first => !top.ray_traverse_miss(ray, |r, slot| visit(r, top.primitive_indices[slot] as usize)),
-            Some(top) => {
-                let mut hit = RayHit::none();
-                top.ray_traverse(ray, &mut hit, |r, slot| visit(r, top.primitive_indices[slot] as usize))
-            }
-            None => {
-                let mut r = ray;
-                let mut any = false;
-                for (k, b) in self.boxes.iter().enumerate() {
-                    if b.intersect_ray(&r) == f32::INFINITY {
-                        continue;
-                    }
-                    let t = visit(&r, k);
-                    if t < r.tmax {
-                        any = true;
-                        if first {
-                            break;
-                        }
-                        r.tmax = t;
-                    }
-                }
-                any
-            }
-        }
+    /// Offers `visit` every block whose box the ray meets (`Top::visit`).
+    fn visit(&self, ray: Ray, first: bool, visit: impl FnMut(&Ray, usize) -> f32) -> bool {
+        self.top.visit(ray, first, visit)
     }
 }
 

@@ -21,7 +21,6 @@ use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
 pub use obvhs::ray::Ray;
-use obvhs::ray::RayHit;
 use obvhs::BvhBuildParams;
 
 use crate::bvh::{Quality, TriBvh, TriHit, BUNDLE};
@@ -30,6 +29,7 @@ use crate::offset::{leaving, Origin};
 use crate::options::BvhBuild;
 use crate::paged::{Block, PagedMesh, Pager};
 use crate::sampling::Hemisphere;
+use crate::top::Top;
 
 /// Where a ray (unit direction) enters a capsule around the segment from `a` to `b` (a ball when
 /// they meet), or infinity (Quilez's capsule test: the cylinder, then the cap it came in by).
@@ -216,8 +216,7 @@ pub struct Scene<'f> {
     frustum: bool,
     placed: Vec<Placed<'f>>,
     /// The instances' eye-space boxes, and a BVH over them when there are many.
-    boxes: Vec<Aabb>,
-    top: Option<CwBvh>,
+    top: Top,
     /// Eye-space bounds of everything.
     bounds: Aabb,
     /// Lines and points as solids, for secondary rays, and their BVH.
@@ -241,10 +240,6 @@ fn coarse(triangles: usize, frame: &Frame) -> bool {
     let (w, h) = frame.size();
     triangles as u64 <= FINE * (w as u64 * h as u64).max(1)
 }
-
-/// Up to this many instances are tried one box after the other: cheaper than a top-level
-/// traversal (a big mesh drawn once is the common case).
-const FEW_INSTANCES: usize = 8;
 
 impl<'f> Scene<'f> {
     /// The scene of `frame`, its trees built as `choice` says for a frame tracing `ray_work`
@@ -291,8 +286,6 @@ impl<'f> Scene<'f> {
             })
             .collect();
         let bounds: Vec<Aabb> = placed.iter().map(|p| eye_bounds(&p.instance.mesh, &p.instance.modelview)).collect();
-        let top = (bounds.len() > FEW_INSTANCES)
-            .then(|| build_cwbvh(&bounds, BvhBuildParams::fast_build(), &mut Duration::default()));
         let mut all = placed_bounds(frame);
         for t in &frame.triangles {
             for v in t.positions {
@@ -316,8 +309,7 @@ impl<'f> Scene<'f> {
             refits: made.refits,
             frustum,
             placed,
-            boxes: bounds,
-            top,
+            top: Top::new(bounds),
             bounds: all,
             solids: &frame.solids,
             solid_bvh,
@@ -336,36 +328,9 @@ impl<'f> Scene<'f> {
         self.line_draws.binary_search(&sequence).is_ok()
     }
 
-    /// Offers `visit` every instance whose box the ray meets (the top-level BVH's way when
-    /// there are many). `visit` returns where it hit (infinity: nowhere); a hit shortens the
-    /// ray for the instances after it; with `first`, the first hit ends the search. True if
-    /// anything was hit.
-    fn visit_instances(&self, ray: Ray, first: bool, mut visit: impl FnMut(&Ray, usize) -> f32) -> bool {
-        match &self.top {
-            Some(top) if first => !top.ray_traverse_miss(ray, |r, slot| visit(r, top.primitive_indices[slot] as usize)),
-            Some(top) => {
-                let mut hit = RayHit::none();
-                top.ray_traverse(ray, &mut hit, |r, slot| visit(r, top.primitive_indices[slot] as usize))
-            }
-            None => {
-                let mut r = ray;
-                let mut any = false;
-                for (k, b) in self.boxes.iter().enumerate() {
-                    if b.intersect_ray(&r) == f32::INFINITY {
-                        continue;
-                    }
-                    let t = visit(&r, k);
-                    if t < r.tmax {
-                        any = true;
-                        if first {
-                            break;
-                        }
-                        r.tmax = t;
-                    }
-                }
-                any
-            }
-        }
+    /// Offers `visit` every instance whose box the ray meets (`Top::visit`).
+    fn visit_instances(&self, ray: Ray, first: bool, visit: impl FnMut(&Ray, usize) -> f32) -> bool {
+        self.top.visit(ray, first, visit)
     }
 
     /// The length of the eye-space diagonal of everything (0 for an empty scene).
@@ -439,7 +404,7 @@ impl<'f> Scene<'f> {
         eps: f32,
         mut local: impl FnMut() -> Vec3,
     ) -> f32 {
-        if self.translucent || !self.line_draws.is_empty() || self.top.is_some() {
+        if self.translucent || !self.line_draws.is_empty() || self.top.tree.is_some() {
             return (0..count)
                 .map(|_| {
                     let ray = leaving(at.p, at.n, around.at(local()), eps, distance);
@@ -451,9 +416,9 @@ impl<'f> Scene<'f> {
         let start = Vec3A::from(at.p + at.n * eps);
         // (Directions are unit to within rounding: a thousandth more covers where any ends.)
         let reach = Aabb::new(start - distance * 1.001, start + distance * 1.001);
-        let mut near = [(0, Vec3A::ZERO, *around); FEW_INSTANCES];
+        let mut near = [(0, Vec3A::ZERO, *around); crate::top::FEW];
         let mut n = 0;
-        for (k, b) in self.boxes.iter().enumerate() {
+        for (k, b) in self.top.boxes.iter().enumerate() {
             if b.intersect_aabb(&reach) {
                 let to_object = &self.placed[k].to_object;
                 near[n] = (k, to_object.transform_point3a(start), around.mapped(to_object));
@@ -551,7 +516,7 @@ impl<'f> Scene<'f> {
     /// The closest hits of `N` rays (a multiple of four; coherent ones: a block of camera rays),
     /// as `closest` finds each, into `best`.
     pub fn closest_packet<const N: usize>(&self, rays: &[Ray; N], best: &mut [Option<Hit>; N]) {
-        if self.top.is_some() {
+        if self.top.tree.is_some() {
             // Many instances: the top level is walked ray by ray.
             for (b, r) in best.iter_mut().zip(rays) {
                 *b = self.closest(*r);
@@ -566,7 +531,7 @@ impl<'f> Scene<'f> {
         // Each ray as far as its closest hit so far: an instance whose box every ray misses
         // or enters beyond that is passed by.
         let reach = |best: &[Option<Hit>; N], j: usize| best[j].map_or(rays[j].tmax, |h| h.t);
-        for (k, b) in self.boxes.iter().enumerate() {
+        for (k, b) in self.top.boxes.iter().enumerate() {
             if (0..N).all(|j| b.intersect_ray(&rays[j]) > reach(best, j)) {
                 continue;
             }
