@@ -127,7 +127,7 @@ impl Distribution {
                     },
                     block_bytes: config.block_bytes(),
                 }),
-                memory_limit: config.memory_limit().or_else(glray_distribute::paging::cgroup_memory_limit),
+                memory_limit: config.memory_limit().or_else(glray_core::memory::cgroup_limit),
             },
             node: None,
             stopped: false,

@@ -113,7 +113,7 @@ impl RankStats {
             ms(r.pack),
             ms(r.unpack),
             r.picture_pixels,
-            glray_distribute::paging::peak_memory(),
+            glray_core::memory::peak(),
             r.imbalance.map_or("null".to_string(), |i| format!("{i:.3}")),
             r.paging.map_or(String::new(), |p| format!(
                 ",\"paging\":{{\"accesses\":{},\"resident\":{},\"cached\":{},\"misses\":{},\"waits\":{},\

@@ -7,6 +7,7 @@ pub mod hash;
 pub mod image;
 pub mod indices;
 pub mod log;
+pub mod memory;
 pub mod pages;
 pub mod prefetch;
 pub mod reallib;

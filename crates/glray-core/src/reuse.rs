@@ -488,10 +488,9 @@ mod tests {
 
     /// The process's address space in bytes (`VmSize`).
     fn address_space() -> usize {
-        let status = std::fs::read_to_string("/proc/self/status").expect("/proc/self/status");
-        let line = status.lines().find(|l| l.starts_with("VmSize:")).expect("a VmSize line");
-        let kb: usize = line.split_whitespace().nth(1).and_then(|n| n.parse().ok()).expect("VmSize in kB");
-        kb * 1024
+        let bytes = crate::memory::status_bytes("VmSize:") as usize;
+        assert!(bytes > 0, "VmSize in /proc/self/status");
+        bytes
     }
 
     /// `ulimit -v` at `extra` bytes more than the process holds now.

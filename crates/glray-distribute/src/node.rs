@@ -675,7 +675,7 @@ impl Node {
         if let (None, Some(limit)) = (&self.paging, self.setup.memory_limit) {
             // Every rank weighs the same scenes: all stop together, rather than one be killed.
             let raw: u64 = scenes.iter().flatten().map(|p| p.sizes().0).sum::<u64>() + own_raw;
-            let need = crate::paging::resident_memory() + REPLICATED_BYTES_A_SCENE_BYTE * raw;
+            let need = glray_core::memory::resident() + REPLICATED_BYTES_A_SCENE_BYTE * raw;
             if need > limit {
                 let mb = |b: u64| b >> 20;
                 return Err(Fault::Refused {

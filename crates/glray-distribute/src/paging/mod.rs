@@ -8,6 +8,4 @@ pub mod blocks;
 pub mod cache;
 pub mod pager;
 
-pub use pager::{
-    cgroup_memory_limit, peak_memory, resident_memory, Asks, Budget, Paging, PagingReport, PagingSetup, Resident,
-};
+pub use pager::{Asks, Budget, Paging, PagingReport, PagingSetup, Resident};

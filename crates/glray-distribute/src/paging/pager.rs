@@ -499,7 +499,7 @@ impl Paging {
             over: cache.over,
             own_bytes: blocks.values().filter(|b| b.0 == self.rank).map(|b| b.1).sum(),
             scene_bytes: blocks.values().map(|b| b.1).sum(),
-            peak_memory: peak_memory(),
+            peak_memory: glray_core::memory::peak(),
         }
     }
 }
@@ -536,45 +536,6 @@ fn block_ref(b: &Block) -> BlockRef {
         triangles: b.mesh.triangles.len() as u32,
         bytes: b.bytes() as u64,
     }
-}
-
-/// This process's peak resident memory (VmHWM of /proc/self/status), bytes; 0 where unknown.
-pub fn peak_memory() -> u64 {
-    status_bytes("VmHWM:")
-}
-
-/// This process's resident memory now (VmRSS), bytes; 0 where unknown.
-pub fn resident_memory() -> u64 {
-    status_bytes("VmRSS:")
-}
-
-fn status_bytes(field: &str) -> u64 {
-    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    status
-        .lines()
-        .find_map(|l| l.strip_prefix(field))
-        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
-        .map_or(0, |kb| kb * 1024)
-}
-
-/// The memory limit of this process's cgroup (v2 `memory.max`, v1 `memory.limit_in_bytes`),
-/// if it has one.
-pub fn cgroup_memory_limit() -> Option<u64> {
-    let groups = std::fs::read_to_string("/proc/self/cgroup").ok()?;
-    let read = |path: String| std::fs::read_to_string(path).ok()?.trim().parse::<u64>().ok();
-    let limit = groups.lines().find_map(|l| {
-        let mut parts = l.splitn(3, ':');
-        let (_, controllers, path) = (parts.next()?, parts.next()?, parts.next()?);
-        match controllers {
-            "" => read(format!("/sys/fs/cgroup{path}/memory.max")),
-            c if c.split(',').any(|c| c == "memory") => {
-                read(format!("/sys/fs/cgroup/memory{path}/memory.limit_in_bytes"))
-            }
-            _ => None,
-        }
-    })?;
-    // (No limit is the largest page-aligned number there is.)
-    (limit < 1 << 60).then_some(limit)
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
