@@ -35,7 +35,7 @@ use crate::bands::Bands;
 use crate::link::{Event, Link};
 use crate::master::{imbalance, Master};
 use crate::pack::{Compression, Packed};
-use crate::paging::{Paging, PagingReport, PagingSetup, Resident};
+use crate::paging::{Missing, Paging, PagingReport, PagingSetup, Resident};
 use crate::protocol::{packed, unpacked, Message, RankReport, Rect};
 use crate::transport::Transport;
 
@@ -348,11 +348,6 @@ impl Node {
         }
     }
 
-    /// The rank's pager, when it pages.
-    pub fn paging(&self) -> Option<&Arc<Paging>> {
-        self.paging.as_ref()
-    }
-
     /// Rank 0: its settings changed (already made here, `settings` their new agreement
     /// number); every other rank makes `changes` before it traces the next frame.
     pub fn announce(&mut self, settings: u64, changes: Vec<(String, String)>) {
@@ -517,17 +512,18 @@ impl Node {
         };
         if let Some(p) = &self.paging {
             report.paging = Some(p.take_report());
-            if let Some((owner, why)) = p.take_failure() {
-                return Err(if why.contains("did not come") {
-                    Fault::Silent {
+            match p.take_failure() {
+                Some(Missing::Late { owner }) => {
+                    let waited = self.limit();
+                    return Err(Fault::Silent {
                         ranks: vec![owner],
-                        waited: self.limit(),
+                        waited,
                         frame,
                         waiting_for: "a block of its data",
-                    }
-                } else {
-                    Fault::Damaged { rank: owner, why }
-                });
+                    });
+                }
+                Some(Missing::Refused { owner, why }) => return Err(Fault::Damaged { rank: owner, why }),
+                None => {}
             }
         }
         if !report.untraced {

@@ -8,4 +8,4 @@ pub mod blocks;
 pub mod cache;
 pub mod pager;
 
-pub use pager::{Asks, Budget, Paging, PagingReport, PagingSetup, Resident};
+pub use pager::{Asks, Budget, Missing, Paging, PagingReport, PagingSetup, Resident};

@@ -101,6 +101,15 @@ impl PagingReport {
     }
 }
 
+/// Why a block could not be had (`Paging::take_failure`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Missing {
+    /// Its owner did not answer within the limit.
+    Late { owner: usize },
+    /// It could not be asked for, or what its owner sent is no block.
+    Refused { owner: usize, why: String },
+}
+
 /// A block on its way, asked for at `asked`.
 struct Pending {
     state: Mutex<State>,
@@ -164,7 +173,7 @@ pub struct Paging {
     counts: Counts,
     latencies: Mutex<Vec<f32>>,
     /// The first block that did not come this frame: its owner, and why.
-    failure: Mutex<Option<(usize, String)>>,
+    failure: Mutex<Option<Missing>>,
 }
 
 impl Paging {
@@ -373,15 +382,15 @@ impl Paging {
                 Some(_) => "glray's MPI thread has ended".to_string(),
                 None => format!("block {key} is in no layout this rank was sent"),
             };
-            self.fail(key, &p, owner.unwrap_or(self.rank), why);
+            self.fail(key, &p, Missing::Refused { owner: owner.unwrap_or(self.rank), why });
         }
         (p, true)
     }
 
-    fn fail(&self, key: u64, p: &Pending, owner: usize, why: String) {
+    fn fail(&self, key: u64, p: &Pending, missing: Missing) {
         let mut first = lock(&self.failure);
         if first.is_none() {
-            *first = Some((owner, why));
+            *first = Some(missing);
         }
         drop(first);
         *lock(&p.state) = State::Failed;
@@ -415,7 +424,7 @@ impl Paging {
                     let block = match built {
                         Ok(b) => Arc::new(b),
                         Err(why) => {
-                            self.fail(key, p, owner, why);
+                            self.fail(key, p, Missing::Refused { owner, why });
                             break None;
                         }
                     };
@@ -433,8 +442,7 @@ impl Paging {
                     if since.elapsed() > limit {
                         drop(state);
                         let owner = read(&self.blocks).get(&key).map_or(self.rank, |b| b.0);
-                        let why = format!("block {key} did not come within {:.1} s", limit.as_secs_f64());
-                        self.fail(key, p, owner, why);
+                        self.fail(key, p, Missing::Late { owner });
                         break None;
                     }
                     state =
@@ -466,8 +474,8 @@ impl Paging {
         out
     }
 
-    /// The first block that did not come since this was last asked: its owner, and why.
-    pub fn take_failure(&self) -> Option<(usize, String)> {
+    /// Why the first block that could not be had since this was last asked was not.
+    pub fn take_failure(&self) -> Option<Missing> {
         lock(&self.failure).take()
     }
 
