@@ -7,24 +7,21 @@
 
 use std::time::Duration;
 
-use glray_capture::fixed::Context;
-use glray_core::trace::Value::{self, Int, F64};
+mod common;
+
+use common::{call, lit_context, options};
+use glray_core::trace::Value::{Int, F64};
 use glray_distribute::node::Setup;
 use glray_distribute::paging::{Budget, PagingReport, PagingSetup, Resident};
 use glray_distribute::transport::memory::MemoryTransport;
 use glray_distribute::{Agreement, Limits, Node};
-use glray_render::{Effects, Options, Renderer};
+use glray_render::Renderer;
 use glray_scene::frame::Frame;
 
 const W: u32 = 160;
 const H: u32 = 120;
 /// Squares a side of the terrain (two triangles each).
 const N: usize = 160;
-
-fn call(c: &mut Context, name: &str, args: &[Value<'static>]) {
-    let (op, ty) = glray_capture::ops::op_for(name).unwrap_or_else(|| panic!("{name}"));
-    c.call(op, ty, args);
-}
 
 fn height(x: f64, y: f64) -> f64 {
     0.35 * (1.3 * x).sin() * (1.1 * y).cos() + 0.1 * (3.0 * x + 2.0 * y).sin()
@@ -42,15 +39,7 @@ fn normal(x: f64, y: f64) -> [f64; 3] {
 /// Rank `rank`'s frames (of `ranks`): its rows of the terrain as a display list; rank 0 also
 /// the boxes above it. Frame 0 seen from afar, the others from close by.
 fn frames(rank: usize, ranks: usize, count: usize) -> Vec<Frame> {
-    let mut c = Context::default();
-    c.set_drawable(W, H);
-    call(&mut c, "glMatrixMode", &[Int(0x1701)]);
-    call(&mut c, "glFrustum", &[-0.6, 0.6, -0.45, 0.45, 1.0, 40.0].map(F64));
-    call(&mut c, "glMatrixMode", &[Int(0x1700)]);
-    for cap in [0x0B50, 0x4000, 0x0B57, 0x0B71] {
-        // lighting, light 0, colour material, depth test
-        call(&mut c, "glEnable", &[Int(cap)]);
-    }
+    let mut c = lit_context(W, H, [-0.6, 0.6, -0.45, 0.45, 1.0, 40.0]);
     let step = 8.0 / N as f64;
     let at = |i: usize, j: usize| (-4.0 + i as f64 * step, -4.0 + j as f64 * step);
     call(&mut c, "glNewList", &[Int(1), Int(0x1300)]);
@@ -106,10 +95,6 @@ fn frames(rank: usize, ranks: usize, count: usize) -> Vec<Frame> {
             c.take_frame()
         })
         .collect()
-}
-
-fn options(preset: &str) -> Options {
-    Options { effects: Effects::preset(preset).unwrap(), ..Options::default() }
 }
 
 /// Every rank's pictures and reports of the frames, over `ranks` ranks in threads, paged as

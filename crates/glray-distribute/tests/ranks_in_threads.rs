@@ -5,22 +5,19 @@
 
 use std::time::{Duration, Instant};
 
-use glray_capture::fixed::Context;
-use glray_core::trace::Value::{self, Int, F64};
+mod common;
+
+use common::{call, lit_context, options};
+use glray_core::trace::Value::{Int, F64};
 use glray_distribute::node::{Roles, Setup};
 use glray_distribute::transport::memory::MemoryTransport;
 use glray_distribute::{Agreement, Fault, Limits, Node};
-use glray_render::{Effects, Options, Renderer};
+use glray_render::Renderer;
 use glray_scene::frame::Frame;
 
 const W: u32 = 150;
 const H: u32 = 110;
 const BOXES: usize = 6;
-
-fn call(c: &mut Context, name: &str, args: &[Value<'static>]) {
-    let (op, ty) = glray_capture::ops::op_for(name).unwrap_or_else(|| panic!("{name}"));
-    c.call(op, ty, args);
-}
 
 /// The frames of `frames` frames drawn by the rank `rank` of `ranks`: a ground (rank 0's) and
 /// its block of the boxes, lit, with the same camera everywhere.
@@ -31,15 +28,7 @@ fn frames_of(rank: usize, ranks: usize, frames: usize) -> Vec<Frame> {
 /// `frames_of`, the boxes lifted by `lift` every other frame (their points move up and down
 /// the window from frame to frame: across the ranks' bands).
 fn frames_moving(rank: usize, ranks: usize, frames: usize, lift: f64) -> Vec<Frame> {
-    let mut c = Context::default();
-    c.set_drawable(W, H);
-    call(&mut c, "glMatrixMode", &[Int(0x1701)]);
-    call(&mut c, "glFrustum", &[-0.6, 0.6, -0.45, 0.45, 1.0, 30.0].map(F64));
-    call(&mut c, "glMatrixMode", &[Int(0x1700)]);
-    for cap in [0x0B50, 0x4000, 0x0B57, 0x0B71] {
-        // lighting, light 0, colour material, depth test
-        call(&mut c, "glEnable", &[Int(cap)]);
-    }
+    let mut c = lit_context(W, H, [-0.6, 0.6, -0.45, 0.45, 1.0, 30.0]);
     call(&mut c, "glNewList", &[Int(1), Int(0x1300)]);
     call(&mut c, "glBegin", &[Int(4)]);
     let faces: [([f64; 3], [[f64; 3]; 4]); 3] = [
@@ -86,11 +75,6 @@ fn frames_moving(rank: usize, ranks: usize, frames: usize, lift: f64) -> Vec<Fra
             c.take_frame()
         })
         .collect()
-}
-
-/// A preset's options, as a user gets them (AO denoised where the preset has AO).
-fn options(preset: &str) -> Options {
-    Options { effects: Effects::preset(preset).unwrap(), ..Options::default() }
 }
 
 /// Rank 0's pictures of `frames` frames over `ranks` ranks in threads.
