@@ -9,7 +9,7 @@ use std::sync::OnceLock;
 use glray_distribute::Transport;
 
 /// The version of the edge's functions this libglray was built with (glray-mpi's `ABI`).
-const ABI: u32 = 1;
+const ABI: u32 = 2;
 
 type Init = unsafe extern "C" fn(*mut c_int, *mut *mut *mut c_char, c_int, *mut c_int) -> c_int;
 
@@ -22,6 +22,7 @@ pub struct Edge {
     size: extern "C" fn() -> c_int,
     send: unsafe extern "C" fn(c_int, *const u8, usize) -> c_int,
     flushed: extern "C" fn() -> c_int,
+    unsent: extern "C" fn() -> c_int,
     poll: unsafe extern "C" fn(*mut c_int, *mut *mut u8, *mut usize) -> c_int,
     free: unsafe extern "C" fn(*mut u8, usize),
     pub finalize: extern "C" fn(c_int) -> c_int,
@@ -88,6 +89,7 @@ fn load() -> Result<Edge, String> {
                 c"glray_mpi_send",
             )?),
             flushed: std::mem::transmute::<*mut c_void, extern "C" fn() -> c_int>(sym(c"glray_mpi_flushed")?),
+            unsent: std::mem::transmute::<*mut c_void, extern "C" fn() -> c_int>(sym(c"glray_mpi_unsent")?),
             poll: std::mem::transmute::<*mut c_void, unsafe extern "C" fn(*mut c_int, *mut *mut u8, *mut usize) -> c_int>(
                 sym(c"glray_mpi_poll")?,
             ),
@@ -166,5 +168,9 @@ impl Transport for MpiTransport {
 
     fn flushed(&mut self) -> Result<bool, String> {
         self.edge.check((self.edge.flushed)()).map(|f| f != 0)
+    }
+
+    fn unsent(&mut self) -> Result<u64, String> {
+        self.edge.check((self.edge.unsent)()).map(|b| b as u64)
     }
 }

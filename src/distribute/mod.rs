@@ -126,6 +126,7 @@ impl Distribution {
                         None => Budget::Fraction(config.cache_fraction()),
                     },
                     block_bytes: config.block_bytes(),
+                    park: config.paging_parks(),
                 }),
                 memory_limit: config.memory_limit().or_else(glray_core::memory::cgroup_limit),
             },

@@ -43,7 +43,7 @@ pub const TRIGGERS: &[&str] = &["auto", "swap", "finish", "flush", "readpixels"]
 pub const LIGHTING: &[&str] = &["vertex", "pixel"];
 pub const PRESENTS: &[&str] = &["auto", "pixels", "shader"];
 pub const DISTRIBUTIONS: &[&str] = &["auto", "local", "replicated", "paged", "data-parallel"];
-pub const PAGING: &[&str] = &["fetch", "all-resident"];
+pub const PAGING: &[&str] = &["wait", "park", "all-resident"];
 pub const MPI_ROLES: &[&str] = &["shared", "dedicated", "paper"];
 pub const MPI_COMPRESSIONS: &[&str] = &["lz4", "zstd", "none"];
 pub const MPI_PICTURES: &[&str] = &["own", "whole"];
@@ -257,11 +257,13 @@ pub const SETTINGS: &[Setting] = &[
     Setting {
         key: "paging",
         kind: Kind::Choice(PAGING),
-        default: "fetch",
-        doc: "With `distribute = paged`: `fetch`, other ranks' blocks are fetched as rays reach them; \
-              `all-resident` (for checking), every block of the frame is fetched before it is traced and kept: \
-              the same blocks and trees with nothing remote while tracing, the reference paging's pictures \
-              equal.",
+        default: "wait",
+        doc: "With `distribute = paged`, how other ranks' blocks come: `wait`, fetched as rays reach them, \
+              the thread waiting for each (the blocking way, GLuRay's; faster on this 2-core machine); `park`, \
+              fetched as rays reach them, a piece of the picture whose rays miss one set aside while the \
+              thread traces others, and traced again when its blocks have come; `all-resident` (for checking), every block of the \
+              frame fetched before it is traced and kept: the same blocks and trees with nothing remote \
+              while tracing, the reference paging's pictures equal.",
     },
     Setting {
         key: "memory_mb",
@@ -293,7 +295,7 @@ pub const SETTINGS: &[Setting] = &[
         default: "lz4",
         doc: "How glray's messages between ranks are compressed (losslessly: the pictures are the same): \
               `lz4` (fast, about half the bytes of a frame's pixels), `zstd` (fewer bytes for a few times the \
-              time: slow links), `none`.",
+              time: slow links), `none`. A paged scene's blocks go compressed only while the network is behind.",
     },
     Setting {
         key: "mpi_poll",
@@ -744,6 +746,11 @@ impl Config {
         self.get("paging") == "all-resident"
     }
 
+    /// Whether `paging` parks rays that miss a block (`park`) rather than wait.
+    pub fn paging_parks(&self) -> bool {
+        self.get("paging") == "park"
+    }
+
     /// `memory_mb` in bytes, when set (not 0).
     pub fn memory_limit(&self) -> Option<u64> {
         self.get("memory_mb").parse::<u64>().ok().filter(|&m| m > 0).map(|m| m << 20)
@@ -848,6 +855,7 @@ mod tests {
         let env = |k: &str, v: &str| vars(&[("HOME", "/nonexistent"), (k, v)]);
         let defaults = Config::resolve(&vars(&[("HOME", "/nonexistent")]), &[]).unwrap();
         assert_eq!((defaults.cache_fraction(), defaults.cache_mb(), defaults.all_resident()), (0.125, None, false));
+        assert!(!defaults.paging_parks(), "rays that miss a block wait unless told to park");
         assert_eq!((defaults.block_bytes(), defaults.memory_limit()), (128 * 1024, None));
         for (value, share) in [("1/4", 0.25), (" 1 / 2 ", 0.5), ("0.0625", 0.0625), ("1", 1.0)] {
             let c = Config::resolve(&env("GLRAY_CACHE_FRACTION", value), &[]).unwrap();
@@ -860,7 +868,11 @@ mod tests {
         let c = Config::resolve(&env("GLRAY_DISTRIBUTE", "paged"), &[]).unwrap();
         assert_eq!(c.distribute(true), "paged");
         let c = Config::resolve(&env("GLRAY_PAGING", "all-resident"), &[]).unwrap();
-        assert!(c.all_resident());
+        assert!(c.all_resident() && !c.paging_parks());
+        let c = Config::resolve(&env("GLRAY_PAGING", "park"), &[]).unwrap();
+        assert!(!c.all_resident() && c.paging_parks());
+        let e = Config::resolve(&env("GLRAY_PAGING", "fetch"), &[]).unwrap_err().0;
+        assert!(e.contains("`paging`") && e.contains("wait, park, all-resident"), "{e}");
         let c = Config::resolve(&env("GLRAY_MEMORY_MB", "300"), &[]).unwrap();
         assert_eq!(c.memory_limit(), Some(300 << 20));
         assert!(Config::resolve(&env("GLRAY_PAGING", "sometimes"), &[]).is_err());

@@ -421,6 +421,21 @@ struct Core {
     hurry_until: Option<Instant>,
 }
 
+/// Bytes of sends under way past which the network is behind (`block_packing`).
+const SATURATED: u64 = 2 << 20;
+
+/// How a reply of blocks is packed, `unsent` bytes still under way: compressed (`how`) only
+/// while the network is behind; on a link that keeps up (loopback, a fast fabric),
+/// compressing costs both ends more time than the bytes it saves (LZ4 packs a 94 KB block in
+/// 0.29 ms and unpacks it in 0.16 ms, more than the block's encoding and decoding together).
+fn block_packing(unsent: u64, how: Compression) -> Compression {
+    if unsent >= SATURATED {
+        how
+    } else {
+        Compression::None
+    }
+}
+
 /// The wait between polls while blocks are moving (`Core::hurry_until`), and for how long
 /// after the last one moved.
 const BLOCK_POLL: Duration = Duration::from_micros(20);
@@ -669,7 +684,10 @@ impl Core {
             Message::BlockAsk { frame, keys } if self.paging.is_some() => {
                 self.hurry_until = Some(Instant::now() + BLOCK_HURRY);
                 let served = self.paging.as_ref().map(|p| p.serve(&keys)).unwrap_or_default();
-                let how = self.compression;
+                let how = block_packing(self.transport.unsent().unwrap_or(0), self.compression);
+                if let (Some(p), true) = (&self.paging, how != Compression::None) {
+                    p.served_packed(served.len() as u64);
+                }
                 let blocks = served.into_iter().map(|(k, b)| (k, b.map(|b| Packed::new(&b, 1, how)))).collect();
                 self.send(from, Message::BlockData { frame, blocks });
             }
@@ -688,5 +706,19 @@ impl Core {
                 let _ = self.inbox.send(Event::Message(from, other));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blocks_are_compressed_only_while_the_network_is_behind() {
+        assert_eq!(block_packing(0, Compression::Lz4), Compression::None);
+        assert_eq!(block_packing(SATURATED - 1, Compression::Zstd(1)), Compression::None);
+        assert_eq!(block_packing(SATURATED, Compression::Lz4), Compression::Lz4);
+        assert_eq!(block_packing(50 << 20, Compression::Zstd(1)), Compression::Zstd(1));
+        assert_eq!(block_packing(50 << 20, Compression::None), Compression::None, "`none` never compresses");
     }
 }

@@ -13,6 +13,11 @@ pub trait Transport {
     fn poll(&mut self) -> Result<Option<(usize, Vec<u8>)>, String>;
     /// Whether every send started has completed (moving them on).
     fn flushed(&mut self) -> Result<bool, String>;
+    /// Bytes of the sends started and not completed (moving them on): how far the network is
+    /// behind. None here by default: a transport that hands bytes over at once.
+    fn unsent(&mut self) -> Result<u64, String> {
+        Ok(0)
+    }
 }
 
 /// Ranks as threads of one process, for tests: each rank's inbox a channel.

@@ -2,8 +2,9 @@
 //! of 51,200 triangles split over 2 to 4 ranks (each rank's piece a paged mesh of its own, in
 //! blocks), with small boxes above it that every rank holds, traced zoomed out and zoomed in.
 //! Every picture is the replicated mode's byte for byte: fetching blocks through a cache of
-//! 1/8 of the scene, with every block fetched before tracing (`all-resident`), and through a
-//! cache so small it thrashes (1/64); and no rank holds another's blocks beyond its cache.
+//! 1/8 of the scene, parking the pieces whose rays miss a block (`park`) and waiting for each
+//! (`wait`), with every block fetched before tracing (`all-resident`), and through a cache so
+//! small it thrashes (1/64); and no rank holds another's blocks beyond its cache.
 
 use std::time::Duration;
 
@@ -128,8 +129,8 @@ fn run(
     handles.into_iter().map(|h| h.join().unwrap()).collect()
 }
 
-fn paged(resident: Resident, fraction: f64) -> Option<PagingSetup> {
-    Some(PagingSetup { resident, budget: Budget::Fraction(fraction), block_bytes: 16 * 1024 })
+fn paged(resident: Resident, fraction: f64, park: bool) -> Option<PagingSetup> {
+    Some(PagingSetup { resident, budget: Budget::Fraction(fraction), block_bytes: 16 * 1024, park })
 }
 
 #[test]
@@ -141,13 +142,17 @@ fn paged_pictures_are_the_replicated_ones_for_two_three_and_four_ranks() {
             let replicated = run(ranks, preset, None, count);
             assert_ne!(replicated[0][0].0.rgba, replicated[0][1].0.rgba, "zoomed in");
             let mut setups = vec![
-                ("a cache of 1/8", paged(Resident::Fetch, 1.0 / 8.0)),
-                ("all-resident", paged(Resident::All, 1.0)),
+                ("a cache of 1/8", paged(Resident::Fetch, 1.0 / 8.0, true)),
+                ("all-resident", paged(Resident::All, 1.0, false)),
             ];
             // (A thrashing cache with shadows and reflections too takes a minute here: every
-            // secondary ray's blocks come again and again, one request after the other.)
+            // secondary ray's blocks come again and again.)
             if preset != "full" {
-                setups.push(("a cache of 1/64", paged(Resident::Fetch, 1.0 / 64.0)));
+                setups.push(("a cache of 1/64", paged(Resident::Fetch, 1.0 / 64.0, true)));
+            }
+            // The blocking baseline (`paging = wait`), where parking has most to set aside.
+            if preset == "ao" {
+                setups.push(("a cache of 1/8, waiting", paged(Resident::Fetch, 1.0 / 8.0, false)));
             }
             for (what, setup) in setups {
                 let started = std::time::Instant::now();
@@ -186,6 +191,12 @@ fn paged_pictures_are_the_replicated_ones_for_two_three_and_four_ranks() {
                     if what == "all-resident" {
                         // Every block came before tracing: the tracer never missed.
                         assert!(g.iter().all(|(_, r)| r.unwrap().waits == 0));
+                    }
+                    // Parked pieces (traced again once their blocks came) only where parking.
+                    let parked: u64 = g.iter().map(|(_, r)| r.unwrap().parked).sum();
+                    match setup.unwrap() {
+                        s if s.park => assert!(parked > 0, "{what}, rank {rank}: misses park pieces"),
+                        _ => assert_eq!(parked, 0, "{what}, rank {rank}"),
                     }
                     if what == "a cache of 1/64" {
                         let evicted: u64 = g.iter().map(|(_, r)| r.unwrap().evictions).sum();

@@ -80,6 +80,13 @@ impl Comm {
         }
     }
 
+    /// Bytes of the sends still under way (after moving them on): how far behind the
+    /// network is.
+    pub fn unsent(&mut self) -> Result<u64, String> {
+        self.flushed()?;
+        Ok(self.outbox.iter().map(|(data, _)| data.len() as u64).sum())
+    }
+
     pub fn poll(&mut self) -> Result<Option<(c_int, Vec<u8>)>, String> {
         // Sends move on as messages are looked for.
         self.flushed()?;

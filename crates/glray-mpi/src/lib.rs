@@ -17,7 +17,7 @@ use std::ffi::{c_char, c_int};
 use std::panic::catch_unwind;
 
 /// The version of this edge's functions: libglray refuses another.
-pub const ABI: u32 = 1;
+pub const ABI: u32 = 2;
 
 /// What went wrong last, for `glray_mpi_error`.
 fn set_error(e: String) {
@@ -110,6 +110,12 @@ pub unsafe extern "C" fn glray_mpi_send(to: c_int, bytes: *const u8, len: usize)
 #[no_mangle]
 pub extern "C" fn glray_mpi_flushed() -> c_int {
     guarded(|| comm::with(|c| c.flushed().map(c_int::from)))
+}
+
+/// Bytes of the sends still under way, at most 2 GiB (-1: see `glray_mpi_error`).
+#[no_mangle]
+pub extern "C" fn glray_mpi_unsent() -> c_int {
+    guarded(|| comm::with(|c| c.unsent().map(|b| b.min(c_int::MAX as u64) as c_int)))
 }
 
 /// 1 and a message (its sender, and bytes to give back with `glray_mpi_free`) when one has

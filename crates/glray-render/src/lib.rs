@@ -32,6 +32,7 @@ pub mod meshes;
 pub mod offset;
 pub mod options;
 pub mod paged;
+mod parking;
 pub mod pieces;
 mod progress;
 mod recent;

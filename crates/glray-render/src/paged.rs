@@ -33,6 +33,18 @@ impl Block {
         Block { mesh, bvh }
     }
 
+    /// The tree's bytes (`TriBvh::to_bytes`): sent with the mesh, so that the rank that
+    /// fetches a block does not build the tree again.
+    pub fn tree_bytes(&self) -> Vec<u8> {
+        self.bvh.to_bytes()
+    }
+
+    /// The block of `mesh` with the tree `tree` (`tree_bytes`), checked against the mesh.
+    pub fn with_tree(mesh: Mesh, tree: &[u8]) -> Result<Block, String> {
+        let bvh = TriBvh::from_bytes(tree, mesh.triangles.len())?;
+        Ok(Block { mesh, bvh })
+    }
+
     /// The bytes it holds (its mesh and its tree): what a cache of blocks counts.
     pub fn bytes(&self) -> usize {
         self.mesh.bytes() + self.bvh.bytes()
@@ -104,6 +116,19 @@ pub trait Pager: Send + Sync {
     /// Block `key`, its own or fetched (waiting for it, within the pager's limit); None when it
     /// could not be had (the pager keeps why, and the frame fails with it).
     fn block(&self, key: u64) -> Option<Arc<Block>>;
+    /// Whether the pager parks (`park`); false: `block` always waits.
+    fn parks(&self) -> bool {
+        false
+    }
+    /// Parking, on this thread from now on: a block not here is asked for and `block` returns
+    /// None at once instead of waiting, so that the thread goes on with other work while the
+    /// block travels.
+    fn park(&self) {}
+    /// Ends `park` on this thread: whether a block was missing since, so that what was traced
+    /// meanwhile is wrong and must be traced again.
+    fn unpark(&self) -> bool {
+        false
+    }
 }
 
 /// A paged mesh as the scene walks it: the same answers as one tree over all its triangles

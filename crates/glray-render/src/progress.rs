@@ -29,7 +29,8 @@ impl Progress {
             return;
         }
         *shown = Some(Instant::now());
-        let pct = 100.0 * done as f64 / self.pixels.max(1) as f64;
+        // (At most 100: pieces set aside for a missing block (paging) are traced and counted twice.)
+        let pct = (100.0 * done as f64 / self.pixels.max(1) as f64).min(100.0);
         let _ = write!(std::io::stderr(), "\rglray: tracing {pct:5.1}% ({:.1} s)", self.start.elapsed().as_secs_f64());
     }
 

@@ -10,7 +10,6 @@ use std::time::{Duration, Instant};
 use glam::Vec4;
 use glray_scene::camera::Camera;
 use glray_scene::frame::{Frame, TriangleId};
-use rayon::prelude::*;
 
 use crate::bvh_choice::ray_work;
 use crate::denoise::{AoPixel, Band, Denoiser, HeldRows, Motion, Past};
@@ -18,6 +17,7 @@ use crate::gouraud::Gouraud;
 use crate::meshes::Meshes;
 use crate::options::{Options, MAX_PASSES};
 use crate::paged::Pager;
+use crate::parking;
 use crate::pieces::{self, for_each_block, Piece};
 use crate::progress::Progress;
 use crate::resolve::closest_hit_suffices;
@@ -727,7 +727,7 @@ impl Job<'_> {
         // Pieces of the image (`pieces`), each piece's pixels in 4x2 blocks: the camera rays of
         // a block are traced together (eight to a packet where the CPU has AVX, else two packets
         // of four). With secondary rays, pieces are tiled.
-        let process = |mut piece: Piece| {
+        let process = |piece: &mut Piece| {
             let (rows, columns) = (piece.rows(), piece.columns());
             let (y0, last) = (*rows.start(), *rows.end());
             let (left, right) = (columns.start.max(x0), columns.end.min(x1));
@@ -798,13 +798,12 @@ impl Job<'_> {
         };
         // Called, not inlined into rayon's loop: inlined, the pixel loop compiled ~1% slower,
         // and a piece's work is one frame of a profile.
-        let process: &(dyn Fn(Piece) + Sync) = &process;
+        let process: &(dyn Fn(&mut Piece) + Sync) = &process;
         match self.work {
             None => {
                 let (c, a) = (colors.as_deref_mut(), ao.as_deref_mut());
-                pieces::split(&mut rgba, &mut depth, c, a, w, secondary.then_some(pieces::SEGMENT))
-                    .into_par_iter()
-                    .for_each(process)
+                let all = pieces::split(&mut rgba, &mut depth, c, a, w, secondary.then_some(pieces::SEGMENT));
+                parking::trace(all, process, self.pager)
             }
             Some(work) => {
                 // Chunk by chunk as they are handed out: each chunk's pieces on every thread,
@@ -815,10 +814,11 @@ impl Job<'_> {
                     let chunk: Vec<u32> = chunk.into_iter().filter(|&t| t < grid.count()).collect();
                     chunk.iter().for_each(|&t| wanted[t as usize] = true);
                     let (c, a) = (colors.as_deref_mut(), ao.as_deref_mut());
-                    pieces::split(&mut rgba, &mut depth, c, a, w, Some(grid.side()))
-                        .into_par_iter()
+                    let mine: Vec<Piece> = pieces::split(&mut rgba, &mut depth, c, a, w, Some(grid.side()))
+                        .into_iter()
                         .filter(|p| wanted[grid.tile_at(p.x0, p.y0) as usize])
-                        .for_each(process);
+                        .collect();
+                    parking::trace(mine, process, self.pager);
                     let image = Layers { rgba: &rgba, depth: &depth, colors: colors.as_deref(), ao: ao.as_deref() };
                     for &t in &chunk {
                         wanted[t as usize] = false;

@@ -8,7 +8,15 @@
 //! thread that misses waits for its block (the blocking way, as GLuRay's render threads wait
 //! on their one-sided reads), at most the frame's limit; a block that does not come fails the
 //! frame with its owner named (`take_failure`).
+//!
+//! Parking (`PagingSetup::park`, `paging = park`): while the tracer traces a piece of the picture
+//! in parking mode (`Pager::park`), a block not here is asked for and the piece goes on without
+//! it, to be traced again later (`glray_render`'s parking), so that a thread's misses travel
+//! together instead of one round trip after another. At most as many blocks as the cache holds
+//! are on their way (their bytes wait outside the cache until a piece takes them); beyond, the
+//! piece's retry waits for them as the blocking way does.
 
+use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, RwLock, Weak};
@@ -48,11 +56,13 @@ pub struct PagingSetup {
     pub budget: Budget,
     /// About how many bytes a block holds (`block_kb`).
     pub block_bytes: usize,
+    /// Whether rays that miss a block are parked (`paging = park`) or wait (`wait`).
+    pub park: bool,
 }
 
 impl Default for PagingSetup {
     fn default() -> PagingSetup {
-        PagingSetup { resident: Resident::Fetch, budget: Budget::Fraction(0.125), block_bytes: 128 * 1024 }
+        PagingSetup { resident: Resident::Fetch, budget: Budget::Fraction(0.125), block_bytes: 128 * 1024, park: false }
     }
 }
 
@@ -80,9 +90,13 @@ pub struct PagingReport {
     pub fetch_max_ms: f64,
     /// Time the tracer's threads waited for blocks, all threads together.
     pub stall: Duration,
-    /// Blocks of this rank's sent to others, and their bytes.
+    /// Pieces of the picture set aside for a missing block and traced again (parking).
+    pub parked: u64,
+    /// Blocks of this rank's sent to others, their bytes, and how many went compressed (the
+    /// network behind: `mpi_compression` applies to blocks only then).
     pub served: u64,
     pub served_bytes: u64,
+    pub served_packed: u64,
     /// Bytes the cache holds and may hold; blocks it took over its budget (all pinned).
     pub cache_bytes: u64,
     pub cache_capacity: u64,
@@ -154,6 +168,38 @@ struct Counts {
     stall_ns: AtomicU64,
     served: AtomicU64,
     served_bytes: AtomicU64,
+    served_packed: AtomicU64,
+    parked: AtomicU64,
+}
+
+/// What a piece traced in parking mode has met so far, on this thread (`Pager::park`): its
+/// accesses, counted only if the piece need not be traced again (the retry counts them), and
+/// whether a block was missing.
+#[derive(Default)]
+struct Attempt {
+    accesses: u64,
+    resident: u64,
+    cached: u64,
+    missed: bool,
+}
+
+thread_local! {
+    /// The pieces this thread is tracing in parking mode, innermost last (a thread waiting
+    /// inside one may be lent to another's work by rayon).
+    static ATTEMPTS: RefCell<Vec<Attempt>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Counts an access of the kind `kind` picks: on the piece in parking mode, or at once.
+fn count(global: &AtomicU64, kind: fn(&mut Attempt) -> &mut u64) {
+    let counted = ATTEMPTS.with(|a| a.borrow_mut().last_mut().map(|a| *kind(a) += 1).is_some());
+    if !counted {
+        global.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+/// Whether this thread is tracing a piece in parking mode.
+fn parking() -> bool {
+    ATTEMPTS.with(|a| !a.borrow().is_empty())
 }
 
 /// A rank's paging: see the module.
@@ -324,6 +370,9 @@ impl Paging {
             }
         }
         drop(cache);
+        // Blocks that came for parked pieces whose retries did not need them after all (the
+        // first try's rays went where the missing blocks would have stopped them).
+        lock(&self.pending).retain(|_, p| !matches!(*lock(&p.state), State::Arrived(..)));
         self.update_capacity();
     }
 
@@ -385,6 +434,30 @@ impl Paging {
             self.fail(key, &p, Missing::Refused { owner: owner.unwrap_or(self.rank), why });
         }
         (p, true)
+    }
+
+    /// Block `key`, not here, for a piece traced in parking mode: built now if its bytes have
+    /// come; else asked for (unless as many blocks as the cache holds are on their way
+    /// already: the piece's retry waits for it) and the piece marked to be traced again.
+    fn parked(&self, key: u64, since: Instant) -> Option<Arc<Block>> {
+        let on_way = lock(&self.pending).get(&key).cloned();
+        let here = on_way.filter(|p| matches!(*lock(&p.state), State::Arrived(..) | State::Ready(_)));
+        if let Some(p) = here {
+            return self.wait(key, &p, since);
+        }
+        let room = lock(&self.pending).len() < self.in_flight_limit();
+        if room {
+            self.ask(key);
+        }
+        ATTEMPTS.with(|a| a.borrow_mut().last_mut().map(|a| a.missed = true));
+        None
+    }
+
+    /// How many blocks may be on their way at once for parked pieces: as many as the cache
+    /// holds (at least 16).
+    fn in_flight_limit(&self) -> usize {
+        let capacity = lock(&self.cache).capacity();
+        ((capacity / self.setup.block_bytes.max(1) as u64) as usize).max(16)
     }
 
     fn fail(&self, key: u64, p: &Pending, missing: Missing) {
@@ -474,6 +547,11 @@ impl Paging {
         out
     }
 
+    /// The link: `count` blocks it served went compressed.
+    pub fn served_packed(&self, count: u64) {
+        self.counts.served_packed.fetch_add(count, Ordering::Relaxed);
+    }
+
     /// Why the first block that could not be had since this was last asked was not.
     pub fn take_failure(&self) -> Option<Missing> {
         lock(&self.failure).take()
@@ -500,8 +578,10 @@ impl Paging {
             fetch_p99_ms: at(0.99).map_or(0.0, |&l| f64::from(l)),
             fetch_max_ms: latencies.last().map_or(0.0, |&l| f64::from(l)),
             stall: Duration::from_nanos(take(&c.stall_ns)),
+            parked: take(&c.parked),
             served: take(&c.served),
             served_bytes: take(&c.served_bytes),
+            served_packed: take(&c.served_packed),
             cache_bytes: cache.used(),
             cache_capacity: cache.capacity(),
             over: cache.over,
@@ -518,21 +598,46 @@ impl Pager for Paging {
     }
 
     fn block(&self, key: u64) -> Option<Arc<Block>> {
-        self.counts.accesses.fetch_add(1, Ordering::Relaxed);
+        let c = &self.counts;
+        count(&c.accesses, |a| &mut a.accesses);
         if let Some(b) = read(&self.own).get(&key) {
-            self.counts.resident.fetch_add(1, Ordering::Relaxed);
+            count(&c.resident, |a| &mut a.resident);
             return Some(b.clone());
         }
         if let Some(b) = lock(&self.cache).get(key) {
-            self.counts.cached.fetch_add(1, Ordering::Relaxed);
+            count(&c.cached, |a| &mut a.cached);
             return Some(b);
         }
         let since = Instant::now();
+        if parking() {
+            return self.parked(key, since);
+        }
         let (p, asked) = self.ask(key);
         if !asked {
-            self.counts.waits.fetch_add(1, Ordering::Relaxed);
+            c.waits.fetch_add(1, Ordering::Relaxed);
         }
         self.wait(key, &p, since)
+    }
+
+    fn parks(&self) -> bool {
+        self.setup.park && self.setup.resident == Resident::Fetch
+    }
+
+    fn park(&self) {
+        ATTEMPTS.with(|a| a.borrow_mut().push(Attempt::default()));
+    }
+
+    fn unpark(&self) -> bool {
+        let Some(a) = ATTEMPTS.with(|a| a.borrow_mut().pop()) else { return false };
+        let c = &self.counts;
+        if a.missed {
+            c.parked.fetch_add(1, Ordering::Relaxed);
+        } else {
+            c.accesses.fetch_add(a.accesses, Ordering::Relaxed);
+            c.resident.fetch_add(a.resident, Ordering::Relaxed);
+            c.cached.fetch_add(a.cached, Ordering::Relaxed);
+        }
+        a.missed
     }
 }
 

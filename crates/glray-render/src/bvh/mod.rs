@@ -22,6 +22,7 @@ mod node;
 mod packet;
 mod refit;
 mod stack;
+mod wire;
 
 use glam::{Vec2, Vec3, Vec3A, Vec4};
 use glray_core::prefetch;

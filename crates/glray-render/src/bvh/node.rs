@@ -37,6 +37,37 @@ pub(super) struct Node {
 
 const _: () = assert!(std::mem::size_of::<Node>() == 128, "two cache lines");
 
+/// A node's bytes on the wire (`wire`): its fields, little-endian, without the padding.
+pub(super) const NODE_BYTES: usize = 2 * 3 * WIDTH + 4 * (3 + 3 + 1 + WIDTH);
+
+impl Node {
+    /// Appends the node's fields (`NODE_BYTES`).
+    pub fn put(&self, out: &mut Vec<u8>) {
+        out.extend(self.q.iter().flatten().flatten());
+        out.extend(self.origin.iter().chain(&self.step).flat_map(|f| f.to_le_bytes()));
+        out.extend(std::iter::once(&self.occupied).chain(&self.child).flat_map(|u| u.to_le_bytes()));
+    }
+
+    /// The node `put` wrote (`NODE_BYTES` of them).
+    pub fn take(b: &[u8]) -> Node {
+        let word = |k: usize| {
+            let at = 2 * 3 * WIDTH + 4 * k;
+            [b[at], b[at + 1], b[at + 2], b[at + 3]]
+        };
+        let mut q = [[[0u8; WIDTH]; 3]; 2];
+        for (k, v) in q.iter_mut().flatten().flatten().enumerate() {
+            *v = b[k];
+        }
+        Node {
+            q,
+            origin: std::array::from_fn(|k| f32::from_le_bytes(word(k))),
+            step: std::array::from_fn(|k| f32::from_le_bytes(word(3 + k))),
+            occupied: u32::from_le_bytes(word(6)),
+            child: std::array::from_fn(|k| u32::from_le_bytes(word(7 + k))),
+        }
+    }
+}
+
 impl Node {
     /// A node over children with boxes `boxes` (at most `WIDTH`, finite: minimum and maximum
     /// corners), in slots from the first; their references are set afterwards (`child`,
