@@ -19,7 +19,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use glray_core::config::Config;
-use glray_distribute::node::{Announced, PictureParts, Roles, Setup};
+use glray_distribute::node::{Announced, PictureParts, Roles, Setup, TileHomes};
 use glray_distribute::pack::Compression;
 use glray_distribute::paging::{Budget, PagingSetup, Resident};
 use glray_distribute::{Agreement, FrameReport, Limits, Node, Transport};
@@ -129,6 +129,7 @@ impl Distribution {
                     park: config.paging_parks(),
                 }),
                 memory_limit: config.memory_limit().or_else(glray_core::memory::cgroup_limit),
+                tiles: if config.mpi_random_tiles() { TileHomes::Random } else { TileHomes::Bands },
             },
             node: None,
             stopped: false,

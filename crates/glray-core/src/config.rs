@@ -47,6 +47,8 @@ pub const PAGING: &[&str] = &["wait", "park", "all-resident"];
 pub const MPI_ROLES: &[&str] = &["shared", "dedicated", "paper"];
 pub const MPI_COMPRESSIONS: &[&str] = &["lz4", "zstd", "none"];
 pub const MPI_PICTURES: &[&str] = &["own", "whole"];
+/// The values of `mpi_tiles` (glray-distribute's `TileHomes`).
+pub const MPI_TILES: &[&str] = &["bands", "random"];
 /// The values of `bvh` (glray-render's `bvh_choice::BvhBuild`).
 pub const BVH_BUILDS: &[&str] = &["auto", "sah", "fast"];
 
@@ -313,6 +315,15 @@ pub const SETTINGS: &[Setting] = &[
               `own`, the part its own data covers (what a sort-last compositor such as IceT takes from it; \
               the rest is its background); `whole`, all of it (a host that reads the whole frame on every \
               rank). Rank 0 always gets all of it.",
+    },
+    Setting {
+        key: "mpi_tiles",
+        kind: Kind::Choice(MPI_TILES),
+        default: "bands",
+        doc: "Where each tile of a shared frame goes first: `bands`, to the rank whose band of rows holds it \
+              (the same tiles on the same rank frame after frame: what it holds for them, paging's cache, \
+              stays warm); `random`, to a rank drawn at random for each tile and frame (the comparison). Read \
+              on the rank that hands out tiles.",
     },
     Setting {
         key: "threads",
@@ -776,6 +787,11 @@ impl Config {
         self.get("mpi_poll").parse().unwrap_or(1000)
     }
 
+    /// Whether tiles go to ranks at random (`mpi_tiles = random`) rather than to their bands'.
+    pub fn mpi_random_tiles(&self) -> bool {
+        self.get("mpi_tiles") == "random"
+    }
+
     /// Whether ranks other than 0 get the whole picture back (`mpi_picture = whole`).
     pub fn mpi_whole_picture(&self) -> bool {
         self.get("mpi_picture") == "whole"
@@ -809,6 +825,7 @@ impl Config {
             "mpi_compression",
             "mpi_poll",
             "mpi_picture",
+            "mpi_tiles",
             "real_opengl",
             "real_glx",
             "real_egl",

@@ -196,6 +196,30 @@ pub struct Setup {
     /// The memory a rank may use (`memory_mb`, or its cgroup's limit): replicated, a scene that
     /// would not fit stops the sharing with a message naming paging.
     pub memory_limit: Option<u64>,
+    /// Where tiles go first (`mpi_tiles`; read where tiles are handed out).
+    pub tiles: TileHomes,
+}
+
+/// Which rank each tile goes to first (`mpi_tiles`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TileHomes {
+    /// The rank whose band of rows holds it: every frame the same tiles on the same rank, so
+    /// that what it holds for them (paging's cache) stays warm and its rows cross no link.
+    Bands,
+    /// A rank drawn at random for each tile and frame: the comparison coherence is measured
+    /// against.
+    Random,
+}
+
+/// Tile `tile`'s rank of `tracing` in frame `frame`, drawn at random (`TileHomes::Random`),
+/// the same on any machine.
+fn random_home(frame: u64, tile: usize, tracing: &[usize]) -> usize {
+    // (splitmix64 of the frame and tile.)
+    let mut z = frame.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (tile as u64).wrapping_add(0x632B_E59B_D9B4_E019);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    tracing[(z % tracing.len().max(1) as u64) as usize]
 }
 
 impl Default for Setup {
@@ -209,6 +233,7 @@ impl Default for Setup {
             parts: PictureParts::Own,
             paging: None,
             memory_limit: None,
+            tiles: TileHomes::Bands,
         }
     }
 }
@@ -765,7 +790,12 @@ impl Node {
             pending_rows: Vec::new(),
         };
         if me == self.master_rank() {
-            let homes = state.bands.homes(&grid);
+            let mut homes = state.bands.homes(&grid);
+            if self.setup.tiles == TileHomes::Random && !self.tracing.is_empty() {
+                for (t, h) in homes.iter_mut().enumerate() {
+                    *h = random_home(shared.frame, t, &self.tracing);
+                }
+            }
             self.link.begin(shared.frame, homes).map_err(Fault::Transport)?;
         }
         // Phase 1: the tracer's tiles routed as they come, other ranks' rows taken in.
@@ -1220,4 +1250,23 @@ fn ids_of(frame: &Frame) -> (std::collections::HashSet<u64>, std::collections::H
     let meshes = frame.instances.iter().map(|i| i.mesh.id).collect();
     let textures = frame.surfaces.iter().filter_map(|s| s.texturing.as_ref()).map(|t| t.texture.version).collect();
     (meshes, textures)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_at_random_reach_every_tracing_rank_and_change_with_the_frame() {
+        let tracing = [0, 2, 3];
+        let deal = |frame| (0..300).map(|t| random_home(frame, t, &tracing)).collect::<Vec<_>>();
+        let first = deal(1);
+        assert_eq!(first, deal(1), "the same deal for the same frame");
+        assert_ne!(first, deal(2), "another frame, another deal");
+        for r in tracing {
+            let n = first.iter().filter(|&&h| h == r).count();
+            assert!((60..140).contains(&n), "rank {r}: {n} of 300 tiles");
+        }
+        assert!(first.iter().all(|h| tracing.contains(h)), "only ranks that trace");
+    }
 }
