@@ -664,18 +664,27 @@ fn paged_ranks_trace_the_replicated_picture_holding_a_fraction_of_the_scene() {
     // each rank keeps its piece in blocks and fetches the others' its rays reach, and the
     // pictures are the replicated ones byte for byte; the largest rank's peak memory (VmHWM) is
     // at most 0.6 of replicated mode's, where every rank holds every piece, the joined mesh and
-    // its tree. With the ranks' memory capped at 300 MB (`memory_mb`, as a cgroup would),
-    // replicated mode stops sharing frames with a message naming paging; paged runs within it.
+    // its tree. With the job in a memory cgroup that gives each rank 300 MB, replicated mode
+    // stops sharing frames with a message naming paging; paged runs within it.
     let dir = scratch("mpi-paged");
     let mesh = dir.join("iso-1M.bin");
     run_ok(
         Command::new(glray_bin()).args(["bench", "--triangles", "1M", "--save-mesh"]).arg(&mesh),
         "glray bench --save-mesh",
     );
-    let run = |name: &str, settings: &[&str]| {
+    // The job in a memory cgroup of 1,200 MB (the kernel's limit, as Slurm or a container sets
+    // one): 300 MB for each of its 4 ranks, below what replicated mode holds.
+    let group = MemoryCgroup::new("mpi-paged", 1200 << 20);
+    let run = |name: &str, settings: &[&str], capped: bool| {
         let (png, stats) = (dir.join(format!("{name}.png")), dir.join(format!("{name}.jsonl")));
-        let mut cmd = Command::new("timeout");
-        cmd.args(["-k", "5", "300"]).arg(glray_bin()).args(["run", "--np", "4"]);
+        // (Capped: a shell joins the cgroup, then becomes the job; its children stay in it.)
+        let mut cmd = Command::new("sh");
+        if capped {
+            cmd.args(["-c", &format!("echo $$ > {} && exec \"$@\"", group.procs().display()), "sh"]);
+        } else {
+            cmd.args(["-c", "exec \"$@\"", "sh"]);
+        }
+        cmd.args(["timeout", "-k", "5", "300"]).arg(glray_bin()).args(["run", "--np", "4"]);
         for s in settings.iter().chain(&["preset=ao"]) {
             cmd.args(["--set", s]);
         }
@@ -691,14 +700,14 @@ fn paged_ranks_trace_the_replicated_picture_holding_a_fraction_of_the_scene() {
         l.split(&format!("\"{k}\":")).nth(1).and_then(|v| v.split([',', '}']).next()?.parse().ok())
     };
     let peak = |lines: &str| lines.lines().filter_map(|l| field(l, "peak_memory")).fold(0.0, f64::max);
-    let (replicated, replicated_stats, _) = run("replicated", &["distribute=replicated"]);
-    let (paged, paged_stats, said) = run("paged", &["distribute=paged", "cache_fraction=1/8", "memory_mb=300"]);
+    let (replicated, replicated_stats, _) = run("replicated", &["distribute=replicated"], false);
+    let (paged, paged_stats, said) = run("paged", &["distribute=paged", "cache_fraction=1/8"], true);
     assert!(paged == replicated, "paged: not the replicated picture\n{said}");
     assert!(!said.contains("stopped"), "{said}");
-    let (_, _, capped) = run("capped", &["distribute=replicated", "memory_mb=300"]);
+    let (_, _, capped) = run("capped", &["distribute=replicated"], true);
     assert!(
         capped.contains("over this rank's memory limit of 300 MB") && capped.contains("distribute = paged"),
-        "replicated under a 300 MB cap: {capped}"
+        "replicated in a cgroup of 1,200 MB for 4 ranks: {capped}"
     );
     // Every rank's every frame says what paging did; ranks fetched blocks of the others'.
     assert_eq!(paged_stats.lines().filter(|l| l.contains("\"paging\":")).count(), 12, "{paged_stats}");
@@ -709,4 +718,37 @@ fn paged_ranks_trace_the_replicated_picture_holding_a_fraction_of_the_scene() {
     let (p, r) = (peak(&paged_stats), peak(&replicated_stats));
     assert!(p > 0.0 && p <= 0.6 * r, "the largest paged rank's peak memory {p} against replicated {r}");
     assert!(p < 300.0 * 1024.0 * 1024.0, "paged within the cap: {p}");
+}
+
+/// A memory cgroup of the kernel's (v1 `memory` controller, or v2 where it is the only
+/// hierarchy) with a limit, made for a test and removed after it (once its processes ended).
+struct MemoryCgroup {
+    dir: std::path::PathBuf,
+}
+
+impl MemoryCgroup {
+    fn new(name: &str, limit: u64) -> MemoryCgroup {
+        let v1 = Path::new("/sys/fs/cgroup/memory");
+        let (root, file) =
+            if v1.is_dir() { (v1, "memory.limit_in_bytes") } else { (Path::new("/sys/fs/cgroup"), "memory.max") };
+        let dir = root.join(format!("glray-test-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir(&dir);
+        std::fs::create_dir(&dir).unwrap_or_else(|e| {
+            panic!("cannot make the memory cgroup {} (the test runs as root, as scripts/test does): {e}", dir.display())
+        });
+        let group = MemoryCgroup { dir };
+        std::fs::write(group.dir.join(file), limit.to_string()).expect("the cgroup's memory limit");
+        group
+    }
+
+    /// The file a process joins the group by writing its pid to.
+    fn procs(&self) -> std::path::PathBuf {
+        self.dir.join("cgroup.procs")
+    }
+}
+
+impl Drop for MemoryCgroup {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir(&self.dir);
+    }
 }

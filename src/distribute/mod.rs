@@ -128,7 +128,10 @@ impl Distribution {
                     block_bytes: config.block_bytes(),
                     park: config.paging_parks(),
                 }),
-                memory_limit: config.memory_limit().or_else(glray_core::memory::cgroup_limit),
+                // (A cgroup's limit is for every process in it: the job's ranks on this node share it.)
+                memory_limit: config
+                    .memory_limit()
+                    .or_else(|| glray_core::memory::cgroup_limit().map(|l| l / ranks_on_node() as u64)),
                 tiles: if config.mpi_random_tiles() { TileHomes::Random } else { TileHomes::Bands },
             },
             node: None,

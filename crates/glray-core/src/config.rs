@@ -271,7 +271,8 @@ pub const SETTINGS: &[Setting] = &[
         key: "memory_mb",
         kind: Kind::Int(0, 1 << 30),
         default: "0",
-        doc: "The memory a rank may use, in megabytes (0: its cgroup's limit, if it has one). Replicated, \
+        doc: "The memory a rank may use, in megabytes (0: its share of its cgroup's limit, if it has one: the \
+              limit over the job's ranks on the node). Replicated, \
               a rank whose scene would not fit stops sharing frames with a message naming `distribute = \
               paged` (each rank then traces its own data) rather than be killed for its memory.",
     },

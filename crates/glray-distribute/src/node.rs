@@ -703,7 +703,7 @@ impl Node {
                     rank: me,
                     why: format!(
                         "every rank's scene on every rank (distribute = replicated) would take about {} MB, over \
-                         this rank's memory limit of {} MB (memory_mb, or its cgroup): with distribute = paged \
+                         this rank's memory limit of {} MB (memory_mb, or its share of its cgroup's): with distribute = paged \
                          each rank keeps its own meshes and a cache of a share of the others' (cache_fraction)",
                         mb(need),
                         mb(limit)
