@@ -212,14 +212,10 @@ pub enum TileHomes {
 }
 
 /// Tile `tile`'s rank of `tracing` in frame `frame`, drawn at random (`TileHomes::Random`),
-/// the same on any machine.
+/// the same on any machine (the tracer's own hash of the frame and tile).
 fn random_home(frame: u64, tile: usize, tracing: &[usize]) -> usize {
-    // (splitmix64 of the frame and tile.)
-    let mut z = frame.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (tile as u64).wrapping_add(0x632B_E59B_D9B4_E019);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    tracing[(z % tracing.len().max(1) as u64) as usize]
+    let h = glray_render::sampling::hash(&[frame as u32, (frame >> 32) as u32, tile as u32]);
+    tracing[h as usize % tracing.len().max(1)]
 }
 
 impl Default for Setup {

@@ -8,6 +8,7 @@
 
 use std::mem::MaybeUninit;
 
+#[cfg(test)]
 use super::{Node, EMPTY, LEAF};
 
 /// What a walk needs of its stack.
@@ -82,8 +83,8 @@ impl<T: Copy> Pending<T> for Spilling<T> {
 /// The most entries a walk of the tree from `root` can have pending: over every path from the
 /// root, the children left behind at each node (all met but one, at most all but one). The
 /// build works this out as it makes the tree (`build::Built::most_pending`); this walk of the
-/// finished tree is what the tests hold it to, and what a tree that came as bytes (`wire`)
-/// is measured by.
+/// finished tree is what the tests hold it to.
+#[cfg(test)]
 pub(super) fn most_pending(nodes: &[Node], root: u32) -> usize {
     let mut most = 0;
     let mut todo = vec![(root, 0usize)];

@@ -67,15 +67,19 @@ impl TriBvh {
         if let Some(t) = leaves.iter().find(|t| t.id.iter().any(|&i| i != EMPTY && i as usize >= triangles)) {
             return Err(format!("a leaf names triangle {:?} of {triangles}", t.id));
         }
-        // Every reference inside the tree, every node reached once from the root (no cycle).
+        // Every reference inside the tree, every node reached once from the root (no cycle); on
+        // the way, the most entries a walk can have pending (`stack::most_pending`'s measure,
+        // which the builder works out as it builds).
         let mut seen = vec![false; nodes.len()];
-        let mut todo = vec![root];
-        while let Some(c) = todo.pop() {
+        let mut todo = vec![(root, 0usize)];
+        let mut most = 0;
+        while let Some((c, above)) = todo.pop() {
             if c & LEAF != 0 {
                 let (first, count) = leaf_blocks(c);
                 if first + count > leaves.len() {
                     return Err(format!("a leaf of blocks {first}..{} of {}", first + count, leaves.len()));
                 }
+                most = most.max(above);
                 continue;
             }
             let Some(s) = seen.get_mut(c as usize) else {
@@ -84,9 +88,10 @@ impl TriBvh {
             if std::mem::replace(s, true) {
                 return Err(format!("node {c} reached twice"));
             }
-            todo.extend(nodes[c as usize].child.iter().filter(|&&k| k != EMPTY));
+            let children = nodes[c as usize].child.iter().filter(|&&k| k != EMPTY);
+            let here = above + children.clone().count().saturating_sub(1);
+            todo.extend(children.map(|&k| (k, here)));
         }
-        let most = if root & LEAF != 0 { 0 } else { stack::most_pending(&nodes, root) };
         let bytes = nodes.len() * std::mem::size_of::<Node>() + leaves.len() * std::mem::size_of::<Tri4>();
         Ok(TriBvh { nodes, leaves, root, shallow: most <= stack::FIXED, far: bytes > FAR })
     }
@@ -112,6 +117,8 @@ mod tests {
             let back = TriBvh::from_bytes(&bytes, n).unwrap();
             assert_eq!(back.to_bytes(), bytes, "{n} triangles");
             assert_eq!((back.root, back.shallow, back.far), (bvh.root, bvh.shallow, bvh.far));
+            let most = if bvh.root & LEAF != 0 { 0 } else { stack::most_pending(&bvh.nodes, bvh.root) };
+            assert_eq!(back.shallow, most <= stack::FIXED, "{n} triangles: the walk's measure");
             for k in 0..200 {
                 let o = Vec3A::new((k % 61) as f32 + 0.37, (k / 4) as f32 + 0.21, 5.0);
                 let ray = ray(o, Vec3A::new(0.05, 0.02, -1.0).normalize(), 0.0, f32::INFINITY);
