@@ -127,6 +127,7 @@ impl Distribution {
                     },
                     block_bytes: config.block_bytes(),
                     park: config.paging_parks(),
+                    prefetch: config.paging_prefetches(),
                 }),
                 // (A cgroup's limit is for every process in it: the job's ranks on this node share it.)
                 memory_limit: config

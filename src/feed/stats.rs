@@ -64,7 +64,7 @@ impl RankStats {
             r.imbalance.map_or(String::new(), |i| format!(", imbalance {i:.2} (slowest / mean)")),
             r.paging.map_or(String::new(), |p| format!(
                 "; paging: {} block accesses ({} own, {} cached, {} fetched: {:.2}% missed), {} evicted, {:.2} MB \
-                 fetched ({:.2} ms mean, {:.2} ms p99, {:.2} ms max), stalled {:.2} ms, {} pieces parked, served {} blocks ({:.2} MB, {} compressed), \
+                 fetched ({:.2} ms mean, {:.2} ms p99, {:.2} ms max), stalled {:.2} ms, {} pieces parked, {} prefetched ({} used), served {} blocks ({:.2} MB, {} compressed), \
                  cache {:.1} of {:.1} MB, own {:.1} of {:.1} MB, peak memory {:.1} MB",
                 p.accesses,
                 p.resident,
@@ -78,6 +78,8 @@ impl RankStats {
                 p.fetch_max_ms,
                 ms(p.stall),
                 p.parked,
+                p.prefetched,
+                p.prefetch_used,
                 p.served,
                 mb(p.served_bytes),
                 p.served_packed,
@@ -120,7 +122,7 @@ impl RankStats {
             r.paging.map_or(String::new(), |p| format!(
                 ",\"paging\":{{\"accesses\":{},\"resident\":{},\"cached\":{},\"misses\":{},\"waits\":{},\
                  \"miss_percent\":{:.4},\"evictions\":{},\"bytes_fetched\":{},\"fetch_mean_ms\":{:.3},\
-                 \"fetch_p99_ms\":{:.3},\"fetch_max_ms\":{:.3},\"stall_ms\":{:.3},\"parked\":{},\"served\":{},\"served_bytes\":{},\"served_packed\":{},\
+                 \"fetch_p99_ms\":{:.3},\"fetch_max_ms\":{:.3},\"stall_ms\":{:.3},\"parked\":{},\"prefetched\":{},\"prefetch_used\":{},\"served\":{},\"served_bytes\":{},\"served_packed\":{},\
                  \"cache_bytes\":{},\"cache_capacity\":{},\"over\":{},\"own_bytes\":{},\"scene_bytes\":{},\
                  \"peak_memory\":{}}}",
                 p.accesses,
@@ -136,6 +138,8 @@ impl RankStats {
                 p.fetch_max_ms,
                 ms(p.stall),
                 p.parked,
+                p.prefetched,
+                p.prefetch_used,
                 p.served,
                 p.served_bytes,
                 p.served_packed,

@@ -268,6 +268,15 @@ pub const SETTINGS: &[Setting] = &[
               while tracing, the reference paging's pictures equal.",
     },
     Setting {
+        key: "prefetch",
+        kind: Kind::Bool,
+        default: "false",
+        doc: "With `distribute = paged`: at the start of each frame, ask at once for the other ranks' blocks \
+              this rank's rays used last frame that its cache no longer holds (at most as many as the cache \
+              holds), so that they travel together while the frame starts instead of one round trip at a \
+              time as rays reach them.",
+    },
+    Setting {
         key: "memory_mb",
         kind: Kind::Int(0, 1 << 30),
         default: "0",
@@ -761,6 +770,11 @@ impl Config {
     /// Whether `paging` parks rays that miss a block (`park`) rather than wait.
     pub fn paging_parks(&self) -> bool {
         self.get("paging") == "park"
+    }
+
+    /// Whether a paged rank asks for last frame's blocks at the start of a frame (`prefetch`).
+    pub fn paging_prefetches(&self) -> bool {
+        self.get("prefetch") == "true"
     }
 
     /// `memory_mb` in bytes, when set (not 0).

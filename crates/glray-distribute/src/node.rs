@@ -731,8 +731,9 @@ impl Node {
             Some(p) => {
                 self.joined.join_with(&mut merged.instances, &ranks, |pieces| p.join(pieces, frame));
                 p.retain(&merged, frame);
-                if p.setup().resident == Resident::All {
-                    p.fetch_all(&merged);
+                match p.setup().resident {
+                    Resident::All => p.fetch_all(&merged),
+                    Resident::Fetch => p.prefetch(),
                 }
             }
             None => self.joined.join(&mut merged.instances, &ranks),

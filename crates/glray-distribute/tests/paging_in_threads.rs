@@ -132,7 +132,7 @@ fn run(
 }
 
 fn paged(resident: Resident, fraction: f64, park: bool) -> Option<PagingSetup> {
-    Some(PagingSetup { resident, budget: Budget::Fraction(fraction), block_bytes: 16 * 1024, park })
+    Some(PagingSetup { resident, budget: Budget::Fraction(fraction), block_bytes: 16 * 1024, park, prefetch: false })
 }
 
 #[test]
@@ -155,6 +155,13 @@ fn paged_pictures_are_the_replicated_ones_for_two_three_and_four_ranks() {
             // secondary ray's blocks come again and again.)
             if preset != "full" {
                 setups.push(("a cache of 1/64", paged(Resident::Fetch, 1.0 / 64.0, true)));
+            }
+            // Last frame's blocks asked for as a frame starts (`prefetch`): a thrashing cache
+            // has evicted many of them.
+            if preset != "full" && ranks == 2 {
+                let prefetching =
+                    paged(Resident::Fetch, 1.0 / 64.0, false).map(|s| PagingSetup { prefetch: true, ..s });
+                setups.push(("a cache of 1/64, prefetching", prefetching));
             }
             // The blocking baseline (`paging = wait`), where parking has most to set aside.
             if preset == "ao" {
@@ -207,7 +214,17 @@ fn paged_pictures_are_the_replicated_ones_for_two_three_and_four_ranks() {
                         s if s.park => assert!(parked > 0, "{what}, rank {rank}: misses park pieces"),
                         _ => assert_eq!(parked, 0, "{what}, rank {rank}"),
                     }
-                    if what == "a cache of 1/64" {
+                    let prefetched: u64 = g.iter().map(|(_, r)| r.unwrap().prefetched).sum();
+                    if setup.unwrap().prefetch {
+                        // Nothing before the first frame; then blocks the last frame used, some of
+                        // them used again.
+                        assert_eq!(g[0].1.unwrap().prefetched, 0, "{what}, rank {rank}");
+                        let used: u64 = g.iter().map(|(_, r)| r.unwrap().prefetch_used).sum();
+                        assert!(prefetched > 0 && used > 0 && used <= prefetched, "{what}, rank {rank}: {g:?}");
+                    } else {
+                        assert_eq!(prefetched, 0, "{what}, rank {rank}");
+                    }
+                    if what.starts_with("a cache of 1/64") {
                         let evicted: u64 = g.iter().map(|(_, r)| r.unwrap().evictions).sum();
                         assert!(evicted > 0, "rank {rank}: a thrashing cache evicts");
                     }

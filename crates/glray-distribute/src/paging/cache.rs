@@ -17,6 +17,8 @@ struct Slot {
     block: Arc<Block>,
     bytes: u64,
     referenced: bool,
+    /// Used since `take_touched` was last called (it is then in `touched`).
+    touched: bool,
 }
 
 #[derive(Default)]
@@ -27,6 +29,9 @@ pub struct Cache {
     free: Vec<usize>,
     index: HashMap<u64, usize>,
     hand: usize,
+    /// The blocks used since `take_touched` was last called, in the order of their first use
+    /// (one entry each: what a frame's rays needed, for prefetching it the next frame).
+    touched: Vec<u64>,
     /// Blocks taken in over the budget (every block pinned).
     pub over: u64,
 }
@@ -63,6 +68,10 @@ impl Cache {
     pub fn get(&mut self, key: u64) -> Option<Arc<Block>> {
         let slot = self.slots[*self.index.get(&key)?].as_mut().expect("indexed slots are full");
         slot.referenced = true;
+        if !slot.touched {
+            slot.touched = true;
+            self.touched.push(key);
+        }
         Some(slot.block.clone())
     }
 
@@ -95,7 +104,8 @@ impl Cache {
         if self.used + bytes > self.capacity {
             self.over += 1;
         }
-        let slot = Slot { key, block, bytes, referenced: true };
+        self.touched.push(key);
+        let slot = Slot { key, block, bytes, referenced: true, touched: true };
         let at = match self.free.pop() {
             Some(at) => {
                 self.slots[at] = Some(slot);
@@ -118,6 +128,23 @@ impl Cache {
             self.used -= slot.bytes;
             self.free.push(at);
         }
+    }
+
+    /// The blocks used since this was last called, first used first (those evicted since
+    /// included), and a new count from now.
+    pub fn take_touched(&mut self) -> Vec<u64> {
+        let touched = std::mem::take(&mut self.touched);
+        for k in &touched {
+            if let Some(&at) = self.index.get(k) {
+                self.slots[at].as_mut().expect("indexed slots are full").touched = false;
+            }
+        }
+        touched
+    }
+
+    /// Whether block `key` is held (not marked used).
+    pub fn holds(&self, key: u64) -> bool {
+        self.index.contains_key(&key)
     }
 
     /// The keys it holds.
@@ -166,5 +193,24 @@ mod tests {
         assert!(c.used() <= 300, "{}", c.used());
         c.remove(6);
         assert!(c.get(6).is_none());
+    }
+
+    #[test]
+    fn the_blocks_used_since_last_asked_come_once_each_first_used_first_evicted_ones_too() {
+        let mut c = Cache::new(200);
+        c.insert(1, block(), 100);
+        c.insert(2, block(), 100);
+        c.get(2);
+        c.get(1);
+        assert_eq!(c.take_touched(), vec![1, 2]);
+        assert!(c.take_touched().is_empty(), "a new count after each call");
+        c.get(2);
+        c.get(2);
+        // Block 3 evicts one of them: it was used all the same.
+        c.insert(3, block(), 100);
+        c.get(1);
+        let touched = c.take_touched();
+        assert_eq!(&touched[..2], &[2, 3]);
+        assert_eq!(touched.len(), if c.holds(1) { 3 } else { 2 });
     }
 }

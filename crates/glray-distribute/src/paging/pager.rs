@@ -15,6 +15,12 @@
 //! together instead of one round trip after another. At most as many blocks as the cache holds
 //! are on their way (their bytes wait outside the cache until a piece takes them); beyond, the
 //! piece's retry waits for them as the blocking way does.
+//!
+//! Prefetching (`PagingSetup::prefetch`, `prefetch = true`): at the start of a frame the blocks
+//! last frame's rays used that the cache no longer holds are asked for at once (`prefetch`),
+//! so that they travel together while the frame starts; a ray that reaches one waits only if it
+//! has not come yet. With the same tiles on the same rank frame after frame (`mpi_tiles =
+//! bands`), those are the blocks the rank's rays are likeliest to need again.
 
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
@@ -58,11 +64,19 @@ pub struct PagingSetup {
     pub block_bytes: usize,
     /// Whether rays that miss a block are parked (`paging = park`) or wait (`wait`).
     pub park: bool,
+    /// Whether last frame's blocks are asked for as a frame starts (`prefetch`).
+    pub prefetch: bool,
 }
 
 impl Default for PagingSetup {
     fn default() -> PagingSetup {
-        PagingSetup { resident: Resident::Fetch, budget: Budget::Fraction(0.125), block_bytes: 128 * 1024, park: false }
+        PagingSetup {
+            resident: Resident::Fetch,
+            budget: Budget::Fraction(0.125),
+            block_bytes: 128 * 1024,
+            park: false,
+            prefetch: false,
+        }
     }
 }
 
@@ -92,6 +106,10 @@ pub struct PagingReport {
     pub stall: Duration,
     /// Pieces of the picture set aside for a missing block and traced again (parking).
     pub parked: u64,
+    /// Blocks asked for as the frame started (`prefetch`; not counted in `misses`), and of
+    /// those that came, how many a ray then used.
+    pub prefetched: u64,
+    pub prefetch_used: u64,
     /// Blocks of this rank's sent to others, their bytes, and how many went compressed (the
     /// network behind: `mpi_compression` applies to blocks only then).
     pub served: u64,
@@ -129,6 +147,8 @@ struct Pending {
     state: Mutex<State>,
     changed: Condvar,
     asked: Instant,
+    /// Asked for by `prefetch`, not by a ray.
+    prefetched: bool,
 }
 
 #[derive(Default)]
@@ -170,6 +190,8 @@ struct Counts {
     served_bytes: AtomicU64,
     served_packed: AtomicU64,
     parked: AtomicU64,
+    prefetched: AtomicU64,
+    prefetch_used: AtomicU64,
 }
 
 /// What a piece traced in parking mode has met so far, on this thread (`Pager::park`): its
@@ -218,6 +240,8 @@ pub struct Paging {
     asks: Mutex<Option<Box<dyn Asks>>>,
     counts: Counts,
     latencies: Mutex<Vec<f32>>,
+    /// The other ranks' blocks last frame's rays used, first used first (for `prefetch`).
+    last_frame: Mutex<Vec<u64>>,
     /// The first block that did not come this frame: its owner, and why.
     failure: Mutex<Option<Missing>>,
 }
@@ -242,6 +266,7 @@ impl Paging {
             asks: Mutex::new(None),
             counts: Counts::default(),
             latencies: Mutex::default(),
+            last_frame: Mutex::default(),
             failure: Mutex::default(),
         }
     }
@@ -369,6 +394,7 @@ impl Paging {
                 cache.remove(k);
             }
         }
+        *lock(&self.last_frame) = cache.take_touched();
         drop(cache);
         // Blocks that came for parked pieces whose retries did not need them after all (the
         // first try's rays went where the missing blocks would have stopped them).
@@ -403,24 +429,50 @@ impl Paging {
         };
         let waiting: Vec<(u64, Arc<Pending>)> = {
             let mut cache = lock(&self.cache);
-            keys.into_iter().filter(|&k| cache.get(k).is_none()).map(|k| (k, self.ask(k).0)).collect()
+            keys.into_iter().filter(|&k| cache.get(k).is_none()).map(|k| (k, self.ask(k, false).0)).collect()
         };
         for (key, p) in waiting {
             let _ = self.wait(key, &p, Instant::now());
         }
     }
 
-    /// Asks for block `key` unless it is on its way already: its pending entry, and whether
-    /// this call asked.
-    fn ask(&self, key: u64) -> (Arc<Pending>, bool) {
+    /// `prefetch`: the blocks last frame's rays used that the cache no longer holds (and that
+    /// a layout still names, not on their way already), asked for now, first used first, at
+    /// most as many as the cache holds. The tracer takes them as its rays reach them.
+    pub fn prefetch(&self) {
+        let last = std::mem::take(&mut *lock(&self.last_frame));
+        if !self.setup.prefetch || self.setup.resident == Resident::All {
+            return;
+        }
+        let room = self.in_flight_limit();
+        let wanted: Vec<u64> = {
+            let cache = lock(&self.cache);
+            let known = read(&self.blocks);
+            let pending = lock(&self.pending);
+            let room = room.saturating_sub(pending.len());
+            last.into_iter()
+                .filter(|k| !cache.holds(*k) && known.contains_key(k) && !pending.contains_key(k))
+                .take(room)
+                .collect()
+        };
+        for k in wanted {
+            self.ask(k, true);
+        }
+    }
+
+    /// Asks for block `key` unless it is on its way already (for a ray, or `prefetch`ed): its
+    /// pending entry, and whether this call asked.
+    fn ask(&self, key: u64, prefetched: bool) -> (Arc<Pending>, bool) {
         let mut pending = lock(&self.pending);
         if let Some(p) = pending.get(&key) {
             return (p.clone(), false);
         }
-        let p = Arc::new(Pending { state: Mutex::default(), changed: Condvar::new(), asked: Instant::now() });
+        let p =
+            Arc::new(Pending { state: Mutex::default(), changed: Condvar::new(), asked: Instant::now(), prefetched });
         pending.insert(key, p.clone());
         drop(pending);
-        self.counts.misses.fetch_add(1, Ordering::Relaxed);
+        let kind = if prefetched { &self.counts.prefetched } else { &self.counts.misses };
+        kind.fetch_add(1, Ordering::Relaxed);
         let owner = read(&self.blocks).get(&key).map(|b| b.0);
         let asked = match (owner, lock(&self.asks).as_ref()) {
             (Some(owner), Some(asks)) => asks.ask(owner, key),
@@ -447,7 +499,7 @@ impl Paging {
         }
         let room = lock(&self.pending).len() < self.in_flight_limit();
         if room {
-            self.ask(key);
+            self.ask(key, false);
         }
         ATTEMPTS.with(|a| a.borrow_mut().last_mut().map(|a| a.missed = true));
         None
@@ -502,6 +554,9 @@ impl Paging {
                         }
                     };
                     lock(&self.latencies).push(at.saturating_duration_since(p.asked).as_secs_f32() * 1000.0);
+                    if p.prefetched {
+                        self.counts.prefetch_used.fetch_add(1, Ordering::Relaxed);
+                    }
                     let bytes = block.bytes() as u64;
                     let evicted = lock(&self.cache).insert(key, block.clone(), bytes);
                     self.counts.evictions.fetch_add(u64::from(evicted), Ordering::Relaxed);
@@ -579,6 +634,8 @@ impl Paging {
             fetch_max_ms: latencies.last().map_or(0.0, |&l| f64::from(l)),
             stall: Duration::from_nanos(take(&c.stall_ns)),
             parked: take(&c.parked),
+            prefetched: take(&c.prefetched),
+            prefetch_used: take(&c.prefetch_used),
             served: take(&c.served),
             served_bytes: take(&c.served_bytes),
             served_packed: take(&c.served_packed),
@@ -612,7 +669,7 @@ impl Pager for Paging {
         if parking() {
             return self.parked(key, since);
         }
-        let (p, asked) = self.ask(key);
+        let (p, asked) = self.ask(key, false);
         if !asked {
             c.waits.fetch_add(1, Ordering::Relaxed);
         }
