@@ -187,7 +187,11 @@ int main(int argc, char **argv) {
   glLoadIdentity();
   double aspect = (double)w / h;
   if (mesh_path) {
-    double top = 0.5 * tan(40.0 * M_PI / 360.0); /* the anchors' gluPerspective(40, aspect, 0.5, 10) */
+    /* the anchors' gluPerspective(40, aspect, 0.5, 10); ICET_LIKE_ZOOM=4 narrows it to a quarter
+       (a zoomed-in view, as paging's cache study takes one) */
+    double zoom = getenv("ICET_LIKE_ZOOM") ? atof(getenv("ICET_LIKE_ZOOM")) : 1.0;
+    if (!(zoom > 0.0)) die("bad ICET_LIKE_ZOOM");
+    double top = 0.5 * tan(40.0 * M_PI / 360.0) / zoom;
     glFrustum(-top * aspect, top * aspect, -top, top, 0.5, 10.0);
   } else {
     glFrustum(-0.5 * aspect, 0.5 * aspect, -0.5, 0.5, 1.0, 40.0);
