@@ -492,12 +492,15 @@ impl Paging {
     /// come; else asked for (unless as many blocks as the cache holds are on their way
     /// already: the piece's retry waits for it) and the piece marked to be traced again.
     fn parked(&self, key: u64, since: Instant) -> Option<Arc<Block>> {
-        let on_way = lock(&self.pending).get(&key).cloned();
+        let (on_way, in_flight) = {
+            let pending = lock(&self.pending);
+            (pending.get(&key).cloned(), pending.len())
+        };
         let here = on_way.filter(|p| matches!(*lock(&p.state), State::Arrived(..) | State::Ready(_)));
         if let Some(p) = here {
             return self.wait(key, &p, since);
         }
-        let room = lock(&self.pending).len() < self.in_flight_limit();
+        let room = in_flight < self.in_flight_limit();
         if room {
             self.ask(key, false);
         }
@@ -505,8 +508,8 @@ impl Paging {
         None
     }
 
-    /// How many blocks may be on their way at once for parked pieces: as many as the cache
-    /// holds (at least 16).
+    /// How many blocks may be on their way at once for parked pieces or a prefetch: as many as
+    /// the cache holds (at least 16).
     fn in_flight_limit(&self) -> usize {
         let capacity = lock(&self.cache).capacity();
         ((capacity / self.setup.block_bytes.max(1) as u64) as usize).max(16)
